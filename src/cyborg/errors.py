@@ -1,0 +1,48 @@
+"""The one exception hierarchy of the project.
+
+Every error names the bad value and says how to fix it, so a student who meets
+it for the first time knows what to do next.
+"""
+
+from __future__ import annotations
+
+
+class CyborgError(Exception):
+    """Base class of every error raised by the cyborg package."""
+
+
+class ConfigError(CyborgError):
+    """A configuration file (state machine YAML, scenario script) is invalid.
+
+    ``problems`` holds one line per problem; ``str()`` joins them.
+    """
+
+    def __init__(self, problems: list[str] | str, *, source: str | None = None) -> None:
+        self.problems = [problems] if isinstance(problems, str) else list(problems)
+        self.source = source
+        prefix = f"{source}: " if source else ""
+        super().__init__("\n".join(prefix + p for p in self.problems))
+
+
+class TransportError(CyborgError):
+    """Something went wrong in the message transport (topics, services, actions)."""
+
+
+class ServiceTimeoutError(TransportError):
+    """A service call got no answer within its timeout."""
+
+
+class ServiceUnavailableError(TransportError):
+    """A service call was made to a service nobody offers."""
+
+
+class DatabaseError(CyborgError):
+    """A database could not be opened, migrated or written."""
+
+
+class MapError(CyborgError):
+    """A map file could not be read, or a location is not on the map."""
+
+
+class PlanningError(CyborgError):
+    """No collision-free route exists between two poses."""
