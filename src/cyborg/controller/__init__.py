@@ -1,0 +1,1 @@
+"""Controller core: state machine configuration, transition logic and runtime."""

@@ -1,0 +1,274 @@
+"""The controller's state machine at run time (thesis 6.1 and 8.1).
+
+Modules publish event names on ``/cyborg_controller/register_event``. If an
+event is a transition of the active state (or of a superstate around it), the
+controller cancels the active module's goal, waits for the acknowledgement (or
+the preempt timeout), then enters the next state: it sets ``/state_resources``,
+publishes the change on ``/cyborg_controller/state_change`` and sends the goal
+to the next module. Only then is another event looked at, so two modules are
+never in control at once. A module's result becomes the event ``succeeded`` or
+``aborted``. Everything is driven by messages; nothing polls.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import enum
+import logging
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from cyborg.controller.machine import ABORTED, SUCCEEDED, MachineSpec
+from cyborg.transport import topics
+from cyborg.transport.base import ActionClient, ClientGoalHandle, GoalStatus, MessageInfo, Node
+from cyborg.transport.messages import (
+    StateMachineAction,
+    StateMachineFeedback,
+    StateMachineGoal,
+    StateMachineResult,
+    String,
+    SystemState,
+)
+
+log = logging.getLogger(__name__)
+
+START_EVENT = "start"
+
+_Handle = ClientGoalHandle[StateMachineGoal, StateMachineResult, StateMachineFeedback]
+
+
+class Phase(enum.Enum):
+    """What the controller is doing right now."""
+
+    STOPPED = "stopped"
+    ENTERING = "entering"  # connecting to the next module and sending its goal
+    ACTIVE = "active"  # a module is in control
+    HANDING_OVER = "handing_over"  # waiting for the active module to acknowledge a cancel
+
+
+class EventSource(enum.Enum):
+    TOPIC = "topic"
+    MODULE = "module"  # the active module's result: succeeded / aborted
+
+
+@dataclass
+class ControllerStats:
+    """Counters a user can read (the dashboard and `cyborg status` show them)."""
+
+    events_received: int = 0
+    events_invalid: int = 0
+    events_overflow: int = 0
+    handovers: int = 0
+    preempt_timeouts: int = 0
+    connect_failures: int = 0
+    succeeded_fallbacks: int = 0
+
+
+@dataclass(frozen=True)
+class _Event:
+    name: str
+    source: EventSource
+    goal_seq: int = 0
+
+
+class Controller:
+    """Runs a :class:`MachineSpec` against the modules' action servers."""
+
+    def __init__(self, node: Node, machine: MachineSpec, *, event_queue_size: int = 100) -> None:
+        self.node = node
+        self.machine = machine
+        self.stats = ControllerStats()
+        self.phase = Phase.STOPPED
+        self.active_state: str | None = None
+        self.previous_state = ""
+        self.last_event = ""
+        self._event_queue_size = event_queue_size
+        self._queue: deque[_Event] = deque()
+        self._wakeup: asyncio.Event | None = None
+        self._pending_topic_events = 0
+        self._clients: dict[
+            str, ActionClient[StateMachineGoal, StateMachineResult, StateMachineFeedback]
+        ] = {}
+        self._goal: _Handle | None = None
+        self._goal_seq = 0
+        self._task: asyncio.Task[None] | None = None
+        self._state_pub = node.publisher(topics.STATE_CHANGE, SystemState, latch=True)
+        self._listeners: list[Callable[[SystemState], None]] = []
+        node.subscribe(topics.REGISTER_EVENT, String, self._on_event_message, queue_size=event_queue_size)
+
+    # --- public API -------------------------------------------------------------------
+
+    def start(self) -> asyncio.Task[None]:
+        """Enter the initial state and start handling events (runs on the clock's loop)."""
+        if self._task is None:
+            self._wakeup = asyncio.Event()
+            self._task = self.node.clock.loop.create_task(self._run(), name="controller")
+        return self._task
+
+    async def stop(self) -> None:
+        self.phase = Phase.STOPPED
+        if self._task is not None:
+            self._task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._task
+            self._task = None
+        if self._goal is not None and not self._goal.status.is_terminal:
+            self._goal.cancel()
+        self.phase = Phase.STOPPED
+
+    def add_state_listener(self, listener: Callable[[SystemState], None]) -> None:
+        """Called synchronously on every state change (in-process observers such as the dashboard)."""
+        self._listeners.append(listener)
+
+    def valid_events(self) -> dict[str, str]:
+        return self.machine.transitions_of(self.active_state) if self.active_state else {}
+
+    @property
+    def goal_status(self) -> GoalStatus | None:
+        return self._goal.status if self._goal is not None else None
+
+    # --- event intake -----------------------------------------------------------------
+
+    def _on_event_message(self, message: String, info: MessageInfo) -> None:
+        self.stats.events_received += 1
+        name = message.data.strip()
+        if self.phase is Phase.ACTIVE and not self._queue:
+            # Fast path: decide at once whether the event matters.
+            if self.active_state is None or self.machine.lookup(self.active_state, name) is None:
+                self._drop_invalid(name, info.sender)
+                return
+        elif self._pending_topic_events >= self._event_queue_size:
+            self.stats.events_overflow += 1
+            log.warning(
+                "event %r from %s dropped: %d events already queued",
+                name,
+                info.sender,
+                self._pending_topic_events,
+            )
+            return
+        self._pending_topic_events += 1
+        self._push(_Event(name, EventSource.TOPIC))
+
+    def _drop_invalid(self, name: str, sender: str) -> None:
+        self.stats.events_invalid += 1
+        log.debug("event %r from %s is no transition of %s; dropped", name, sender, self.active_state)
+
+    def _push(self, event: _Event) -> None:
+        self._queue.append(event)
+        if self._wakeup is not None:
+            self._wakeup.set()
+
+    def _on_goal_done(self, handle: _Handle, seq: int) -> None:
+        if seq != self._goal_seq or self.phase in (Phase.HANDING_OVER, Phase.STOPPED):
+            return
+        status = handle.status
+        event = SUCCEEDED if status is GoalStatus.SUCCEEDED else ABORTED
+        if status is not GoalStatus.SUCCEEDED:
+            log.info(
+                "module of %s ended %s (%s): event %r",
+                self.active_state,
+                status.name,
+                handle.text or "no reason given",
+                event,
+            )
+        self._push(_Event(event, EventSource.MODULE, seq))
+
+    # --- the loop -----------------------------------------------------------------------
+
+    async def _run(self) -> None:
+        assert self._wakeup is not None
+        await self._enter(self.machine.enter(self.machine.initial), START_EVENT)
+        while True:
+            while not self._queue:
+                self._wakeup.clear()
+                await self._wakeup.wait()
+            event = self._queue.popleft()
+            if event.source is EventSource.TOPIC:
+                self._pending_topic_events -= 1
+            await self._handle(event)
+
+    async def _handle(self, event: _Event) -> None:
+        assert self.active_state is not None
+        if event.source is EventSource.MODULE and event.goal_seq != self._goal_seq:
+            return  # outcome of a goal we already left
+        target = self.machine.lookup(self.active_state, event.name)
+        name = event.name
+        if target is None and event.source is EventSource.MODULE:
+            self.stats.succeeded_fallbacks += 1
+            log.info("state %s has no %r transition; falling back to 'aborted'", self.active_state, name)
+            target = self.machine.lookup(self.active_state, ABORTED)
+        if target is None:
+            self._drop_invalid(name, "queue")
+            return
+        if event.source is EventSource.TOPIC:
+            await self._preempt_active()
+        await self._enter(target, name)
+
+    async def _preempt_active(self) -> None:
+        goal = self._goal
+        if goal is None or goal.status.is_terminal:
+            return
+        self.phase = Phase.HANDING_OVER
+        goal.cancel()
+        try:
+            await asyncio.wait_for(goal.wait(), self.machine.timeouts.preempt)
+        except TimeoutError:
+            self.stats.preempt_timeouts += 1
+            log.warning(
+                "module of %s did not acknowledge the cancel within %.1f s; handing over anyway",
+                self.active_state,
+                self.machine.timeouts.preempt,
+            )
+
+    async def _enter(self, state: str, event: str) -> None:
+        """Enter ``state``; on a connection failure follow its 'aborted' transition."""
+        while True:
+            self.phase = Phase.ENTERING
+            previous = self.active_state or ""
+            self._goal_seq += 1
+            self._goal = None
+            self.previous_state, self.active_state, self.last_event = previous, state, event
+            self.stats.handovers += 1
+            self.node.set_param(topics.STATE_RESOURCES_PARAM, self.machine.resources_of(state))
+            change = SystemState(event=event, from_system_state=previous, to_system_state=state)
+            self._state_pub.publish(change)
+            for listener in self._listeners:
+                try:
+                    listener(change)
+                except Exception:
+                    log.exception("state listener failed")
+            if await self._send_goal(state, event, previous):
+                self.phase = Phase.ACTIVE
+                return
+            self.stats.connect_failures += 1
+            fallback = self.machine.lookup(state, ABORTED)
+            assert fallback is not None  # validation guarantees an 'aborted' transition
+            state, event = fallback, ABORTED
+            if fallback == self.active_state:
+                # Retrying the same missing server: wait a bit instead of spinning.
+                await self.node.clock.sleep(self.machine.timeouts.connect)
+
+    async def _send_goal(self, state: str, event: str, previous: str) -> bool:
+        action = self.machine.states[state].action
+        assert action is not None
+        client = self._clients.get(action)
+        if client is None:
+            client = self._clients[action] = self.node.action_client(action, StateMachineAction)
+        if not client.server_available():
+            connect = self.machine.timeouts.connect
+            if not await client.wait_for_server(connect):
+                log.warning(
+                    "no action server %s for state %s within %.1f s: taking 'aborted'",
+                    action,
+                    state,
+                    connect,
+                )
+                return False
+        seq = self._goal_seq
+        goal = StateMachineGoal(previous_state=previous, event=event, current_state=state)
+        handle = client.send_goal(goal)
+        handle.add_done_callback(lambda h: self._on_goal_done(h, seq))
+        self._goal = handle
+        return True

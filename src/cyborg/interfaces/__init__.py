@@ -1,0 +1,1 @@
+"""User interfaces: the `cyborg` command line and the dashboard."""

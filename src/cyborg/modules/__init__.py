@@ -1,0 +1,1 @@
+"""Behaviour modules and the helper that makes writing one a few lines."""

@@ -1,0 +1,188 @@
+"""The module-side helper: a behaviour module's action server in a few lines.
+
+A module writes one ``async def execute(ctx)`` per state it serves. The helper
+runs it when the controller sends a goal, cancels it when the controller
+preempts (the coroutine gets ``asyncio.CancelledError`` at its next ``await``,
+so it stops at once; use ``try/finally`` to clean up) and reports the outcome:
+
+* returning normally (or ``return Outcome.SUCCEEDED``) -> SUCCEEDED, the event ``succeeded``;
+* ``raise Abort("why")`` or ``return Outcome.ABORTED`` -> ABORTED, the event ``aborted``;
+* an unexpected exception -> logged, ABORTED (the controller carries on).
+
+Example::
+
+    class Music(BehaviourModule):
+        def __init__(self, node):
+            super().__init__(node)
+            self.serve("cyborg_music/play", self.play)
+
+        async def play(self, ctx):
+            self.say("Here is a song.")
+            await ctx.sleep(30)
+"""
+
+from __future__ import annotations
+
+import asyncio
+import enum
+import logging
+from collections.abc import Awaitable, Callable
+from typing import Any
+
+from cyborg.transport import topics
+from cyborg.transport.base import GoalStatus, MessageInfo, Node, ServerGoalHandle
+from cyborg.transport.messages import (
+    EmotionalFeedback,
+    EmotionalState,
+    StateMachineAction,
+    StateMachineFeedback,
+    StateMachineGoal,
+    StateMachineResult,
+    String,
+)
+
+log = logging.getLogger(__name__)
+
+_GoalHandle = ServerGoalHandle[StateMachineGoal, StateMachineResult, StateMachineFeedback]
+
+
+class Outcome(enum.Enum):
+    SUCCEEDED = "succeeded"
+    ABORTED = "aborted"
+
+
+class Abort(Exception):
+    """Raise inside ``execute`` to end the goal ABORTED with a reason."""
+
+
+class GoalContext:
+    """What ``execute`` gets: the goal, the clock and feedback helpers."""
+
+    def __init__(self, module: BehaviourModule, handle: _GoalHandle) -> None:
+        self.module = module
+        self.handle = handle
+        self.goal: StateMachineGoal = handle.goal
+
+    @property
+    def event(self) -> str:
+        """The event that led the controller to this state."""
+        return self.goal.event
+
+    @property
+    def previous_state(self) -> str:
+        return self.goal.previous_state
+
+    @property
+    def preempt_requested(self) -> bool:
+        return self.handle.cancel_requested
+
+    async def sleep(self, seconds: float) -> None:
+        await self.module.node.clock.sleep(seconds)
+
+    async def wait_forever(self) -> None:
+        """Stay in control until the controller preempts."""
+        await asyncio.get_running_loop().create_future()
+
+    def feedback(self, status: str, message: str = "") -> None:
+        self.handle.publish_feedback(StateMachineFeedback(status=status, message=message))
+
+
+Execute = Callable[[GoalContext], Awaitable[Outcome | None]]
+
+
+class StateServer:
+    """One action server with SimpleActionServer policy: one goal at a time, a new goal preempts."""
+
+    def __init__(
+        self, module: BehaviourModule, name: str, execute: Execute, *, honour_cancel: bool = True
+    ) -> None:
+        self.module = module
+        self.name = name
+        self._execute = execute
+        self.honour_cancel = honour_cancel
+        self._current: tuple[_GoalHandle, asyncio.Task[Any]] | None = None
+        self.goals_received = 0
+        self.server = module.node.action_server(name, StateMachineAction, self._on_goal, self._on_cancel)
+
+    @property
+    def active(self) -> bool:
+        return self._current is not None and not self._current[0].status.is_terminal
+
+    def _on_goal(self, handle: _GoalHandle) -> None:
+        self.goals_received += 1
+        if self._current is not None:
+            old_handle, old_task = self._current
+            if not old_handle.status.is_terminal:
+                old_task.cancel()
+        handle.accept()
+        task = self.module.node.clock.loop.create_task(self._run(handle), name=f"{self.name} goal")
+        self._current = (handle, task)
+
+    def _on_cancel(self, handle: _GoalHandle) -> None:
+        if not self.honour_cancel:
+            log.info("%s ignores the cancel request (configured to)", self.name)
+            return
+        if self._current is not None and self._current[0] is handle:
+            self._current[1].cancel()
+        elif not handle.status.is_terminal:
+            handle.canceled()
+
+    async def _run(self, handle: _GoalHandle) -> None:
+        ctx = GoalContext(self.module, handle)
+        try:
+            outcome = await self._execute(ctx)
+        except asyncio.CancelledError:
+            if not handle.status.is_terminal:
+                handle.canceled(StateMachineResult(status="preempted"))
+            return
+        except Abort as exc:
+            handle.abort(StateMachineResult(status="aborted", message=str(exc)), str(exc))
+            return
+        except Exception as exc:
+            log.exception("%s crashed; reporting ABORTED to the controller", self.name)
+            handle.abort(StateMachineResult(status="aborted", message=f"crashed: {exc!r}"), repr(exc))
+            return
+        if handle.status.is_terminal:
+            return
+        if outcome is Outcome.ABORTED:
+            handle.abort(StateMachineResult(status="aborted"))
+        elif handle.status in (GoalStatus.ACTIVE, GoalStatus.PREEMPTING):
+            handle.succeed(StateMachineResult(status="succeeded"))
+
+
+class BehaviourModule:
+    """Base class for behaviour modules: serve states, send events, feedback and speech."""
+
+    def __init__(self, node: Node) -> None:
+        self.node = node
+        self.emotion = "neutral"
+        self.servers: dict[str, StateServer] = {}
+        self._events = node.publisher(topics.REGISTER_EVENT, String)
+        self._feedback = node.publisher(topics.EMOTIONAL_FEEDBACK, EmotionalFeedback)
+        self._speech: Any = None
+        node.subscribe(topics.EMOTIONAL_STATE, EmotionalState, self._on_emotion)
+
+    def serve(self, name: str, execute: Execute, *, honour_cancel: bool = True) -> StateServer:
+        server = StateServer(self, name, execute, honour_cancel=honour_cancel)
+        self.servers[name] = server
+        return server
+
+    def publish_event(self, event: str) -> None:
+        self._events.publish(String(data=event))
+
+    def send_emotion(self, pleasure: float = 0.0, arousal: float = 0.0, dominance: float = 0.0) -> None:
+        self._feedback.publish(
+            EmotionalFeedback(delta_pleasure=pleasure, delta_arousal=arousal, delta_dominance=dominance)
+        )
+
+    def say(self, text: str) -> None:
+        if self._speech is None:
+            self._speech = self.node.publisher(topics.TEXT_TO_SPEECH, String)
+        self._speech.publish(String(data=text))
+
+    def on_speech_text(self, callback: Callable[[str, MessageInfo], None]) -> None:
+        """Call ``callback`` with every text heard by speech-to-text."""
+        self.node.subscribe(topics.TEXT_FROM_SPEECH, String, lambda m, i: callback(m.data, i))
+
+    def _on_emotion(self, message: EmotionalState, info: MessageInfo) -> None:
+        self.emotion = message.to_emotional_state or self.emotion

@@ -1,0 +1,63 @@
+"""Run a robot on a clock until stopped: the body of ``cyborg sim``."""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+
+from cyborg.controller.config import LoadedConfig
+from cyborg.sim.robot import build_robot
+from cyborg.transport import topics
+from cyborg.transport.base import MessageInfo
+from cyborg.transport.clock import Clock, RealClock, VirtualClock
+from cyborg.transport.embedded import EmbeddedTransport
+from cyborg.transport.messages import String, SystemState
+
+log = logging.getLogger(__name__)
+
+
+def make_clock(speed: float | str | None) -> Clock:
+    """'real' -> real time; None -> virtual, as fast as possible; a number -> virtual at that speed."""
+    if speed == "real":
+        return RealClock()
+    return VirtualClock(speed=None if speed is None else float(speed))
+
+
+def run_sim(
+    config: LoadedConfig,
+    *,
+    speed: float | str | None = "real",
+    duration: float | None = None,
+    echo: Callable[[str], None] = print,
+) -> None:
+    clock = make_clock(speed)
+    transport = EmbeddedTransport(clock)
+    robot = build_robot(config, transport)
+    monitor = transport.node("cyborg_console")
+    start = clock.monotonic()
+
+    def stamp() -> str:
+        return f"[{clock.monotonic() - start:8.1f}s]"
+
+    def on_state(msg: SystemState, info: MessageInfo) -> None:
+        echo(f"{stamp()} state  {msg.from_system_state or '-'} --{msg.event}--> {msg.to_system_state}")
+
+    def on_say(msg: String, info: MessageInfo) -> None:
+        echo(f"{stamp()} say    {info.sender}: {msg.data}")
+
+    monitor.subscribe(topics.STATE_CHANGE, SystemState, on_state)
+    monitor.subscribe(topics.TEXT_TO_SPEECH, String, on_say)
+
+    async def main() -> None:
+        robot.start()
+        if duration is None:
+            await clock.loop.create_future()
+        else:
+            await clock.sleep(duration)
+        await robot.controller.stop()
+        transport.shutdown()
+
+    try:
+        clock.run(main())
+    finally:
+        clock.close()

@@ -1,0 +1,200 @@
+"""Injected time: a real clock and a deterministic virtual clock.
+
+Every component reads time through a :class:`Clock` and schedules work on the
+clock's asyncio event loop, so the same code runs in real time on the robot and
+in virtual time in tests and scenario scripts (a simulated day in seconds).
+
+The virtual clock owns an event loop whose ``time()`` is virtual: when no
+callback is ready the loop jumps straight to the next timer instead of
+waiting, so a run is as fast as the work allows and, for the same inputs and
+seed, always takes the same path. With a finite ``speed`` the virtual time runs
+at a fixed multiple of real time instead (``--speed 10``).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import selectors
+import time
+from abc import ABC, abstractmethod
+from collections.abc import Awaitable, Callable, Coroutine, Mapping
+from datetime import UTC, datetime
+from typing import Any, TypeVar
+
+T = TypeVar("T")
+
+DEFAULT_VIRTUAL_START = datetime(2026, 11, 23, 9, 0, tzinfo=UTC)
+
+
+class Clock(ABC):
+    """Time source plus the event loop that all components run on."""
+
+    def __init__(self) -> None:
+        self._loop: asyncio.AbstractEventLoop | None = None
+
+    @property
+    def loop(self) -> asyncio.AbstractEventLoop:
+        if self._loop is None:
+            self._loop = self._make_loop()
+        return self._loop
+
+    @abstractmethod
+    def _make_loop(self) -> asyncio.AbstractEventLoop: ...
+
+    @abstractmethod
+    def now(self) -> float:
+        """Wall-clock time in seconds since the Unix epoch (virtual for virtual clocks)."""
+
+    @property
+    def is_virtual(self) -> bool:
+        return False
+
+    def monotonic(self) -> float:
+        """Seconds on the loop's monotonic time line (use for durations)."""
+        return self.loop.time()
+
+    def datetime(self) -> datetime:
+        """The current time as an aware UTC datetime."""
+        return datetime.fromtimestamp(self.now(), tz=UTC)
+
+    async def sleep(self, seconds: float) -> None:
+        await asyncio.sleep(max(0.0, seconds))
+
+    def call_later(self, delay: float, callback: Callable[..., object], *args: Any) -> asyncio.TimerHandle:
+        return self.loop.call_later(max(0.0, delay), callback, *args)
+
+    def call_soon(self, callback: Callable[..., object], *args: Any) -> asyncio.Handle:
+        return self.loop.call_soon(callback, *args)
+
+    def run(self, main: Coroutine[Any, Any, T]) -> T:
+        """Run ``main`` to completion on this clock's loop."""
+        return self.loop.run_until_complete(main)
+
+    def close(self) -> None:
+        """Cancel whatever is still running on the loop, then close it."""
+        loop = self._loop
+        if loop is None or loop.is_closed():
+            return
+        pending = [task for task in asyncio.all_tasks(loop) if not task.done()]
+        for task in pending:
+            task.cancel()
+        if pending:
+            loop.run_until_complete(asyncio.gather(*pending, return_exceptions=True))
+        loop.close()
+
+
+class RealClock(Clock):
+    """Real time: the loop sleeps for real, ``now()`` is the system clock."""
+
+    def _make_loop(self) -> asyncio.AbstractEventLoop:
+        return asyncio.new_event_loop()
+
+    def now(self) -> float:
+        return time.time()
+
+
+class _VirtualTimeSelector(selectors.BaseSelector):
+    """Selector that advances virtual time instead of blocking on timers."""
+
+    def __init__(self, clock: VirtualClock) -> None:
+        self._inner = selectors.DefaultSelector()
+        self._clock = clock
+
+    def register(self, fileobj: Any, events: int, data: Any = None) -> selectors.SelectorKey:
+        return self._inner.register(fileobj, events, data)
+
+    def unregister(self, fileobj: Any) -> selectors.SelectorKey:
+        return self._inner.unregister(fileobj)
+
+    def modify(self, fileobj: Any, events: int, data: Any = None) -> selectors.SelectorKey:
+        return self._inner.modify(fileobj, events, data)
+
+    def get_map(self) -> Mapping[Any, selectors.SelectorKey]:
+        return self._inner.get_map()
+
+    def close(self) -> None:
+        self._inner.close()
+
+    def select(self, timeout: float | None = None) -> list[tuple[selectors.SelectorKey, int]]:
+        speed = self._clock.speed
+        if speed is not None:
+            real_timeout = None if timeout is None else timeout / speed
+            return self._inner.select(real_timeout)
+        ready = self._inner.select(0)
+        if ready or timeout == 0:
+            return ready
+        if timeout is None:
+            # Nothing is scheduled: only I/O or another thread can wake us.
+            return self._inner.select(None)
+        self._clock._advance(timeout)
+        return []
+
+
+class _VirtualTimeLoop(asyncio.SelectorEventLoop):
+    def __init__(self, clock: VirtualClock) -> None:
+        self._virtual_clock = clock
+        super().__init__(selector=_VirtualTimeSelector(clock))
+        self._clock_resolution = 1e-9
+
+    def time(self) -> float:
+        return self._virtual_clock._loop_time()
+
+
+class VirtualClock(Clock):
+    """Virtual time starting at ``start``.
+
+    ``speed=None`` runs as fast as the work allows (deterministic);
+    a number runs that many virtual seconds per real second.
+    """
+
+    def __init__(self, start: datetime | float = DEFAULT_VIRTUAL_START, speed: float | None = None) -> None:
+        super().__init__()
+        if speed is not None and speed <= 0:
+            raise ValueError(f"speed must be positive or None (as fast as possible), got {speed!r}")
+        self.speed = speed
+        self._start_epoch = start.timestamp() if isinstance(start, datetime) else float(start)
+        self._virtual_elapsed = 0.0
+        self._real_origin = time.monotonic()
+
+    @property
+    def is_virtual(self) -> bool:
+        return True
+
+    def _make_loop(self) -> asyncio.AbstractEventLoop:
+        return _VirtualTimeLoop(self)
+
+    def _loop_time(self) -> float:
+        if self.speed is None:
+            return self._virtual_elapsed
+        return (time.monotonic() - self._real_origin) * self.speed
+
+    def _advance(self, seconds: float) -> None:
+        self._virtual_elapsed += seconds
+
+    def now(self) -> float:
+        return self._start_epoch + self._loop_time()
+
+    @property
+    def start_epoch(self) -> float:
+        return self._start_epoch
+
+
+async def wait_until(
+    predicate: Callable[[], bool], clock: Clock, *, timeout: float, interval: float = 0.01
+) -> bool:
+    """Wait (on ``clock``) until ``predicate()`` is true; False on timeout. For tests and tools."""
+    deadline = clock.monotonic() + timeout
+    while not predicate():
+        if clock.monotonic() >= deadline:
+            return False
+        await clock.sleep(interval)
+    return True
+
+
+def run_with(clock: Clock, main: Callable[[], Awaitable[T]]) -> T:
+    """Run an async function on ``clock``'s loop and return its result."""
+
+    async def _main() -> T:
+        return await main()
+
+    return clock.run(_main())

@@ -1,0 +1,662 @@
+"""The embedded in-process transport: the whole robot in one Python process.
+
+Messages, service calls and action traffic are delivered through the clock's
+event loop (``call_soon``), never synchronously, so a component sees the same
+ordering and re-entrancy as over a network. It is the default transport and the
+fake that the tests use; the contract tests run against it and ROS alike.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import copy
+import inspect
+import itertools
+import logging
+from collections import deque
+from collections.abc import Awaitable, Callable
+from dataclasses import dataclass, field
+from typing import Any, Generic, cast
+
+from cyborg.errors import ServiceTimeoutError, ServiceUnavailableError, TransportError
+from cyborg.transport.base import (
+    DEFAULT_QUEUE_SIZE,
+    ActionClient,
+    ActionServer,
+    ClientGoalHandle,
+    F,
+    G,
+    GoalStatus,
+    M,
+    MessageInfo,
+    Node,
+    Publisher,
+    R,
+    Req,
+    Resp,
+    ServerGoalHandle,
+    ServiceProxy,
+    ServiceServer,
+    Subscription,
+    Transport,
+    normalize_node_name,
+)
+from cyborg.transport.clock import Clock, RealClock
+from cyborg.transport.messages import ActionType, Message, ServiceType, is_nested
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class TransportStats:
+    """Counters a user can read to see what the transport did."""
+
+    callback_errors: int = 0
+    dropped_messages: int = 0
+    published: int = 0
+
+
+def _copier(cls: type[Message]) -> Callable[[Any], Any]:
+    return copy.deepcopy if is_nested(cls) else copy.copy
+
+
+class _Topic:
+    def __init__(self, name: str, msg_type: type[Message]) -> None:
+        self.name = name
+        self.msg_type = msg_type
+        self.subscriptions: list[_EmbeddedSubscription[Any]] = []
+        self.latched: tuple[Message, MessageInfo] | None = None
+        self.copy = _copier(msg_type)
+
+
+class EmbeddedTransport(Transport):
+    """In-process graph of topics, services, actions and parameters."""
+
+    def __init__(self, clock: Clock | None = None) -> None:
+        self.clock = clock or RealClock()
+        self.stats = TransportStats()
+        self._topics: dict[str, _Topic] = {}
+        self._services: dict[str, _EmbeddedServiceServer[Any, Any]] = {}
+        self._action_servers: dict[str, _EmbeddedActionServer[Any, Any, Any]] = {}
+        self._action_clients: dict[str, list[_EmbeddedActionClient[Any, Any, Any]]] = {}
+        self._params: dict[str, Any] = {}
+        self._nodes: dict[str, EmbeddedNode] = {}
+        self._goal_ids = itertools.count(1)
+
+    # --- nodes ---------------------------------------------------------------
+
+    def node(self, name: str) -> EmbeddedNode:
+        name = normalize_node_name(name)
+        if not name:
+            raise TransportError("node name is empty: give every component a name, e.g. 'cyborg_idle'")
+        if name in self._nodes:
+            raise TransportError(
+                f"node name {name!r} is already in use: node names must be unique, pick another"
+            )
+        node = EmbeddedNode(self, name)
+        self._nodes[name] = node
+        return node
+
+    def node_names(self) -> list[str]:
+        return sorted(self._nodes)
+
+    def shutdown(self) -> None:
+        for node in list(self._nodes.values()):
+            node.shutdown()
+
+    def _forget_node(self, node: EmbeddedNode) -> None:
+        self._nodes.pop(node.name, None)
+
+    # --- topics --------------------------------------------------------------
+
+    def _topic(self, name: str, msg_type: type[Message]) -> _Topic:
+        topic = self._topics.get(name)
+        if topic is None:
+            topic = self._topics[name] = _Topic(name, msg_type)
+        elif topic.msg_type is not msg_type:
+            raise TransportError(
+                f"topic {name} carries {topic.msg_type.ros_type}, not {msg_type.ros_type}: "
+                "use the same message type on every publisher and subscriber of a topic"
+            )
+        return topic
+
+    def topic_names(self) -> dict[str, str]:
+        return {name: t.msg_type.ros_type for name, t in sorted(self._topics.items())}
+
+    def _publish(self, topic: _Topic, message: Message, sender: str, latch: bool) -> None:
+        if not isinstance(message, topic.msg_type):
+            raise TransportError(
+                f"cannot publish {type(message).__name__} on {topic.name}: "
+                f"it carries {topic.msg_type.ros_type}"
+            )
+        self.stats.published += 1
+        info = MessageInfo(sender=sender, stamp=self.clock.now())
+        delivered = topic.copy(message)
+        if latch:
+            topic.latched = (delivered, info)
+        for subscription in topic.subscriptions:
+            subscription._enqueue(delivered, info)
+
+    def _run_callback(self, callback: Callable[..., object], *args: Any) -> None:
+        try:
+            result = callback(*args)
+            if inspect.isawaitable(result):
+                task = asyncio.ensure_future(result)
+                task.add_done_callback(self._report_task_error)
+        except Exception:
+            self.stats.callback_errors += 1
+            log.exception("callback %s failed; the transport carries on", _describe(callback))
+
+    def _report_task_error(self, task: asyncio.Future[Any]) -> None:
+        if not task.cancelled() and task.exception() is not None:
+            self.stats.callback_errors += 1
+            log.error("callback task failed; the transport carries on", exc_info=task.exception())
+
+
+def _describe(callback: Callable[..., object]) -> str:
+    return getattr(callback, "__qualname__", repr(callback))
+
+
+class EmbeddedNode(Node):
+    def __init__(self, transport: EmbeddedTransport, name: str) -> None:
+        self.transport = transport
+        self.name = name
+        self.clock = transport.clock
+        self._subscriptions: list[_EmbeddedSubscription[Any]] = []
+        self._services: list[_EmbeddedServiceServer[Any, Any]] = []
+        self._action_servers: list[_EmbeddedActionServer[Any, Any, Any]] = []
+        self._alive = True
+
+    def publisher(
+        self,
+        topic: str,
+        msg_type: type[M],
+        *,
+        queue_size: int = DEFAULT_QUEUE_SIZE,
+        latch: bool = False,
+    ) -> Publisher[M]:
+        return _EmbeddedPublisher(self, self.transport._topic(self.resolve(topic), msg_type), latch)
+
+    def subscribe(
+        self,
+        topic: str,
+        msg_type: type[M],
+        callback: Callable[[M, MessageInfo], None],
+        *,
+        queue_size: int = DEFAULT_QUEUE_SIZE,
+    ) -> Subscription[M]:
+        if queue_size < 1:
+            raise TransportError(f"queue_size must be at least 1, got {queue_size}")
+        t = self.transport._topic(self.resolve(topic), msg_type)
+        sub: _EmbeddedSubscription[M] = _EmbeddedSubscription(self.transport, t, callback, queue_size)
+        t.subscriptions.append(sub)
+        self._subscriptions.append(sub)
+        if t.latched is not None:
+            sub._enqueue(*t.latched)
+        return sub
+
+    def advertise_service(
+        self,
+        name: str,
+        srv_type: ServiceType[Req, Resp],
+        handler: Callable[[Req, MessageInfo], Resp | Awaitable[Resp]],
+    ) -> ServiceServer:
+        full = self.resolve(name)
+        if full in self.transport._services:
+            raise TransportError(
+                f"service {full} is already offered by {self.transport._services[full].node.name}: "
+                "each service has one server"
+            )
+        server: _EmbeddedServiceServer[Req, Resp] = _EmbeddedServiceServer(self, full, srv_type, handler)
+        self.transport._services[full] = server
+        self._services.append(server)
+        return server
+
+    def service_proxy(self, name: str, srv_type: ServiceType[Req, Resp]) -> ServiceProxy[Req, Resp]:
+        return _EmbeddedServiceProxy(self, self.resolve(name), srv_type)
+
+    def action_server(
+        self,
+        name: str,
+        action_type: ActionType[G, R, F],
+        on_goal: Callable[[ServerGoalHandle[G, R, F]], None],
+        on_cancel: Callable[[ServerGoalHandle[G, R, F]], None],
+    ) -> ActionServer[G, R, F]:
+        full = self.resolve(name)
+        existing = self.transport._action_servers.get(full)
+        if existing is not None:
+            raise TransportError(
+                f"action server {full} already exists in node {existing.node.name}: "
+                "give each state's action server its own name"
+            )
+        server = _EmbeddedActionServer(self, full, action_type, on_goal, on_cancel)
+        self.transport._action_servers[full] = server
+        self._action_servers.append(server)
+        return server
+
+    def action_client(self, name: str, action_type: ActionType[G, R, F]) -> ActionClient[G, R, F]:
+        full = self.resolve(name)
+        client = _EmbeddedActionClient(self, full, action_type)
+        self.transport._action_clients.setdefault(full, []).append(client)
+        return client
+
+    def get_param(self, name: str, default: Any = None) -> Any:
+        return copy.deepcopy(self.transport._params.get(self.resolve(name), default))
+
+    def set_param(self, name: str, value: Any) -> None:
+        self.transport._params[self.resolve(name)] = copy.deepcopy(value)
+
+    def shutdown(self) -> None:
+        if not self._alive:
+            return
+        self._alive = False
+        for sub in list(self._subscriptions):
+            sub.unsubscribe()
+        for service in list(self._services):
+            service.shutdown()
+        for server in list(self._action_servers):
+            server.shutdown()
+        self.transport._forget_node(self)
+
+
+class _EmbeddedPublisher(Publisher[M]):
+    def __init__(self, node: EmbeddedNode, topic: _Topic, latch: bool) -> None:
+        self._node = node
+        self._topic = topic
+        self._latch = latch
+        self.topic = topic.name
+
+    def publish(self, message: M) -> None:
+        self._node.transport._publish(self._topic, message, self._node.name, self._latch)
+
+    def subscriber_count(self) -> int:
+        return len(self._topic.subscriptions)
+
+
+class _EmbeddedSubscription(Subscription[M]):
+    def __init__(
+        self,
+        transport: EmbeddedTransport,
+        topic: _Topic,
+        callback: Callable[[M, MessageInfo], None],
+        queue_size: int,
+    ) -> None:
+        self._transport = transport
+        self._topic = topic
+        self.topic = topic.name
+        self._callback = callback
+        self._queue: deque[tuple[M, MessageInfo]] = deque()
+        self._queue_size = queue_size
+        self._dropped = 0
+        self._scheduled = False
+        self._active = True
+
+    @property
+    def dropped(self) -> int:
+        return self._dropped
+
+    def _enqueue(self, message: Message, info: MessageInfo) -> None:
+        if len(self._queue) >= self._queue_size:
+            self._queue.popleft()
+            self._dropped += 1
+            self._transport.stats.dropped_messages += 1
+        self._queue.append((cast(M, message), info))
+        if not self._scheduled:
+            self._scheduled = True
+            self._transport.clock.loop.call_soon(self._drain)
+
+    def _drain(self) -> None:
+        self._scheduled = False
+        queue = self._queue
+        while queue and self._active:
+            message, info = queue.popleft()
+            self._transport._run_callback(self._callback, message, info)
+
+    def unsubscribe(self) -> None:
+        self._active = False
+        self._queue.clear()
+        if self in self._topic.subscriptions:
+            self._topic.subscriptions.remove(self)
+
+
+class _EmbeddedServiceServer(ServiceServer, Generic[Req, Resp]):
+    def __init__(
+        self,
+        node: EmbeddedNode,
+        name: str,
+        srv_type: ServiceType[Req, Resp],
+        handler: Callable[[Req, MessageInfo], Resp | Awaitable[Resp]],
+    ) -> None:
+        self.node = node
+        self.name = name
+        self.srv_type = srv_type
+        self.handler = handler
+
+    def shutdown(self) -> None:
+        services = self.node.transport._services
+        if services.get(self.name) is self:
+            del services[self.name]
+
+
+class _EmbeddedServiceProxy(ServiceProxy[Req, Resp]):
+    def __init__(self, node: EmbeddedNode, name: str, srv_type: ServiceType[Req, Resp]) -> None:
+        self._node = node
+        self.name = name
+        self._srv_type = srv_type
+
+    def _server(self) -> _EmbeddedServiceServer[Req, Resp] | None:
+        return self._node.transport._services.get(self.name)
+
+    def available(self) -> bool:
+        return self._server() is not None
+
+    async def wait_for_service(self, timeout: float) -> bool:
+        deadline = self._node.clock.monotonic() + timeout
+        while not self.available():
+            if self._node.clock.monotonic() >= deadline:
+                return False
+            await self._node.clock.sleep(min(0.01, timeout))
+        return True
+
+    async def call(self, request: Req | None = None, *, timeout: float = 5.0) -> Resp:
+        server = self._server()
+        if server is None:
+            raise ServiceUnavailableError(
+                f"service {self.name} is not offered by any node: start the component that offers it"
+            )
+        if server.srv_type.ros_type != self._srv_type.ros_type:
+            raise TransportError(
+                f"service {self.name} is {server.srv_type.ros_type}, not {self._srv_type.ros_type}"
+            )
+        req = request if request is not None else self._srv_type.request()
+        info = MessageInfo(sender=self._node.name, stamp=self._node.clock.now())
+
+        async def handle() -> Resp:
+            await asyncio.sleep(0)  # deliver on a later loop turn, as over a network
+            answer = server.handler(copy.deepcopy(req), info)
+            if inspect.isawaitable(answer):
+                answer = await answer
+            return answer  # type: ignore[return-value]
+
+        try:
+            return await asyncio.wait_for(handle(), timeout)
+        except TimeoutError as exc:
+            raise ServiceTimeoutError(
+                f"service {self.name} gave no answer within {timeout} s: "
+                "check that its node is running and not blocked, or raise the timeout"
+            ) from exc
+
+
+# --- actions -------------------------------------------------------------------
+
+
+@dataclass
+class _Goal(Generic[G, R, F]):
+    goal_id: str
+    goal: G
+    sender: str
+    status: GoalStatus = GoalStatus.PENDING
+    result: R | None = None
+    text: str = ""
+    client: _EmbeddedClientGoalHandle[G, R, F] | None = None
+    server_handle: _EmbeddedServerGoalHandle[G, R, F] | None = None
+    history: list[GoalStatus] = field(default_factory=list)
+
+
+class _EmbeddedActionServer(ActionServer[G, R, F]):
+    def __init__(
+        self,
+        node: EmbeddedNode,
+        name: str,
+        action_type: ActionType[G, R, F],
+        on_goal: Callable[[ServerGoalHandle[G, R, F]], None],
+        on_cancel: Callable[[ServerGoalHandle[G, R, F]], None],
+    ) -> None:
+        self.node = node
+        self.name = name
+        self.action_type = action_type
+        self._on_goal = on_goal
+        self._on_cancel = on_cancel
+        self._goals: dict[str, _Goal[G, R, F]] = {}
+        self.alive = True
+
+    def _receive_goal(self, goal: _Goal[G, R, F]) -> None:
+        if not self.alive:
+            return
+        self._goals[goal.goal_id] = goal
+        handle = _EmbeddedServerGoalHandle(self, goal)
+        goal.server_handle = handle
+        self.node.transport._run_callback(self._on_goal, handle)
+
+    def _receive_cancel(self, goal_id: str) -> None:
+        goal = self._goals.get(goal_id)
+        if goal is None or goal.server_handle is None or goal.status.is_terminal:
+            return
+        if goal.status is GoalStatus.PENDING:
+            self._set_status(goal, GoalStatus.RECALLING)
+        elif goal.status is GoalStatus.ACTIVE:
+            self._set_status(goal, GoalStatus.PREEMPTING)
+        else:
+            return
+        self.node.transport._run_callback(self._on_cancel, goal.server_handle)
+
+    def _set_status(
+        self, goal: _Goal[G, R, F], status: GoalStatus, result: R | None = None, text: str = ""
+    ) -> None:
+        goal.status = status
+        goal.history.append(status)
+        if result is not None:
+            goal.result = result
+        if text:
+            goal.text = text
+        if status.is_terminal:
+            self._goals.pop(goal.goal_id, None)
+            if goal.result is None:
+                goal.result = self.action_type.result()
+        client = goal.client
+        if client is not None:
+            self.node.clock.loop.call_soon(client._on_status, status, goal.result, goal.text)
+
+    def _send_feedback(self, goal: _Goal[G, R, F], feedback: F) -> None:
+        client = goal.client
+        if client is not None:
+            self.node.clock.loop.call_soon(client._on_feedback, copy.deepcopy(feedback))
+
+    def shutdown(self) -> None:
+        if not self.alive:
+            return
+        self.alive = False
+        servers = self.node.transport._action_servers
+        if servers.get(self.name) is self:
+            del servers[self.name]
+        for goal in list(self._goals.values()):
+            self._goals.pop(goal.goal_id, None)
+            if goal.client is not None:
+                self.node.clock.loop.call_soon(goal.client._on_status, GoalStatus.LOST, None, "server gone")
+
+
+_ALLOWED: dict[str, frozenset[GoalStatus]] = {
+    "accept": frozenset({GoalStatus.PENDING, GoalStatus.RECALLING}),
+    "reject": frozenset({GoalStatus.PENDING, GoalStatus.RECALLING}),
+    "finish": frozenset({GoalStatus.ACTIVE, GoalStatus.PREEMPTING}),
+    "canceled": frozenset(
+        {GoalStatus.PENDING, GoalStatus.ACTIVE, GoalStatus.PREEMPTING, GoalStatus.RECALLING}
+    ),
+}
+
+
+class _EmbeddedServerGoalHandle(ServerGoalHandle[G, R, F]):
+    def __init__(self, server: _EmbeddedActionServer[G, R, F], goal: _Goal[G, R, F]) -> None:
+        self._server = server
+        self._goal = goal
+        self.goal = goal.goal
+        self.goal_id = goal.goal_id
+        self.sender = goal.sender
+
+    @property
+    def status(self) -> GoalStatus:
+        return self._goal.status
+
+    def _transition(self, kind: str, status: GoalStatus, result: R | None, text: str) -> None:
+        if self._goal.status not in _ALLOWED[kind]:
+            log.warning(
+                "action %s: cannot %s goal %s in status %s; ignored",
+                self._server.name,
+                kind,
+                self.goal_id,
+                self._goal.status.name,
+            )
+            return
+        self._server._set_status(self._goal, status, result, text)
+
+    def accept(self) -> None:
+        target = GoalStatus.PREEMPTING if self._goal.status is GoalStatus.RECALLING else GoalStatus.ACTIVE
+        self._transition("accept", target, None, "")
+
+    def reject(self, result: R | None = None, text: str = "") -> None:
+        self._transition("reject", GoalStatus.REJECTED, result, text)
+
+    def publish_feedback(self, feedback: F) -> None:
+        if not self._goal.status.is_terminal:
+            self._server._send_feedback(self._goal, feedback)
+
+    def succeed(self, result: R | None = None, text: str = "") -> None:
+        self._transition("finish", GoalStatus.SUCCEEDED, result, text)
+
+    def abort(self, result: R | None = None, text: str = "") -> None:
+        self._transition("finish", GoalStatus.ABORTED, result, text)
+
+    def canceled(self, result: R | None = None, text: str = "") -> None:
+        pending = self._goal.status in (GoalStatus.PENDING, GoalStatus.RECALLING)
+        target = GoalStatus.RECALLED if pending else GoalStatus.PREEMPTED
+        self._transition("canceled", target, result, text)
+
+
+class _EmbeddedClientGoalHandle(ClientGoalHandle[G, R, F]):
+    def __init__(
+        self,
+        client: _EmbeddedActionClient[G, R, F],
+        goal: _Goal[G, R, F],
+        on_feedback: Callable[[F], None] | None,
+        on_status: Callable[[GoalStatus], None] | None,
+    ) -> None:
+        self._client = client
+        self._goal = goal
+        self.goal = goal.goal
+        self._status = GoalStatus.PENDING
+        self._result: R | None = None
+        self._text = ""
+        self._on_feedback_cb = on_feedback
+        self._on_status_cb = on_status
+        self._done_callbacks: list[Callable[[ClientGoalHandle[G, R, F]], None]] = []
+        self._waiters: list[asyncio.Future[GoalStatus]] = []
+
+    @property
+    def status(self) -> GoalStatus:
+        return self._status
+
+    @property
+    def result(self) -> R | None:
+        return self._result
+
+    @property
+    def text(self) -> str:
+        return self._text
+
+    def cancel(self) -> None:
+        if self._status.is_terminal:
+            return
+        server = self._client._server()
+        if server is None:
+            return
+        self._client._node.clock.loop.call_soon(server._receive_cancel, self._goal.goal_id)
+
+    async def wait(self) -> GoalStatus:
+        if self._status.is_terminal:
+            return self._status
+        future: asyncio.Future[GoalStatus] = self._client._node.clock.loop.create_future()
+        self._waiters.append(future)
+        return await future
+
+    def add_done_callback(self, callback: Callable[[ClientGoalHandle[G, R, F]], None]) -> None:
+        if self._status.is_terminal:
+            self._client._node.clock.loop.call_soon(callback, self)
+        else:
+            self._done_callbacks.append(callback)
+
+    def _on_feedback(self, feedback: F) -> None:
+        if self._on_feedback_cb is not None and not self._status.is_terminal:
+            self._client._node.transport._run_callback(self._on_feedback_cb, feedback)
+
+    def _on_status(self, status: GoalStatus, result: R | None, text: str) -> None:
+        if self._status.is_terminal:
+            return
+        self._status = status
+        if status.is_terminal:
+            self._result = result
+            self._text = text
+        transport = self._client._node.transport
+        if self._on_status_cb is not None:
+            transport._run_callback(self._on_status_cb, status)
+        if status.is_terminal:
+            for waiter in self._waiters:
+                if not waiter.done():
+                    waiter.set_result(status)
+            self._waiters.clear()
+            callbacks, self._done_callbacks = self._done_callbacks, []
+            for callback in callbacks:
+                transport._run_callback(callback, self)
+
+
+class _EmbeddedActionClient(ActionClient[G, R, F]):
+    def __init__(self, node: EmbeddedNode, name: str, action_type: ActionType[G, R, F]) -> None:
+        self._node = node
+        self.name = name
+        self._action_type = action_type
+
+    def _server(self) -> _EmbeddedActionServer[G, R, F] | None:
+        server = self._node.transport._action_servers.get(self.name)
+        if server is None or not server.alive:
+            return None
+        if server.action_type.ros_type != self._action_type.ros_type:
+            raise TransportError(
+                f"action {self.name} is {server.action_type.ros_type}, "
+                f"not {self._action_type.ros_type}: use the server's action type"
+            )
+        return cast(_EmbeddedActionServer[G, R, F], server)
+
+    def server_available(self) -> bool:
+        return self._server() is not None
+
+    async def wait_for_server(self, timeout: float) -> bool:
+        clock = self._node.clock
+        deadline = clock.monotonic() + timeout
+        while not self.server_available():
+            remaining = deadline - clock.monotonic()
+            if remaining <= 0:
+                return False
+            await clock.sleep(min(0.05, remaining))
+        return True
+
+    def send_goal(
+        self,
+        goal: G,
+        *,
+        on_feedback: Callable[[F], None] | None = None,
+        on_status: Callable[[GoalStatus], None] | None = None,
+    ) -> ClientGoalHandle[G, R, F]:
+        transport = self._node.transport
+        record: _Goal[G, R, F] = _Goal(
+            goal_id=f"{self._node.name}-{next(transport._goal_ids)}",
+            goal=copy.deepcopy(goal),
+            sender=self._node.name,
+        )
+        handle = _EmbeddedClientGoalHandle(self, record, on_feedback, on_status)
+        record.client = handle
+        server = self._server()
+        loop = self._node.clock.loop
+        if server is None:
+            loop.call_soon(handle._on_status, GoalStatus.LOST, None, f"no action server at {self.name}")
+        else:
+            loop.call_soon(server._receive_goal, record)
+        return handle

@@ -1,0 +1,237 @@
+"""Message, service and action types shared by every component.
+
+Field names mirror the Cyborg's ROS messages exactly (thesis chapter 8), so the
+ROS transport can convert them field by field and existing Cyborg modules keep
+working. Each type carries its ROS type name in ``ros_type``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import Any, ClassVar, Generic, TypeVar
+
+
+@dataclass
+class Message:
+    """Base class of all message types (a plain, mutable dataclass)."""
+
+    ros_type: ClassVar[str] = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+
+M = TypeVar("M", bound=Message)
+Req = TypeVar("Req", bound=Message)
+Resp = TypeVar("Resp", bound=Message)
+G = TypeVar("G", bound=Message)
+R = TypeVar("R", bound=Message)
+F = TypeVar("F", bound=Message)
+
+
+# --- std_msgs / std_srvs ---------------------------------------------------
+
+
+@dataclass
+class String(Message):
+    ros_type: ClassVar[str] = "std_msgs/String"
+    data: str = ""
+
+
+@dataclass
+class Empty(Message):
+    ros_type: ClassVar[str] = "std_msgs/Empty"
+
+
+# --- cyborg_controller -----------------------------------------------------
+
+
+@dataclass
+class SystemState(Message):
+    """Published on every state change of the controller's state machine."""
+
+    ros_type: ClassVar[str] = "cyborg_controller/SystemState"
+    event: str = ""
+    from_system_state: str = ""
+    to_system_state: str = ""
+
+
+@dataclass
+class EmotionalFeedback(Message):
+    """A change in the PAD values sent by a module (absolute values on set_emotional_values)."""
+
+    ros_type: ClassVar[str] = "cyborg_controller/EmotionalFeedback"
+    delta_pleasure: float = 0.0
+    delta_arousal: float = 0.0
+    delta_dominance: float = 0.0
+
+
+@dataclass
+class EmotionalState(Message):
+    ros_type: ClassVar[str] = "cyborg_controller/EmotionalState"
+    from_emotional_state: str = ""
+    to_emotional_state: str = ""
+    current_pleasure: float = 0.0
+    current_arousal: float = 0.0
+    current_dominance: float = 0.0
+
+
+@dataclass
+class EmotionalStateServiceRequest(Message):
+    ros_type: ClassVar[str] = "cyborg_controller/EmotionalStateServiceRequest"
+
+
+@dataclass
+class EmotionalStateServiceResponse(Message):
+    ros_type: ClassVar[str] = "cyborg_controller/EmotionalStateServiceResponse"
+    emotional_state: str = ""
+    current_pleasure: float = 0.0
+    current_arousal: float = 0.0
+    current_dominance: float = 0.0
+
+
+@dataclass
+class StateMachineGoal(Message):
+    ros_type: ClassVar[str] = "cyborg_controller/StateMachineGoal"
+    previous_state: str = ""
+    event: str = ""
+    current_state: str = ""
+
+
+@dataclass
+class StateMachineResult(Message):
+    ros_type: ClassVar[str] = "cyborg_controller/StateMachineResult"
+    status: str = ""
+    message: str = ""
+
+
+@dataclass
+class StateMachineFeedback(Message):
+    ros_type: ClassVar[str] = "cyborg_controller/StateMachineFeedback"
+    status: str = ""
+    message: str = ""
+
+
+# --- geometry / navigation -------------------------------------------------
+
+
+@dataclass
+class Point(Message):
+    ros_type: ClassVar[str] = "geometry_msgs/Point"
+    x: float = 0.0
+    y: float = 0.0
+    z: float = 0.0
+
+
+@dataclass
+class Quaternion(Message):
+    ros_type: ClassVar[str] = "geometry_msgs/Quaternion"
+    x: float = 0.0
+    y: float = 0.0
+    z: float = 0.0
+    w: float = 1.0
+
+
+@dataclass
+class Pose(Message):
+    ros_type: ClassVar[str] = "geometry_msgs/Pose"
+    position: Point = field(default_factory=Point)
+    orientation: Quaternion = field(default_factory=Quaternion)
+
+
+@dataclass
+class Header(Message):
+    ros_type: ClassVar[str] = "std_msgs/Header"
+    seq: int = 0
+    stamp: float = 0.0
+    frame_id: str = ""
+
+
+@dataclass
+class PoseStamped(Message):
+    ros_type: ClassVar[str] = "geometry_msgs/PoseStamped"
+    header: Header = field(default_factory=Header)
+    pose: Pose = field(default_factory=Pose)
+
+
+@dataclass
+class PoseWithCovarianceStamped(Message):
+    """The base's localised pose (rosarnl's ``amcl_pose``); covariance left at zero."""
+
+    ros_type: ClassVar[str] = "geometry_msgs/PoseWithCovarianceStamped"
+    header: Header = field(default_factory=Header)
+    pose: Pose = field(default_factory=Pose)
+
+
+@dataclass
+class MoveBaseGoal(Message):
+    ros_type: ClassVar[str] = "move_base_msgs/MoveBaseGoal"
+    target_pose: PoseStamped = field(default_factory=PoseStamped)
+
+
+@dataclass
+class MoveBaseFeedback(Message):
+    ros_type: ClassVar[str] = "move_base_msgs/MoveBaseFeedback"
+    base_position: PoseStamped = field(default_factory=PoseStamped)
+
+
+@dataclass
+class MoveBaseResult(Message):
+    ros_type: ClassVar[str] = "move_base_msgs/MoveBaseResult"
+
+
+@dataclass
+class EmptyRequest(Message):
+    ros_type: ClassVar[str] = "std_srvs/EmptyRequest"
+
+
+@dataclass
+class EmptyResponse(Message):
+    ros_type: ClassVar[str] = "std_srvs/EmptyResponse"
+
+
+# --- service and action type descriptors -----------------------------------
+
+
+@dataclass(frozen=True)
+class ServiceType(Generic[Req, Resp]):
+    ros_type: str
+    request: type[Req]
+    response: type[Resp]
+
+
+@dataclass(frozen=True)
+class ActionType(Generic[G, R, F]):
+    ros_type: str
+    goal: type[G]
+    result: type[R]
+    feedback: type[F]
+
+
+EmotionalStateService: ServiceType[EmotionalStateServiceRequest, EmotionalStateServiceResponse] = ServiceType(
+    "cyborg_controller/EmotionalStateService",
+    EmotionalStateServiceRequest,
+    EmotionalStateServiceResponse,
+)
+EmptyService: ServiceType[EmptyRequest, EmptyResponse] = ServiceType(
+    "std_srvs/Empty", EmptyRequest, EmptyResponse
+)
+StateMachineAction: ActionType[StateMachineGoal, StateMachineResult, StateMachineFeedback] = ActionType(
+    "cyborg_controller/StateMachineAction",
+    StateMachineGoal,
+    StateMachineResult,
+    StateMachineFeedback,
+)
+MoveBaseAction: ActionType[MoveBaseGoal, MoveBaseResult, MoveBaseFeedback] = ActionType(
+    "move_base_msgs/MoveBaseAction", MoveBaseGoal, MoveBaseResult, MoveBaseFeedback
+)
+
+
+def is_nested(cls: type[Message]) -> bool:
+    """True if some field of ``cls`` is itself a message (so copies must be deep)."""
+    return any(
+        isinstance(f.default_factory, type) and issubclass(f.default_factory, Message)
+        for f in dataclasses.fields(cls)
+        if f.default_factory is not dataclasses.MISSING
+    )

@@ -1,0 +1,26 @@
+"""Topic, service, action and parameter names of the Cyborg's ROS graph (thesis ch. 8-9).
+
+Every component uses these constants, so the embedded and ROS transports carry
+exactly the names existing Cyborg modules use.
+"""
+
+REGISTER_EVENT = "/cyborg_controller/register_event"
+STATE_CHANGE = "/cyborg_controller/state_change"
+STATE_RESOURCES_PARAM = "/state_resources"
+
+EMOTIONAL_FEEDBACK = "/cyborg_controller/emotional_feedback"
+EMOTIONAL_STATE = "/cyborg_controller/emotional_state"
+GET_EMOTIONAL_STATE = "/cyborg_controller/get_emotional_state"
+SET_EMOTIONAL_STATE = "/cyborg_controller/set_emotional_state"
+SET_EMOTIONAL_VALUES = "/cyborg_controller/set_emotional_values"
+EMOTIONAL_CONTROLLER = "/cyborg_controller/emotional_controller"
+MOTIVATOR_DECISION = "/cyborg_controller/motivator_decision"
+
+TEXT_TO_SPEECH = "/text_to_speech"
+TEXT_FROM_SPEECH = "/text_from_speech"
+
+MOVE_BASE = "/rosarnl_node/move_base"
+WANDER = "/rosarnl_node/wander"
+STOP = "/rosarnl_node/stop"
+AMCL_POSE = "/rosarnl_node/amcl_pose"
+ARNL_PATH_STATE = "/rosarnl_node/arnl_path_state"
