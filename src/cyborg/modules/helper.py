@@ -116,7 +116,14 @@ class StateServer:
                 old_task.cancel()
         handle.accept()
         task = self.module.node.clock.loop.create_task(self._run(handle), name=f"{self.name} goal")
+        # A task cancelled before it first runs never enters _run: acknowledge it here.
+        task.add_done_callback(lambda t: self._acknowledge_if_cancelled(t, handle))
         self._current = (handle, task)
+
+    @staticmethod
+    def _acknowledge_if_cancelled(task: asyncio.Task[Any], handle: _GoalHandle) -> None:
+        if task.cancelled() and not handle.status.is_terminal:
+            handle.canceled(StateMachineResult(status="preempted"))
 
     def _on_cancel(self, handle: _GoalHandle) -> None:
         if not self.honour_cancel:
