@@ -61,11 +61,14 @@ states:
 
 
 def test_duplicate_state_key_is_reported_with_line() -> None:
-    text = VALID + """
+    text = (
+        VALID
+        + """
   idle:
     action: other/idle
     transitions: {aborted: idle}
 """
+    )
     message = problems(text)
     assert "duplicate key 'idle'" in message and "line" in message
 
@@ -109,17 +112,22 @@ def test_state_without_action_or_substates() -> None:
 
 
 def test_all_problems_reported_at_once() -> None:
-    text = VALID.replace("music_play: music", "music_play: nowhere").replace("succeeded: idle, aborted: idle", "succeeded: gone")
+    text = VALID.replace("music_play: music", "music_play: nowhere").replace(
+        "succeeded: idle, aborted: idle", "succeeded: gone"
+    )
     message = problems(text)
     assert "'nowhere'" in message and "'gone'" in message
 
 
 def test_unreachable_state_is_a_warning_not_an_error() -> None:
-    text = VALID + """
+    text = (
+        VALID
+        + """
   lonely:
     action: cyborg_lonely/x
     transitions: {aborted: idle}
 """
+    )
     loaded = parse_config(text, source="m.yaml")
     assert any("'lonely' is unreachable" in w for w in loaded.warnings)
 

@@ -65,4 +65,8 @@ def test_resources_are_inherited_and_merged() -> None:
 
 def test_transitions_of_lists_inherited_events() -> None:
     machine = parse_config(NESTED).machine
-    assert machine.transitions_of("talking") == {"succeeded": "idle", "aborted": "idle", "conversation_interest": "idle"}
+    assert machine.transitions_of("talking") == {
+        "succeeded": "idle",
+        "aborted": "idle",
+        "conversation_interest": "idle",
+    }

@@ -152,7 +152,7 @@ def test_service_timeout_and_unavailable(graph: Graph) -> None:
     with pytest.raises(ServiceUnavailableError, match="/missing"):
         graph.run(missing.call(timeout=1.0))
     server.advertise_service("/slow", EmotionalStateService, slow)
-    with pytest.raises(ServiceTimeoutError, match="within 0.5 s"):
+    with pytest.raises(ServiceTimeoutError, match=r"within 0\.5 s"):
         graph.run(client.service_proxy("/slow", EmotionalStateService).call(timeout=0.5))
 
 
@@ -188,7 +188,9 @@ def test_action_goal_feedback_and_success(graph: Graph) -> None:
     async def main() -> GoalStatus:
         assert await client.wait_for_server(1.0)
         handle = client.send_goal(
-            StateMachineGoal("idle", "go", "mod"), on_feedback=lambda f: feedback.append(f.message), on_status=statuses.append
+            StateMachineGoal("idle", "go", "mod"),
+            on_feedback=lambda f: feedback.append(f.message),
+            on_status=statuses.append,
         )
         status = await handle.wait()
         assert handle.result is not None and handle.result.status == "done"
@@ -236,7 +238,9 @@ def test_action_cancel_pending_goal_is_recalled(graph: Graph) -> None:
     assert graph.run(main()) is GoalStatus.RECALLED
 
 
-@pytest.mark.parametrize(("verb", "expected"), [("reject", GoalStatus.REJECTED), ("abort", GoalStatus.ABORTED)])
+@pytest.mark.parametrize(
+    ("verb", "expected"), [("reject", GoalStatus.REJECTED), ("abort", GoalStatus.ABORTED)]
+)
 def test_action_reject_and_abort(graph: Graph, verb: str, expected: GoalStatus) -> None:
     mod, ctl = graph.node("mod"), graph.node("ctl")
 

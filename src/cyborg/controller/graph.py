@@ -96,10 +96,11 @@ def render_bytes(graph: graphviz.Digraph, fmt: str = "svg") -> bytes:
             "fix: install it (apt-get install graphviz) or write a .dot file instead"
         )
     try:
-        return subprocess.run(
+        done = subprocess.run(
             ["dot", f"-T{fmt}"], input=graph.source.encode(), capture_output=True, check=True
-        ).stdout
+        )
     except subprocess.CalledProcessError as exc:
         raise CyborgError(
             f"Graphviz could not render format {fmt!r}: {exc.stderr.decode().strip()}; fix: use svg, png or pdf"
         ) from exc
+    return bytes(done.stdout)
