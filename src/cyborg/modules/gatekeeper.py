@@ -1,0 +1,80 @@
+"""Gatekeeper: a relay in front of an output module (thesis 3.3 and 6.1.1).
+
+It relays messages from an input topic to an output topic only when their
+sender is the node the active state grants the gatekeeper's resource. On every
+state change it reads the active state's resource list from the parameter
+``/state_resources``. Until it has read a list it passes nothing (fail closed).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections import Counter
+from dataclasses import dataclass, field
+
+from cyborg.transport import topics
+from cyborg.transport.base import MessageInfo, Node, normalize_node_name
+from cyborg.transport.messages import Message, String, SystemState
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class GatekeeperStats:
+    passed: int = 0
+    dropped: int = 0
+    dropped_by_sender: Counter[str] = field(default_factory=Counter)
+
+
+class Gatekeeper:
+    """Relays ``input_topic`` -> ``output_topic`` for the node holding ``resource``."""
+
+    def __init__(
+        self,
+        node: Node,
+        *,
+        input_topic: str,
+        output_topic: str,
+        resource: str,
+        msg_type: type[Message] = String,
+    ) -> None:
+        self.node = node
+        self.resource = resource
+        self.input_topic = input_topic
+        self.output_topic = output_topic
+        self.allowed: str | None = None
+        self.known = False
+        self.stats = GatekeeperStats()
+        self._output = node.publisher(output_topic, msg_type)
+        node.subscribe(topics.STATE_CHANGE, SystemState, self._on_state_change)
+        node.subscribe(input_topic, msg_type, self._on_message, queue_size=100)
+
+    def _on_state_change(self, message: SystemState, info: MessageInfo) -> None:
+        resources = self.node.get_param(topics.STATE_RESOURCES_PARAM)
+        if not isinstance(resources, dict):
+            log.warning(
+                "%s: %s is not a resource list (%r); passing nothing",
+                self.node.name,
+                topics.STATE_RESOURCES_PARAM,
+                resources,
+            )
+            self.allowed, self.known = None, False
+            return
+        holder = resources.get(self.resource)
+        self.allowed = normalize_node_name(holder) if isinstance(holder, str) else None
+        self.known = True
+
+    def _on_message(self, message: Message, info: MessageInfo) -> None:
+        if self.known and self.allowed is not None and normalize_node_name(info.sender) == self.allowed:
+            self.stats.passed += 1
+            self._output.publish(message)
+            return
+        self.stats.dropped += 1
+        self.stats.dropped_by_sender[info.sender] += 1
+        log.debug(
+            "%s: dropped a message from %s (%s is held by %s)",
+            self.node.name,
+            info.sender,
+            self.resource,
+            self.allowed,
+        )

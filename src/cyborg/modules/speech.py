@@ -1,0 +1,114 @@
+"""Text-to-speech output module.
+
+Speaks one sentence at a time from a bounded queue. Every sentence is logged
+and published on ``/cyborg_tts/spoken`` (what the robot actually said, after
+the gatekeeper). With an audio device it speaks through espeak-ng; it can also
+write each sentence to a WAV file. A sentence occupies the speaker for its
+estimated duration on the injected clock, so virtual time behaves like real.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import glob
+import logging
+import os
+import shutil
+from collections import deque
+from pathlib import Path
+
+from cyborg.transport.base import MessageInfo, Node
+from cyborg.transport.messages import String
+
+log = logging.getLogger(__name__)
+
+SPEECH_INPUT_TOPIC = "/cyborg_tts/say"
+SPOKEN_TOPIC = "/cyborg_tts/spoken"
+WORDS_PER_SECOND = 2.6
+
+
+def audio_device_present() -> bool:
+    return bool(glob.glob("/dev/snd/pcmC*p")) or "PULSE_SERVER" in os.environ
+
+
+def estimated_duration(text: str) -> float:
+    return 0.4 + len(text.split()) / WORDS_PER_SECOND
+
+
+class TextToSpeech:
+    """Subscribes to ``input_topic`` and speaks what arrives, in order."""
+
+    def __init__(
+        self,
+        node: Node,
+        *,
+        input_topic: str = SPEECH_INPUT_TOPIC,
+        queue_size: int = 10,
+        play_audio: bool | None = None,
+        wav_dir: Path | None = None,
+        voice: str = "en",
+    ) -> None:
+        self.node = node
+        self.queue: deque[str] = deque()
+        self.queue_size = queue_size
+        self.dropped = 0
+        self.spoken: list[str] = []
+        self.voice = voice
+        self.espeak = shutil.which("espeak-ng")
+        wants_audio = audio_device_present() if play_audio is None else play_audio
+        self.play_audio = bool(wants_audio and self.espeak and not node.clock.is_virtual)
+        self.wav_dir = wav_dir
+        if wav_dir is not None:
+            wav_dir.mkdir(parents=True, exist_ok=True)
+        self._wake = asyncio.Event()
+        self._spoken_pub = node.publisher(SPOKEN_TOPIC, String)
+        node.subscribe(input_topic, String, self._on_text)
+        self._task = node.clock.loop.create_task(self._speak_loop(), name="tts")
+
+    def _on_text(self, message: String, info: MessageInfo) -> None:
+        text = message.data.strip()
+        if not text:
+            return
+        if len(self.queue) >= self.queue_size:
+            self.queue.popleft()
+            self.dropped += 1
+            log.warning("speech queue full: dropped the oldest sentence")
+        self.queue.append(text)
+        self._wake.set()
+
+    async def _speak_loop(self) -> None:
+        while True:
+            while not self.queue:
+                self._wake.clear()
+                await self._wake.wait()
+            text = self.queue.popleft()
+            await self._speak(text)
+
+    async def _speak(self, text: str) -> None:
+        log.info("saying: %s", text)
+        self.spoken.append(text)
+        self._spoken_pub.publish(String(data=text))
+        if self.wav_dir is not None and self.espeak:
+            path = self.wav_dir / f"{len(self.spoken):04d}.wav"
+            await self._espeak("-w", str(path), text)
+        if self.play_audio:
+            await self._espeak(text)
+        else:
+            await self.node.clock.sleep(estimated_duration(text))
+
+    async def _espeak(self, *args: str) -> None:
+        assert self.espeak is not None
+        try:
+            process = await asyncio.create_subprocess_exec(
+                self.espeak,
+                "-v",
+                self.voice,
+                *args,
+                stdout=asyncio.subprocess.DEVNULL,
+                stderr=asyncio.subprocess.PIPE,
+            )
+            _, err = await process.communicate()
+            if process.returncode:
+                log.warning("espeak-ng failed (%s): %s", process.returncode, err.decode().strip())
+        except OSError as exc:
+            log.warning("espeak-ng could not run: %s", exc)
