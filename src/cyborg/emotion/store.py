@@ -1,0 +1,305 @@
+"""Persistent state of the controller core's emotion system and motivator (SQLite).
+
+One file holds the PAD point and when it was last updated (wall time, seconds),
+the emotion system's on/off switch, the motivator's saturations and its table of
+motivational events. Every write is committed at once (WAL, synchronous=FULL),
+so a crash loses at most the write in flight.
+
+A missing file is created with defaults (events seeded from the caller's list);
+a file that is not a database, fails ``PRAGMA integrity_check`` or has another
+schema is moved aside to ``<name>.corrupt-<timestamp>`` with a warning and
+recreated, so the controller always starts.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import sqlite3
+import time
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from types import TracebackType
+
+from pydantic import ValidationError
+
+from cyborg.emotion.model import DIMENSIONS, PAD, clamp
+from cyborg.errors import DatabaseError
+from cyborg.motivator.logic import MotivationalEvent
+
+log = logging.getLogger(__name__)
+
+SCHEMA_VERSION = "1"
+
+_TABLES: dict[str, str] = {
+    "meta": "CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)",
+    "emotion": (
+        "CREATE TABLE emotion (id INTEGER PRIMARY KEY CHECK (id = 1), "
+        "pleasure REAL NOT NULL, arousal REAL NOT NULL, dominance REAL NOT NULL, "
+        "updated_at REAL, enabled INTEGER NOT NULL)"
+    ),
+    "saturations": "CREATE TABLE saturations (event TEXT PRIMARY KEY, value REAL NOT NULL)",
+    "events": (
+        "CREATE TABLE events (state TEXT NOT NULL, event TEXT NOT NULL, "
+        "reward_pleasure REAL NOT NULL, reward_arousal REAL NOT NULL, "
+        "reward_dominance REAL NOT NULL, event_cost REAL, PRIMARY KEY (state, event))"
+    ),
+}
+_COLUMNS: dict[str, list[str]] = {
+    "meta": ["key", "value"],
+    "emotion": ["id", "pleasure", "arousal", "dominance", "updated_at", "enabled"],
+    "saturations": ["event", "value"],
+    "events": [
+        "state",
+        "event",
+        "reward_pleasure",
+        "reward_arousal",
+        "reward_dominance",
+        "event_cost",
+    ],
+}
+
+
+class _Unusable(Exception):
+    """The file exists but cannot be used as this store (reason in args[0])."""
+
+
+@dataclass(frozen=True)
+class StoredEmotion:
+    """The persisted PAD point, the wall time of its last update and the on/off switch."""
+
+    pad: PAD
+    updated_at: float | None
+    enabled: bool
+
+
+class ControllerStore:
+    """The SQLite file behind the emotion system and the motivator."""
+
+    def __init__(self, path: str | Path, seed_events: Sequence[MotivationalEvent] = ()) -> None:
+        self.path = Path(path)
+        self._seed = list(seed_events)
+        self._conn = self._open_or_recover()
+
+    # --- opening ---------------------------------------------------------------------
+
+    def _open_or_recover(self) -> sqlite3.Connection:
+        if self.path.is_dir():
+            raise DatabaseError(f"{self.path} is a folder: give the store a file name, e.g. cyborg.db")
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise DatabaseError(
+                f"cannot create the folder for {self.path}: {exc}; pick a writable path"
+            ) from exc
+        wal = self.path.with_name(self.path.name + "-wal")
+        if self.path.exists() and (self.path.stat().st_size > 0 or wal.exists()):
+            try:
+                return self._open_existing()
+            except _Unusable as exc:
+                self._move_aside(str(exc.args[0]))
+        return self._create()
+
+    def _connect(self) -> sqlite3.Connection:
+        """Connect and set the pragmas; raises _Unusable if the file is not a database."""
+        try:
+            conn = sqlite3.connect(self.path, isolation_level=None)
+        except sqlite3.Error as exc:
+            raise DatabaseError(f"cannot open {self.path}: {exc}; check permissions") from exc
+        try:
+            conn.execute("PRAGMA journal_mode=WAL")
+            conn.execute("PRAGMA synchronous=FULL")
+        except sqlite3.OperationalError as exc:
+            conn.close()
+            raise DatabaseError(
+                f"cannot use {self.path}: {exc}; check permissions and that no other program holds it locked"
+            ) from exc
+        except sqlite3.DatabaseError as exc:
+            conn.close()
+            raise _Unusable(f"not an SQLite database ({exc})") from exc
+        return conn
+
+    def _open_existing(self) -> sqlite3.Connection:
+        conn = self._connect()
+        try:
+            self._check(conn)
+        except sqlite3.DatabaseError as exc:
+            conn.close()
+            raise _Unusable(str(exc)) from exc
+        except _Unusable:
+            conn.close()
+            raise
+        return conn
+
+    @staticmethod
+    def _check(conn: sqlite3.Connection) -> None:
+        check = conn.execute("PRAGMA integrity_check").fetchall()
+        if check != [("ok",)]:
+            raise _Unusable(f"integrity_check failed: {check[:3]}")
+        for table, columns in _COLUMNS.items():
+            found = [row[1] for row in conn.execute(f"PRAGMA table_info({table})")]
+            if found != columns:
+                raise _Unusable(f"table {table} has columns {found}, expected {columns}")
+        if conn.execute("SELECT COUNT(*) FROM emotion").fetchone()[0] != 1:
+            raise _Unusable("the emotion row is missing")
+
+    def _move_aside(self, reason: str) -> None:
+        stamp = time.strftime("%Y%m%dT%H%M%S")
+        target = self.path.with_name(f"{self.path.name}.corrupt-{stamp}")
+        n = 1
+        while target.exists():
+            target = self.path.with_name(f"{self.path.name}.corrupt-{stamp}-{n}")
+            n += 1
+        try:
+            self.path.rename(target)
+            for suffix in ("-wal", "-shm"):
+                side = self.path.with_name(self.path.name + suffix)
+                if side.exists():
+                    side.rename(target.with_name(target.name + suffix))
+        except OSError as exc:
+            raise DatabaseError(
+                f"{self.path} is unusable ({reason}) and could not be moved aside: {exc}; "
+                "delete or move the file by hand"
+            ) from exc
+        log.warning(
+            "controller store %s is unusable (%s); moved it to %s and started afresh",
+            self.path,
+            reason,
+            target,
+        )
+
+    def _create(self) -> sqlite3.Connection:
+        try:
+            conn = self._connect()
+        except _Unusable as exc:
+            raise DatabaseError(f"cannot create {self.path}: {exc.args[0]}") from exc
+        with self._transaction(conn):
+            for sql in _TABLES.values():
+                conn.execute(sql)
+            conn.execute("INSERT INTO meta VALUES ('schema_version', ?)", (SCHEMA_VERSION,))
+            conn.execute("INSERT INTO emotion VALUES (1, 0.0, 0.0, 0.0, NULL, 1)")
+            for event in self._seed:
+                self._upsert_event(conn, event)
+        return conn
+
+    # --- plumbing --------------------------------------------------------------------
+
+    @staticmethod
+    @contextmanager
+    def _transaction(conn: sqlite3.Connection) -> Iterator[None]:
+        conn.execute("BEGIN IMMEDIATE")
+        try:
+            yield
+        except BaseException:
+            conn.execute("ROLLBACK")
+            raise
+        conn.execute("COMMIT")
+
+    @contextmanager
+    def _writing(self, what: str) -> Iterator[sqlite3.Connection]:
+        try:
+            with self._transaction(self._conn):
+                yield self._conn
+        except sqlite3.Error as exc:
+            raise DatabaseError(
+                f"could not {what} in {self.path}: {exc}; check the disk and file permissions"
+            ) from exc
+
+    def close(self) -> None:
+        self._conn.close()
+
+    def __enter__(self) -> ControllerStore:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    # --- emotion ---------------------------------------------------------------------
+
+    def get_emotion(self) -> StoredEmotion:
+        p, a, d, updated_at, enabled = self._conn.execute(
+            "SELECT pleasure, arousal, dominance, updated_at, enabled FROM emotion"
+        ).fetchone()
+        values = [clamp(_finite(x, f"stored {dim}")) for x, dim in zip((p, a, d), DIMENSIONS, strict=True)]
+        when = updated_at if isinstance(updated_at, int | float) and math.isfinite(updated_at) else None
+        return StoredEmotion(PAD.of(values), when, bool(enabled))
+
+    def save_emotion(self, pad: PAD, updated_at: float) -> None:
+        with self._writing("save the PAD values") as conn:
+            conn.execute(
+                "UPDATE emotion SET pleasure = ?, arousal = ?, dominance = ?, updated_at = ?",
+                (*pad.as_tuple(), updated_at),
+            )
+
+    def set_emotion_enabled(self, enabled: bool) -> None:
+        with self._writing("switch the emotion system") as conn:
+            conn.execute("UPDATE emotion SET enabled = ?", (int(enabled),))
+
+    # --- saturations -----------------------------------------------------------------
+
+    def get_saturations(self) -> dict[str, float]:
+        rows = self._conn.execute("SELECT event, value FROM saturations ORDER BY event")
+        return {name: max(0.0, min(1.0, _finite(v, f"saturation of {name}"))) for name, v in rows}
+
+    def save_saturations(self, saturations: Mapping[str, float]) -> None:
+        """Replace all saturations with ``saturations``."""
+        with self._writing("save the motivator's saturations") as conn:
+            conn.execute("DELETE FROM saturations")
+            conn.executemany("INSERT INTO saturations VALUES (?, ?)", sorted(saturations.items()))
+
+    # --- motivational events -------------------------------------------------------------
+
+    def list_events(self, state: str | None = None) -> list[MotivationalEvent]:
+        sql = "SELECT * FROM events"
+        rows = (
+            self._conn.execute(sql + " ORDER BY state, event").fetchall()
+            if state is None
+            else self._conn.execute(sql + " WHERE state = ? ORDER BY event", (state,)).fetchall()
+        )
+        events = []
+        for row in rows:
+            try:
+                events.append(MotivationalEvent(**dict(zip(_COLUMNS["events"], row, strict=True))))
+            except ValidationError as exc:
+                log.warning("skipping invalid motivational event row %s in %s: %s", row, self.path, exc)
+        return events
+
+    def add_event(self, event: MotivationalEvent) -> None:
+        """Add ``event``, replacing any event of the same name in the same state."""
+        with self._writing(f"add event {event.event!r}") as conn:
+            self._upsert_event(conn, event)
+
+    def remove_event(self, state: str, event: str) -> bool:
+        """Remove an event; False if there was none of that name in that state."""
+        with self._writing(f"remove event {event!r}") as conn:
+            cursor = conn.execute("DELETE FROM events WHERE state = ? AND event = ?", (state, event))
+        return cursor.rowcount > 0
+
+    @staticmethod
+    def _upsert_event(conn: sqlite3.Connection, event: MotivationalEvent) -> None:
+        conn.execute(
+            "INSERT OR REPLACE INTO events VALUES (?, ?, ?, ?, ?, ?)",
+            (
+                event.state,
+                event.event,
+                event.reward_pleasure,
+                event.reward_arousal,
+                event.reward_dominance,
+                event.event_cost,
+            ),
+        )
+
+
+def _finite(value: object, what: str) -> float:
+    """A stored number hand-edited into nonsense becomes 0 (logged) rather than a crash."""
+    if isinstance(value, int | float) and math.isfinite(value):
+        return float(value)
+    log.warning("%s is %r, not a finite number; using 0.0", what, value)
+    return 0.0
