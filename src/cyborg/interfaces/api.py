@@ -1,0 +1,235 @@
+"""The local HTTP API a running robot serves (documented with OpenAPI).
+
+The command tool (`cyborg event`, `cyborg say`, `cyborg emotion ...`,
+`cyborg status`) and the dashboard talk to it. It is a node on the robot's
+transport: commands become messages on the thesis's topics, and everything the
+robot does arrives as records (see :mod:`cyborg.sim.records`), kept in a ring
+buffer and streamed over a websocket. Bound to 127.0.0.1 unless told otherwise.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+import math
+from collections import deque
+from collections.abc import Callable
+from typing import Any
+
+from aiohttp import WSMsgType, web
+
+from cyborg.controller.machine import MachineSpec
+from cyborg.sim.records import Record, RecordStream
+from cyborg.transport import topics
+from cyborg.transport.base import Node
+from cyborg.transport.messages import EmotionalFeedback, String
+
+log = logging.getLogger(__name__)
+
+DEFAULT_PORT = 8642
+RECORD_BUFFER = 5000
+
+
+class CommandError(web.HTTPBadRequest):
+    def __init__(self, problem: str) -> None:
+        super().__init__(text=json.dumps({"error": problem}), content_type="application/json")
+
+
+class RobotAPI:
+    """HTTP + websocket front of one robot."""
+
+    def __init__(
+        self,
+        node: Node,
+        *,
+        machine: MachineSpec | None = None,
+        extra_status: Callable[[], dict[str, Any]] | None = None,
+    ) -> None:
+        self.node = node
+        self.machine = machine
+        self.extra_status = extra_status
+        self.records: deque[Record] = deque(maxlen=RECORD_BUFFER)
+        self.sequence = 0
+        self.status: dict[str, Any] = {
+            "state": None,
+            "previous_state": None,
+            "event": None,
+            "emotion": "neutral",
+            "pleasure": 0.0,
+            "arousal": 0.0,
+            "dominance": 0.0,
+        }
+        self._sockets: dict[web.WebSocketResponse, asyncio.Queue[str]] = {}
+        self.stream = RecordStream(node)
+        self.stream.listeners.append(self._on_record)
+        self._events = node.publisher(topics.REGISTER_EVENT, String)
+        self._heard = node.publisher(topics.TEXT_FROM_SPEECH, String)
+        self._set_emotion = node.publisher(topics.SET_EMOTIONAL_STATE, String)
+        self._set_values = node.publisher(topics.SET_EMOTIONAL_VALUES, EmotionalFeedback)
+        self._switch = node.publisher(topics.EMOTIONAL_CONTROLLER, String)
+        self.app = web.Application()
+        self.app.add_routes(
+            [
+                web.get("/api/status", self.get_status),
+                web.post("/api/event", self.post_event),
+                web.post("/api/say", self.post_say),
+                web.post("/api/emotion/set", self.post_emotion_set),
+                web.post("/api/emotion/values", self.post_emotion_values),
+                web.post("/api/emotion/switch", self.post_emotion_switch),
+                web.get("/api/records", self.get_records),
+                web.get("/api/openapi.json", self.get_openapi),
+                web.get("/api/ws", self.websocket),
+            ]
+        )
+        self._runner: web.AppRunner | None = None
+        self.port: int | None = None
+
+    # --- records ------------------------------------------------------------------------
+
+    def _on_record(self, record: Record) -> None:
+        self.sequence += 1
+        record = {"seq": self.sequence, **record}
+        self.records.append(record)
+        kind = record["type"]
+        if kind == "state":
+            self.status.update(state=record["to"], previous_state=record["from"], event=record["event"])
+        elif kind == "emotion":
+            self.status.update(
+                emotion=record["emotion"],
+                pleasure=record["pleasure"],
+                arousal=record["arousal"],
+                dominance=record["dominance"],
+            )
+        if self._sockets:
+            text = json.dumps(record)
+            for queue in self._sockets.values():
+                if queue.full():
+                    queue.get_nowait()  # a slow browser loses the oldest records, not the robot's time
+                queue.put_nowait(text)
+
+    def current_status(self) -> dict[str, Any]:
+        status = dict(self.status)
+        state = status.get("state")
+        status["valid_events"] = sorted(self.machine.transitions_of(state)) if self.machine and state else []
+        status["time"] = self.node.clock.now()
+        if self.extra_status is not None:
+            status.update(self.extra_status())
+        return status
+
+    # --- handlers -------------------------------------------------------------------------
+
+    async def _json(self, request: web.Request) -> dict[str, Any]:
+        try:
+            body = await request.json()
+        except (json.JSONDecodeError, UnicodeDecodeError):
+            raise CommandError('the body is not JSON; send e.g. {"name": "music_play"}') from None
+        if not isinstance(body, dict):
+            raise CommandError("the body must be a JSON object")
+        return body
+
+    @staticmethod
+    def _text_field(body: dict[str, Any], key: str) -> str:
+        value = body.get(key)
+        if not isinstance(value, str) or not value.strip():
+            raise CommandError(f"{key!r} must be a non-empty string")
+        return value.strip()
+
+    async def get_status(self, request: web.Request) -> web.Response:
+        return web.json_response(self.current_status())
+
+    async def post_event(self, request: web.Request) -> web.Response:
+        name = self._text_field(await self._json(request), "name")
+        self._events.publish(String(data=name))
+        valid = self.current_status()["valid_events"]
+        return web.json_response({"sent": name, "is_transition": name in valid if self.machine else None})
+
+    async def post_say(self, request: web.Request) -> web.Response:
+        text = self._text_field(await self._json(request), "text")
+        self._heard.publish(String(data=text))
+        return web.json_response({"sent": text})
+
+    async def post_emotion_set(self, request: web.Request) -> web.Response:
+        name = self._text_field(await self._json(request), "name")
+        self._set_emotion.publish(String(data=name))
+        return web.json_response({"sent": name})
+
+    async def post_emotion_values(self, request: web.Request) -> web.Response:
+        body = await self._json(request)
+        values = []
+        for key in ("pleasure", "arousal", "dominance"):
+            value = body.get(key)
+            if (
+                not isinstance(value, int | float)
+                or isinstance(value, bool)
+                or not math.isfinite(value)
+                or abs(value) > 1
+            ):
+                raise CommandError(f"{key!r} must be a number in [-1, 1], got {value!r}")
+            values.append(float(value))
+        self._set_values.publish(EmotionalFeedback(*values))
+        return web.json_response(
+            {"sent": dict(zip(("pleasure", "arousal", "dominance"), values, strict=True))}
+        )
+
+    async def post_emotion_switch(self, request: web.Request) -> web.Response:
+        body = await self._json(request)
+        on = body.get("on")
+        if not isinstance(on, bool):
+            raise CommandError("'on' must be true or false")
+        self._switch.publish(String(data="on" if on else "off"))
+        return web.json_response({"sent": "on" if on else "off"})
+
+    async def get_records(self, request: web.Request) -> web.Response:
+        try:
+            since = int(request.query.get("since", "0"))
+        except ValueError:
+            raise CommandError("'since' must be a record sequence number") from None
+        kinds = set(filter(None, request.query.get("type", "").split(",")))
+        out = [r for r in self.records if r["seq"] > since and (not kinds or r["type"] in kinds)]
+        return web.json_response(out)
+
+    async def get_openapi(self, request: web.Request) -> web.Response:
+        from cyborg.interfaces.openapi import OPENAPI
+
+        return web.json_response(OPENAPI)
+
+    async def websocket(self, request: web.Request) -> web.WebSocketResponse:
+        socket = web.WebSocketResponse(heartbeat=20)
+        await socket.prepare(request)
+        queue: asyncio.Queue[str] = asyncio.Queue(maxsize=1000)
+        self._sockets[socket] = queue
+        await socket.send_str(json.dumps({"type": "hello", "status": self.current_status()}))
+
+        async def pump() -> None:
+            while not socket.closed:
+                await socket.send_str(await queue.get())
+
+        sender = asyncio.ensure_future(pump())
+        try:
+            async for message in socket:
+                if message.type is WSMsgType.ERROR:
+                    break
+        finally:
+            sender.cancel()
+            self._sockets.pop(socket, None)
+        return socket
+
+    # --- serving --------------------------------------------------------------------------
+
+    async def start(self, host: str = "127.0.0.1", port: int = DEFAULT_PORT) -> str:
+        self._runner = web.AppRunner(self.app, access_log=None)
+        await self._runner.setup()
+        site = web.TCPSite(self._runner, host, port)
+        await site.start()
+        server = site._server
+        sockets = getattr(server, "sockets", None) or []
+        self.port = sockets[0].getsockname()[1] if sockets else port
+        return f"http://{host}:{self.port}/"
+
+    async def stop(self) -> None:
+        for socket in list(self._sockets):
+            await socket.close()
+        if self._runner is not None:
+            await self._runner.cleanup()
+            self._runner = None

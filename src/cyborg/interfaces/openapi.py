@@ -1,0 +1,107 @@
+"""OpenAPI 3 description of the robot's local HTTP API (served at /api/openapi.json)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+
+def _command(summary: str, schema: dict[str, Any]) -> dict[str, Any]:
+    return {
+        "post": {
+            "summary": summary,
+            "requestBody": {"required": True, "content": {"application/json": {"schema": schema}}},
+            "responses": {
+                "200": {
+                    "description": "sent",
+                    "content": {"application/json": {"schema": {"type": "object"}}},
+                },
+                "400": {"description": "bad input; the body's 'error' names the problem"},
+            },
+        }
+    }
+
+
+def _object(**properties: dict[str, Any]) -> dict[str, Any]:
+    return {"type": "object", "required": list(properties), "properties": properties}
+
+
+STATUS_SCHEMA: dict[str, Any] = {
+    "type": "object",
+    "properties": {
+        "state": {"type": "string", "nullable": True},
+        "previous_state": {"type": "string", "nullable": True},
+        "event": {"type": "string", "nullable": True},
+        "emotion": {"type": "string"},
+        "pleasure": {"type": "number"},
+        "arousal": {"type": "number"},
+        "dominance": {"type": "number"},
+        "valid_events": {"type": "array", "items": {"type": "string"}},
+        "time": {"type": "number", "description": "robot clock, seconds since the epoch"},
+    },
+}
+
+OPENAPI: dict[str, Any] = {
+    "openapi": "3.0.3",
+    "info": {
+        "title": "Cyborg robot API",
+        "version": "1",
+        "description": "Commands and status of a running Cyborg.",
+    },
+    "paths": {
+        "/api/status": {
+            "get": {
+                "summary": "Previous state, event, current state, emotion and PAD values",
+                "responses": {
+                    "200": {
+                        "description": "status",
+                        "content": {"application/json": {"schema": STATUS_SCHEMA}},
+                    }
+                },
+            }
+        },
+        "/api/event": _command(
+            "Publish an event on /cyborg_controller/register_event", _object(name={"type": "string"})
+        ),
+        "/api/say": _command(
+            "Publish text on /text_from_speech, as speech-to-text would", _object(text={"type": "string"})
+        ),
+        "/api/emotion/set": _command("Set the emotion by name", _object(name={"type": "string"})),
+        "/api/emotion/values": _command(
+            "Set the PAD values",
+            _object(
+                pleasure={"type": "number", "minimum": -1, "maximum": 1},
+                arousal={"type": "number", "minimum": -1, "maximum": 1},
+                dominance={"type": "number", "minimum": -1, "maximum": 1},
+            ),
+        ),
+        "/api/emotion/switch": _command(
+            "Switch the emotion system on or off", _object(on={"type": "boolean"})
+        ),
+        "/api/records": {
+            "get": {
+                "summary": "Recent records (state, emotion, say, heard, pose, motivator)",
+                "parameters": [
+                    {"name": "since", "in": "query", "schema": {"type": "integer"}},
+                    {
+                        "name": "type",
+                        "in": "query",
+                        "schema": {"type": "string"},
+                        "description": "comma-separated record types",
+                    },
+                ],
+                "responses": {
+                    "200": {
+                        "description": "records",
+                        "content": {"application/json": {"schema": {"type": "array"}}},
+                    }
+                },
+            }
+        },
+        "/api/ws": {
+            "get": {
+                "summary": "Websocket: a hello with the status, then every record as JSON",
+                "responses": {"101": {"description": "switching protocols"}},
+            }
+        },
+    },
+}

@@ -1,0 +1,95 @@
+"""Turn what happens on the robot's topics into plain records.
+
+One record per observation, each a dict with ``t`` (seconds since the run
+started, on the injected clock) and ``type``: ``state``, ``emotion``, ``say``
+(what was actually spoken, after the gatekeeper), ``heard``, ``pose`` (at most
+once per second while the pose changes) and ``motivator``. The scenario
+transcript, the HTTP API and the dashboard all read these records.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable
+from typing import Any
+
+from cyborg.modules.speech import SPOKEN_TOPIC
+from cyborg.transport import topics
+from cyborg.transport.base import MessageInfo, Node
+from cyborg.transport.messages import EmotionalState, PoseWithCovarianceStamped, String, SystemState
+
+Record = dict[str, Any]
+POSE_INTERVAL = 1.0
+
+
+def yaw_of(z: float, w: float) -> float:
+    return 2.0 * math.atan2(z, w)
+
+
+class RecordStream:
+    """Subscribes to the robot's topics through ``node`` and calls listeners with records."""
+
+    def __init__(self, node: Node, *, origin: float | None = None) -> None:
+        self.node = node
+        self.origin = node.clock.monotonic() if origin is None else origin
+        self.listeners: list[Callable[[Record], None]] = []
+        self._last_pose_t = -math.inf
+        self._last_pose: tuple[float, float, float] | None = None
+        node.subscribe(topics.STATE_CHANGE, SystemState, self._on_state, queue_size=1000)
+        node.subscribe(topics.EMOTIONAL_STATE, EmotionalState, self._on_emotion, queue_size=1000)
+        node.subscribe(SPOKEN_TOPIC, String, self._on_spoken, queue_size=1000)
+        node.subscribe(topics.TEXT_FROM_SPEECH, String, self._on_heard, queue_size=1000)
+        node.subscribe(topics.AMCL_POSE, PoseWithCovarianceStamped, self._on_pose, queue_size=10)
+        node.subscribe(topics.MOTIVATOR_DECISION, String, self._on_decision, queue_size=1000)
+
+    def now(self) -> float:
+        return round(self.node.clock.monotonic() - self.origin, 3)
+
+    def emit(self, record_type: str, **fields: Any) -> None:
+        record: Record = {"t": self.now(), "type": record_type, **fields}
+        for listener in list(self.listeners):
+            listener(record)
+
+    def _on_state(self, m: SystemState, info: MessageInfo) -> None:
+        self.emit("state", event=m.event, **{"from": m.from_system_state}, to=m.to_system_state)
+
+    def _on_emotion(self, m: EmotionalState, info: MessageInfo) -> None:
+        self.emit(
+            "emotion",
+            emotion=m.to_emotional_state,
+            pleasure=round(m.current_pleasure, 4),
+            arousal=round(m.current_arousal, 4),
+            dominance=round(m.current_dominance, 4),
+        )
+
+    def _on_spoken(self, m: String, info: MessageInfo) -> None:
+        self.emit("say", text=m.data)
+
+    def _on_heard(self, m: String, info: MessageInfo) -> None:
+        self.emit("heard", text=m.data)
+
+    def _on_pose(self, m: PoseWithCovarianceStamped, info: MessageInfo) -> None:
+        p = m.pose
+        pose = (
+            round(p.position.x, 3),
+            round(p.position.y, 3),
+            round(yaw_of(p.orientation.z, p.orientation.w), 3),
+        )
+        now = self.now()
+        if pose == self._last_pose or now - self._last_pose_t < POSE_INTERVAL:
+            return
+        self._last_pose, self._last_pose_t = pose, now
+        self.emit("pose", x=pose[0], y=pose[1], theta=pose[2])
+
+    def _on_decision(self, m: String, info: MessageInfo) -> None:
+        try:
+            decision = json.loads(m.data)
+        except json.JSONDecodeError:
+            decision = {"event": None, "raw": m.data}
+        self.emit(
+            "motivator",
+            event=decision.get("event"),
+            candidates=decision.get("candidates", []),
+            reason=decision.get("reason", ""),
+        )
