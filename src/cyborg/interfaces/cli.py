@@ -111,20 +111,50 @@ def _parse_speed(value: str | None) -> float | str | None:
 )
 @click.option("--speed", default=None, help="virtual time: a factor (10) or 'max'; default real time")
 @click.option("--duration", type=float, default=None, help="stop after this many (virtual) seconds")
-def sim(config_path: Path | None, speed: str | None, duration: float | None) -> None:
-    """Run the whole simulated robot in this process."""
+@click.option("--host", default="127.0.0.1", show_default=True, help="address the API and dashboard bind to")
+@click.option(
+    "--port",
+    default=8642,
+    show_default=True,
+    type=int,
+    help="port of the API and dashboard (0: any free port)",
+)
+def sim(config_path: Path | None, speed: str | None, duration: float | None, host: str, port: int) -> None:
+    """Run the whole simulated robot in this process, with its API and dashboard."""
+    from cyborg.interfaces.api import RobotAPI
     from cyborg.sim.runner import run_sim
+
+    async def serve(transport, robot):  # type: ignore[no-untyped-def]
+        api = RobotAPI(transport.node("cyborg_api"), machine=robot.config.machine)
+        try:
+            url = await api.start(host, port)
+        except OSError as exc:
+            raise CyborgError(
+                f"cannot serve on {host}:{port}: {exc.strerror}; fix: pass --port 0 or another port"
+            ) from exc
+        click.secho(f"dashboard and API: {url}  (try: cyborg status --url {url.rstrip('/')})", fg="green")
+        return api.stop
 
     try:
         config = _load(config_path)
         for warning in config.warnings:
             click.secho(f"warning: {warning}", fg="yellow", err=True)
         asyncio.set_event_loop(None)
-        run_sim(config, speed=_parse_speed(speed), duration=duration, echo=click.echo)
+        run_sim(config, speed=_parse_speed(speed), duration=duration, echo=click.echo, serve=serve)
     except CyborgError as exc:
         _fail(exc)
     except KeyboardInterrupt:
         click.echo("stopped")
+
+
+def _add_tool_commands() -> None:
+    from cyborg.interfaces.command_tool import COMMANDS
+
+    for command in COMMANDS:
+        cli.add_command(command)
+
+
+_add_tool_commands()
 
 
 def main() -> None:

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 
 from cyborg.controller.config import LoadedConfig
-from cyborg.sim.robot import build_robot
+from cyborg.sim.robot import Robot, build_robot
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo
 from cyborg.transport.clock import Clock, RealClock, VirtualClock
@@ -29,6 +29,7 @@ def run_sim(
     speed: float | str | None = "real",
     duration: float | None = None,
     echo: Callable[[str], None] = print,
+    serve: Callable[[EmbeddedTransport, Robot], Awaitable[Callable[[], Awaitable[None]]]] | None = None,
 ) -> None:
     clock = make_clock(speed)
     transport = EmbeddedTransport(clock)
@@ -49,12 +50,15 @@ def run_sim(
     monitor.subscribe(topics.TEXT_TO_SPEECH, String, on_say)
 
     async def main() -> None:
+        stop_server = await serve(transport, robot) if serve is not None else None
         robot.start()
         if duration is None:
             await clock.loop.create_future()
         else:
             await clock.sleep(duration)
         await robot.controller.stop()
+        if stop_server is not None:
+            await stop_server()
         transport.shutdown()
 
     try:
