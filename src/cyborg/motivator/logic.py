@@ -83,6 +83,11 @@ class MotivatorSettings(BaseModel):
     saturation_decline_per_second: float = Field(
         0.001, ge=0.0, description="time-based decline of every saturation"
     )
+    min_seconds_in_state: float = Field(
+        10.0,
+        ge=0.0,
+        description="no choice until the controller has been this long in its current state",
+    )
     idle_reset_seconds: float | None = Field(
         None, gt=0.0, description="after this long in one state all saturations reset to 0"
     )
@@ -235,6 +240,15 @@ def decline(saturations: Mapping[str, float], elapsed_seconds: float, rate: floa
             f"elapsed_seconds = {elapsed_seconds}: pass the non-negative time since the last decline"
         )
     return {name: max(0.0, value - rate * elapsed_seconds) for name, value in saturations.items()}
+
+
+def is_ready(seconds_in_state: float, settings: MotivatorSettings) -> bool:
+    """True once the controller has been in its state for ``min_seconds_in_state``.
+
+    The pause lets modules' own events and feedback come first (the idle module's
+    first boredom feedback makes the Cyborg unconcerned before it wanders).
+    """
+    return seconds_in_state >= settings.min_seconds_in_state
 
 
 def should_reset(seconds_in_state: float, settings: MotivatorSettings) -> bool:
