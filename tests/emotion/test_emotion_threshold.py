@@ -11,6 +11,7 @@ import pytest
 
 from cyborg.emotion.model import NEUTRAL, PAD, EmotionSettings, nearest_emotion, update
 
+ORIGIN = PAD()
 IDLE = PAD(-0.05, -0.05, -0.05)
 MOTIVATOR_NAVIGATION = PAD(0.0, 0.05, -0.01)
 PLAN_OWN_CHOICE = PAD(0.0, 0.0, 0.1)
@@ -24,7 +25,7 @@ PLEASANT_ARRIVAL = PAD(0.1, 0.0, 0.0)
 def labels(
     steps: Sequence[PAD],
     settings: EmotionSettings | None = None,
-    start: PAD = PAD(),
+    start: PAD = ORIGIN,
     current: str = NEUTRAL,
 ) -> tuple[list[str], PAD]:
     s = settings or EmotionSettings()
