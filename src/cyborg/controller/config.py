@@ -32,7 +32,9 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from cyborg.controller.machine import ABORTED, MachineSpec, StateSpec, Timeouts
+from cyborg.emotion.model import EmotionSettings
 from cyborg.errors import ConfigError
+from cyborg.motivator.logic import MotivatorSettings
 
 # --- YAML with duplicate-key detection -------------------------------------------
 
@@ -112,8 +114,8 @@ class ConfigModel(BaseModel):
     initial: str = "idle"
     timeouts: TimeoutsModel = Field(default_factory=TimeoutsModel)  # type: ignore[arg-type]
     states: dict[str, StateModel]
-    emotion: dict[str, Any] = Field(default_factory=dict)
-    motivator: dict[str, Any] = Field(default_factory=dict)
+    emotion: EmotionSettings = Field(default_factory=EmotionSettings)  # type: ignore[arg-type]
+    motivator: MotivatorSettings = Field(default_factory=MotivatorSettings)  # type: ignore[arg-type]
     navigation: dict[str, Any] = Field(default_factory=dict)
     modules: dict[str, Any] = Field(default_factory=dict)
     gatekeepers: list[dict[str, Any]] = Field(default_factory=list)
@@ -268,6 +270,7 @@ def build_machine(model: ConfigModel, source: str) -> tuple[MachineSpec, list[st
                 f"state {leaf.name!r}: no 'aborted' transition (needed when its module fails or "
                 "cannot be reached); fix: add 'aborted: idle' to its transitions or to a superstate's"
             )
+    problems.extend(check_motivational_events(machine, model.motivator))
     if problems:
         raise ConfigError(problems, source=source)
     reachable = machine.reachable()
@@ -277,3 +280,21 @@ def build_machine(model: ConfigModel, source: str) -> tuple[MachineSpec, list[st
         if name not in reachable
     ]
     return machine, warnings
+
+
+def check_motivational_events(machine: MachineSpec, settings: MotivatorSettings) -> list[str]:
+    """Every motivational event must be a transition of its state (the motivator sends it there)."""
+    problems = []
+    for entry in settings.events:
+        if entry.state not in machine.states:
+            problems.append(
+                f"motivator event {entry.event!r}: state {entry.state!r} is not defined"
+                f"{_suggest(entry.state, sorted(machine.states))}; fix: name a defined state"
+            )
+        elif entry.event not in machine.transitions_of(entry.state):
+            valid = ", ".join(sorted(machine.transitions_of(entry.state))) or "none"
+            problems.append(
+                f"motivator event {entry.event!r} is no transition of state {entry.state!r}; "
+                f"fix: add '{entry.event}: <target>' to its transitions or use one of: {valid}"
+            )
+    return problems

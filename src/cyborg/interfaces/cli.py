@@ -119,7 +119,20 @@ def _parse_speed(value: str | None) -> float | str | None:
     type=int,
     help="port of the API and dashboard (0: any free port)",
 )
-def sim(config_path: Path | None, speed: str | None, duration: float | None, host: str, port: int) -> None:
+@click.option(
+    "--data-dir",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="databases (default: $CYBORG_DATA_DIR or ~/.local/share/cyborg)",
+)
+def sim(
+    config_path: Path | None,
+    speed: str | None,
+    duration: float | None,
+    host: str,
+    port: int,
+    data_dir: Path | None,
+) -> None:
     """Run the whole simulated robot in this process, with its API and dashboard."""
     from cyborg.interfaces.api import RobotAPI
     from cyborg.sim.runner import run_sim
@@ -140,7 +153,14 @@ def sim(config_path: Path | None, speed: str | None, duration: float | None, hos
         for warning in config.warnings:
             click.secho(f"warning: {warning}", fg="yellow", err=True)
         asyncio.set_event_loop(None)
-        run_sim(config, speed=_parse_speed(speed), duration=duration, echo=click.echo, serve=serve)
+        run_sim(
+            config,
+            speed=_parse_speed(speed),
+            duration=duration,
+            echo=click.echo,
+            serve=serve,
+            data_dir=data_dir,
+        )
     except CyborgError as exc:
         _fail(exc)
     except KeyboardInterrupt:

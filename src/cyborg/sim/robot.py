@@ -10,13 +10,18 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from cyborg.controller.config import LoadedConfig
 from cyborg.controller.runtime import Controller
+from cyborg.emotion.store import ControllerStore
+from cyborg.emotion.system import EmotionSystem
 from cyborg.errors import ConfigError
 from cyborg.modules.event_script import EventScript
+from cyborg.modules.idle import IdleModule, IdleSettings
 from cyborg.modules.placeholder import PlaceholderModule, PlaceholderSpec
+from cyborg.motivator.component import Motivator
 from cyborg.transport.base import Node, Transport
 
 log = logging.getLogger(__name__)
@@ -31,6 +36,10 @@ class Robot:
     transport: Transport
     config: LoadedConfig
     controller: Controller
+    emotion: EmotionSystem
+    motivator: Motivator
+    store: ControllerStore
+    data_dir: Path
     components: dict[str, object] = field(default_factory=dict)
 
     def start(self) -> None:
@@ -74,16 +83,59 @@ def _event_script(node: Node, settings: dict[str, Any], robot: Robot) -> object:
     return EventScript(node, events, float(settings.get("every", 10.0)))
 
 
-MODULE_KINDS: dict[str, ModuleFactory] = {"placeholder": _placeholder, "event_script": _event_script}
+def _idle(node: Node, settings: dict[str, Any], robot: Robot) -> object:
+    unknown = set(settings) - {"kind", "interval", "boredom", "action"}
+    if unknown:
+        raise ConfigError(
+            f"module {node.name!r}: unknown keys {sorted(unknown)}; fix: use interval, boredom [p, a, d], action"
+        )
+    defaults = IdleSettings()
+    boredom = settings.get("boredom", defaults.boredom)
+    if not (isinstance(boredom, list | tuple) and len(boredom) == 3):
+        raise ConfigError(f"module {node.name!r}: boredom must be [p, a, d], got {boredom!r}")
+    idle = IdleSettings(
+        interval=float(settings.get("interval", defaults.interval)),
+        boredom=(float(boredom[0]), float(boredom[1]), float(boredom[2])),
+    )  # type: ignore[arg-type]
+    return IdleModule(node, idle, action=str(settings.get("action", "cyborg_idle/idle")))
+
+
+MODULE_KINDS: dict[str, ModuleFactory] = {
+    "placeholder": _placeholder,
+    "event_script": _event_script,
+    "idle": _idle,
+}
 
 
 def build_robot(
-    config: LoadedConfig, transport: Transport, *, kinds: dict[str, ModuleFactory] | None = None
+    config: LoadedConfig,
+    transport: Transport,
+    *,
+    data_dir: Path,
+    kinds: dict[str, ModuleFactory] | None = None,
 ) -> Robot:
-    """Create the controller and the configured modules (not started yet)."""
+    """Create the controller (state machine, emotion system, motivator) and the configured modules.
+
+    ``data_dir`` holds the databases (created on first use). Nothing runs until ``start()``.
+    """
     factories = {**MODULE_KINDS, **(kinds or {})}
+    data_dir.mkdir(parents=True, exist_ok=True)
+    settings = config.model
+    store = ControllerStore(data_dir / "controller.db", seed_events=settings.motivator.events)
+    for entry in settings.motivator.events:
+        store.add_event(entry)  # the YAML is the source; entries added to the database stay too
     controller = Controller(transport.node("cyborg_controller"), config.machine)
-    robot = Robot(transport=transport, config=config, controller=controller)
+    emotion = EmotionSystem(transport.node("cyborg_emotion"), settings.emotion, store)
+    motivator = Motivator(transport.node("cyborg_motivator"), settings.motivator, config.machine, store)
+    robot = Robot(
+        transport=transport,
+        config=config,
+        controller=controller,
+        emotion=emotion,
+        motivator=motivator,
+        store=store,
+        data_dir=data_dir,
+    )
     for node_name, settings in config.model.modules.items():
         kind = settings.get("kind", "placeholder") if isinstance(settings, dict) else None
         factory = factories.get(str(kind))

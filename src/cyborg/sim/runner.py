@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import logging
+import os
 from collections.abc import Awaitable, Callable
+from pathlib import Path
 
 from cyborg.controller.config import LoadedConfig
 from cyborg.sim.robot import Robot, build_robot
@@ -14,6 +16,12 @@ from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import String, SystemState
 
 log = logging.getLogger(__name__)
+
+
+def default_data_dir() -> Path:
+    """Where the robot keeps its databases: $CYBORG_DATA_DIR, else ~/.local/share/cyborg."""
+    env = os.environ.get("CYBORG_DATA_DIR")
+    return Path(env) if env else Path.home() / ".local" / "share" / "cyborg"
 
 
 def make_clock(speed: float | str | None) -> Clock:
@@ -30,10 +38,11 @@ def run_sim(
     duration: float | None = None,
     echo: Callable[[str], None] = print,
     serve: Callable[[EmbeddedTransport, Robot], Awaitable[Callable[[], Awaitable[None]]]] | None = None,
+    data_dir: Path | None = None,
 ) -> None:
     clock = make_clock(speed)
     transport = EmbeddedTransport(clock)
-    robot = build_robot(config, transport)
+    robot = build_robot(config, transport, data_dir=data_dir or default_data_dir())
     monitor = transport.node("cyborg_console")
     start = clock.monotonic()
 
