@@ -207,6 +207,14 @@ class ControllerStore:
                 f"could not {what} in {self.path}: {exc}; check the disk and file permissions"
             ) from exc
 
+    def _read(self, sql: str, params: tuple[object, ...] = ()) -> list[tuple[object, ...]]:
+        try:
+            return self._conn.execute(sql, params).fetchall()
+        except sqlite3.Error as exc:
+            raise DatabaseError(
+                f"could not read {self.path}: {exc}; restart the controller to recover the file"
+            ) from exc
+
     def close(self) -> None:
         self._conn.close()
 
@@ -224,9 +232,9 @@ class ControllerStore:
     # --- emotion ---------------------------------------------------------------------
 
     def get_emotion(self) -> StoredEmotion:
-        p, a, d, updated_at, enabled = self._conn.execute(
+        [(p, a, d, updated_at, enabled)] = self._read(
             "SELECT pleasure, arousal, dominance, updated_at, enabled FROM emotion"
-        ).fetchone()
+        )
         values = [clamp(_finite(x, f"stored {dim}")) for x, dim in zip((p, a, d), DIMENSIONS, strict=True)]
         when = updated_at if isinstance(updated_at, int | float) and math.isfinite(updated_at) else None
         return StoredEmotion(PAD.of(values), when, bool(enabled))
@@ -245,8 +253,8 @@ class ControllerStore:
     # --- saturations -----------------------------------------------------------------
 
     def get_saturations(self) -> dict[str, float]:
-        rows = self._conn.execute("SELECT event, value FROM saturations ORDER BY event")
-        return {name: max(0.0, min(1.0, _finite(v, f"saturation of {name}"))) for name, v in rows}
+        rows = self._read("SELECT event, value FROM saturations ORDER BY event")
+        return {str(name): max(0.0, min(1.0, _finite(v, f"saturation of {name}"))) for name, v in rows}
 
     def save_saturations(self, saturations: Mapping[str, float]) -> None:
         """Replace all saturations with ``saturations``."""
@@ -259,14 +267,15 @@ class ControllerStore:
     def list_events(self, state: str | None = None) -> list[MotivationalEvent]:
         sql = "SELECT * FROM events"
         rows = (
-            self._conn.execute(sql + " ORDER BY state, event").fetchall()
+            self._read(sql + " ORDER BY state, event")
             if state is None
-            else self._conn.execute(sql + " WHERE state = ? ORDER BY event", (state,)).fetchall()
+            else self._read(sql + " WHERE state = ? ORDER BY event", (state,))
         )
         events = []
         for row in rows:
             try:
-                events.append(MotivationalEvent(**dict(zip(_COLUMNS["events"], row, strict=True))))
+                row_data = dict(zip(_COLUMNS["events"], row, strict=True))
+                events.append(MotivationalEvent.model_validate(row_data))
             except ValidationError as exc:
                 log.warning("skipping invalid motivational event row %s in %s: %s", row, self.path, exc)
         return events

@@ -1,0 +1,144 @@
+"""The controller store keeps its data across reopen and survives a broken file."""
+
+from __future__ import annotations
+
+import logging
+import sqlite3
+from pathlib import Path
+
+import pytest
+
+from cyborg.emotion.model import PAD
+from cyborg.emotion.store import ControllerStore
+from cyborg.errors import DatabaseError
+from cyborg.motivator.logic import MotivationalEvent
+
+NAVIGATION = MotivationalEvent(
+    state="idle", event="navigation_emotional", reward_arousal=0.05, reward_dominance=-0.01
+)
+MUSIC = MotivationalEvent(state="idle", event="music_play", reward_pleasure=0.05, event_cost=0.2)
+JOKE = MotivationalEvent(state="conversation", event="joke_tell", reward_pleasure=0.02)
+
+
+def corrupt_files(path: Path) -> list[Path]:
+    return sorted(path.parent.glob(path.name + ".corrupt-*"))
+
+
+def test_new_store_has_defaults_and_seeded_events(tmp_path: Path) -> None:
+    with ControllerStore(tmp_path / "sub" / "c.db", [NAVIGATION, MUSIC, JOKE]) as store:
+        stored = store.get_emotion()
+        assert (stored.pad, stored.updated_at, stored.enabled) == (PAD(), None, True)
+        assert store.get_saturations() == {}
+        assert store.list_events("idle") == [MUSIC, NAVIGATION]
+        assert store.list_events() == [JOKE, MUSIC, NAVIGATION]
+
+
+def test_everything_persists_across_reopen(tmp_path: Path) -> None:
+    path = tmp_path / "c.db"
+    with ControllerStore(path, [NAVIGATION]) as store:
+        store.save_emotion(PAD(0.1, -0.2, 0.3), 1234.5)
+        store.set_emotion_enabled(False)
+        store.save_saturations({"navigation_emotional": 0.33, "music_play": 0.0})
+        store.add_event(MUSIC)
+        store.add_event(JOKE)
+        assert store.remove_event("conversation", "joke_tell")
+        assert not store.remove_event("conversation", "joke_tell")
+    with ControllerStore(path, [NAVIGATION, JOKE]) as store:
+        stored = store.get_emotion()
+        assert (stored.pad, stored.updated_at, stored.enabled) == (PAD(0.1, -0.2, 0.3), 1234.5, False)
+        assert store.get_saturations() == {"music_play": 0.0, "navigation_emotional": 0.33}
+        # seeding happens only when the file is created: the removed joke stays removed
+        assert store.list_events() == [MUSIC, NAVIGATION]
+
+
+def test_add_event_replaces_the_same_name_in_the_same_state(tmp_path: Path) -> None:
+    with ControllerStore(tmp_path / "c.db", [NAVIGATION]) as store:
+        stronger = NAVIGATION.model_copy(update={"reward_arousal": 0.2})
+        store.add_event(stronger)
+        assert store.list_events("idle") == [stronger]
+
+
+def test_save_saturations_replaces_the_whole_set(tmp_path: Path) -> None:
+    with ControllerStore(tmp_path / "c.db") as store:
+        store.save_saturations({"a": 0.5, "b": 0.2})
+        store.save_saturations({"b": 0.1})
+        assert store.get_saturations() == {"b": 0.1}
+
+
+def test_writes_are_visible_to_another_connection_at_once(tmp_path: Path) -> None:
+    path = tmp_path / "c.db"
+    with ControllerStore(path) as store:
+        store.save_emotion(PAD(0.5, 0.0, 0.0), 10.0)
+        other = sqlite3.connect(path)
+        try:
+            assert other.execute("SELECT pleasure, updated_at FROM emotion").fetchone() == (0.5, 10.0)
+            assert other.execute("PRAGMA journal_mode").fetchone() == ("wal",)
+        finally:
+            other.close()
+        # synchronous is per connection, so look at the store's own (2 = FULL)
+        assert store._conn.execute("PRAGMA synchronous").fetchone() == (2,)
+
+
+def test_garbage_file_is_moved_aside_and_recreated(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    path = tmp_path / "c.db"
+    path.write_bytes(b"this is not sqlite at all " * 200)
+    with caplog.at_level(logging.WARNING), ControllerStore(path, [NAVIGATION]) as store:
+        assert store.list_events() == [NAVIGATION]
+        assert store.get_emotion().pad == PAD()
+    [aside] = corrupt_files(path)
+    assert aside.read_bytes().startswith(b"this is not sqlite")
+    assert "unusable" in caplog.text and str(aside) in caplog.text
+
+
+def test_database_of_another_schema_is_moved_aside(tmp_path: Path) -> None:
+    path = tmp_path / "c.db"
+    conn = sqlite3.connect(path)
+    conn.execute("CREATE TABLE locations (name TEXT)")
+    conn.commit()
+    conn.close()
+    with ControllerStore(path) as store:
+        store.save_emotion(PAD(0.2, 0.2, 0.2), 1.0)
+    assert len(corrupt_files(path)) == 1
+
+
+def test_damaged_pages_are_detected_and_recovered(tmp_path: Path) -> None:
+    path = tmp_path / "c.db"
+    with ControllerStore(path, [NAVIGATION]) as store:
+        for i in range(300):
+            store.add_event(MUSIC.model_copy(update={"event": f"event_{i:03d}_" + "x" * 40}))
+    data = bytearray(path.read_bytes())
+    assert len(data) > 8192
+    data[4096:8192] = b"\xff" * 4096  # trash the second page, keep the header
+    path.write_bytes(bytes(data))
+    with ControllerStore(path, [NAVIGATION]) as store:
+        assert store.list_events() == [NAVIGATION]
+    assert len(corrupt_files(path)) == 1
+
+
+def test_two_corruptions_in_the_same_second_do_not_overwrite_each_other(tmp_path: Path) -> None:
+    path = tmp_path / "c.db"
+    for _ in range(2):
+        path.write_bytes(b"junk" * 1000)
+        ControllerStore(path).close()
+    assert len(corrupt_files(path)) == 2
+
+
+def test_hand_edited_nonsense_is_tolerated(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    path = tmp_path / "c.db"
+    ControllerStore(path, [NAVIGATION]).close()
+    conn = sqlite3.connect(path)
+    conn.execute("UPDATE emotion SET pleasure = 7.0, arousal = 'lots'")
+    conn.execute("INSERT INTO saturations VALUES ('a', 3.0), ('b', 'x')")
+    conn.execute("INSERT INTO events VALUES ('idle', 'bad', 5.0, 0, 0, NULL)")
+    conn.commit()
+    conn.close()
+    with caplog.at_level(logging.WARNING), ControllerStore(path) as store:
+        assert store.get_emotion().pad == PAD(1.0, 0.0, 0.0)
+        assert store.get_saturations() == {"a": 1.0, "b": 0.0}
+        assert store.list_events() == [NAVIGATION]
+    assert "skipping invalid motivational event" in caplog.text
+
+
+def test_a_folder_path_is_refused_with_a_fix(tmp_path: Path) -> None:
+    with pytest.raises(DatabaseError, match="is a folder"):
+        ControllerStore(tmp_path)
