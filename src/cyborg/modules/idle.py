@@ -16,8 +16,8 @@ IDLE_ACTION = "cyborg_idle/idle"
 
 @dataclass(frozen=True)
 class IdleSettings:
-    interval: float = 5.0
-    boredom: tuple[float, float, float] = (-0.01, -0.02, -0.01)
+    interval: float = 8.0
+    boredom: tuple[float, float, float] = (-0.05, -0.05, -0.05)
 
 
 class IdleModule(BehaviourModule):
