@@ -146,3 +146,25 @@ def test_packaged_configs_are_valid() -> None:
 
     for name in ("demo.yaml",):
         assert load_config(packaged_config(name)).machine.states
+
+
+def test_motivational_event_must_be_a_transition_of_its_state() -> None:
+    text = (
+        VALID
+        + """
+motivator:
+  events:
+    - {state: idle, event: music_play, reward_pleasure: 0.1}
+    - {state: music, event: dance, reward_arousal: 0.1}
+    - {state: nowhere, event: music_play}
+"""
+    )
+    message = problems(text)
+    assert "motivator event 'dance' is no transition of state 'music'" in message
+    assert "state 'nowhere' is not defined" in message
+    assert "'music_play'" not in message.split("dance")[0]  # the valid one is not reported
+
+
+def test_emotion_settings_are_validated() -> None:
+    message = problems(VALID + "\nemotion: {decay_rate: 3}\n")
+    assert "emotion > decay_rate" in message
