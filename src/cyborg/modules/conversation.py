@@ -1,0 +1,73 @@
+"""Conversation and question modules of the thesis's test system (10.1).
+
+The conversation module listens to speech-to-text: a greeting asks the
+controller for the ``conversation`` state (event ``conversation_interest``).
+While in conversation it waits; the motivator picks one of the question
+states (joke, weather, selfie, follower, Simon says), each served by its own
+question module, which asks its question and succeeds. The conversation ends
+(succeeded) after a quiet spell.
+"""
+
+from __future__ import annotations
+
+import re
+
+from cyborg.modules.helper import BehaviourModule, GoalContext
+from cyborg.transport.base import MessageInfo, Node
+
+GREETINGS = frozenset({"hello", "hi", "hey", "hallo", "hei", "greetings", "howdy", "yo"})
+GREETING_PHRASES = ("good morning", "good afternoon", "good evening")
+CONVERSATION_ACTION = "cyborg_conversation/conversation"
+CONVERSATION_INTEREST = "conversation_interest"
+
+
+def is_greeting(text: str) -> bool:
+    """True when ``text`` greets the robot ("Hello!", "hi there", "good morning Cyborg")."""
+    lowered = text.lower()
+    words = re.findall(r"[a-zæøå]+", lowered)
+    return bool(words) and (words[0] in GREETINGS or any(p in lowered for p in GREETING_PHRASES))
+
+
+class ConversationModule(BehaviourModule):
+    """Asks for the conversation state on a greeting; stays until ``quiet_seconds`` pass without speech."""
+
+    def __init__(self, node: Node, *, quiet_seconds: float = 90.0, action: str = CONVERSATION_ACTION) -> None:
+        super().__init__(node)
+        self.quiet_seconds = quiet_seconds
+        self.last_heard = node.clock.monotonic()
+        self.in_conversation = False
+        self.serve(action, self.converse)
+        self.on_speech_text(self._on_text)
+
+    def _on_text(self, text: str, info: MessageInfo) -> None:
+        self.last_heard = self.node.clock.monotonic()
+        if is_greeting(text) and not self.in_conversation:
+            self.publish_event(CONVERSATION_INTEREST)
+
+    async def converse(self, ctx: GoalContext) -> None:
+        self.in_conversation = True
+        try:
+            if ctx.event == CONVERSATION_INTEREST:
+                self.last_heard = self.node.clock.monotonic()
+                self.send_emotion(0.05, 0.05, 0.0)
+            while True:
+                remaining = self.last_heard + self.quiet_seconds - self.node.clock.monotonic()
+                if remaining <= 0:
+                    return  # the person left: succeeded
+                await ctx.sleep(remaining)
+        finally:
+            self.in_conversation = False
+
+
+class QuestionModule(BehaviourModule):
+    """Asks one question through speech, gives the person time to answer, and succeeds."""
+
+    def __init__(self, node: Node, *, action: str, question: str, answer_seconds: float = 6.0) -> None:
+        super().__init__(node)
+        self.question = question
+        self.answer_seconds = answer_seconds
+        self.serve(action, self.ask)
+
+    async def ask(self, ctx: GoalContext) -> None:
+        self.say(self.question)
+        await ctx.sleep(self.answer_seconds)
