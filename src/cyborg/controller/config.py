@@ -106,6 +106,17 @@ class TimeoutsModel(BaseModel):
     preempt: float = Field(2.0, gt=0, description="seconds to wait for a module to acknowledge a cancel")
 
 
+class GatekeeperModel(BaseModel):
+    """A relay in front of an output module: only the node holding ``resource`` gets through."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    name: str = Field(min_length=1, description="node name of the gatekeeper")
+    input: str = Field(min_length=1, description="topic the behaviour modules publish on")
+    output: str = Field(min_length=1, description="topic the output module listens to")
+    resource: str = Field(min_length=1, description="resource name in the states' resource lists")
+
+
 class ConfigModel(BaseModel):
     """The whole YAML file. Sections other than the state machine belong to their components."""
 
@@ -118,7 +129,7 @@ class ConfigModel(BaseModel):
     motivator: MotivatorSettings = Field(default_factory=MotivatorSettings)  # type: ignore[arg-type]
     navigation: dict[str, Any] = Field(default_factory=dict)
     modules: dict[str, Any] = Field(default_factory=dict)
-    gatekeepers: list[dict[str, Any]] = Field(default_factory=list)
+    gatekeepers: list[GatekeeperModel] = Field(default_factory=list)
 
 
 @dataclass

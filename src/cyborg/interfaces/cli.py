@@ -32,6 +32,14 @@ def _load(path: Path | None) -> LoadedConfig:
     return load_config(path)
 
 
+def check_modules(loaded: LoadedConfig) -> None:
+    """Validate the ``modules:`` section against the known module kinds."""
+    from cyborg.sim.kinds import MODULE_KINDS, parse_module_settings
+
+    for name, raw in loaded.model.modules.items():
+        parse_module_settings(name, raw, MODULE_KINDS, loaded.source)
+
+
 def _fail(exc: CyborgError) -> None:
     click.secho(str(exc), fg="red", err=True)
     sys.exit(1)
@@ -59,6 +67,7 @@ def validate(file: Path) -> None:
     """Check a state machine YAML FILE; exit 0 if valid, 1 with the problems otherwise."""
     try:
         loaded = load_config(file)
+        check_modules(loaded)
     except CyborgError as exc:
         _fail(exc)
         return

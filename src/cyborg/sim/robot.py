@@ -8,25 +8,19 @@ sim`` runs the result; tests build it on a virtual clock.
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 from cyborg.controller.config import LoadedConfig
 from cyborg.controller.runtime import Controller
 from cyborg.emotion.store import ControllerStore
 from cyborg.emotion.system import EmotionSystem
-from cyborg.errors import ConfigError
-from cyborg.modules.event_script import EventScript
-from cyborg.modules.idle import IdleModule, IdleSettings
-from cyborg.modules.placeholder import PlaceholderModule, PlaceholderSpec
+from cyborg.modules.gatekeeper import Gatekeeper
 from cyborg.motivator.component import Motivator
-from cyborg.transport.base import Node, Transport
+from cyborg.sim.kinds import MODULE_KINDS, ModuleKind, parse_module_settings
+from cyborg.transport.base import Transport
 
 log = logging.getLogger(__name__)
-
-ModuleFactory = Callable[[Node, dict[str, Any], "Robot"], object]
 
 
 @dataclass
@@ -46,73 +40,12 @@ class Robot:
         self.controller.start()
 
 
-def _placeholder(node: Node, settings: dict[str, Any], robot: Robot) -> object:
-    servers = settings.get("servers")
-    if not isinstance(servers, list) or not servers:
-        raise ConfigError(
-            f"module {node.name!r}: a placeholder needs 'servers:', a list of "
-            "{action: ..., say: ..., duration: ...}; fix: add at least one server"
-        )
-    specs = []
-    for entry in servers:
-        unknown = set(entry) - {"action", "say", "duration", "emotion", "honour_cancel"}
-        if unknown or "action" not in entry:
-            raise ConfigError(
-                f"module {node.name!r}: server entry {entry!r} is invalid; fix: use the keys "
-                "action (required), say, duration, emotion [p, a, d], honour_cancel"
-            )
-        emotion = entry.get("emotion")
-        specs.append(
-            PlaceholderSpec(
-                action=str(entry["action"]),
-                say=str(entry.get("say", "")),
-                duration=None if entry.get("duration") is None else float(entry["duration"]),
-                emotion=tuple(emotion) if emotion else None,  # type: ignore[arg-type]
-                honour_cancel=bool(entry.get("honour_cancel", True)),
-            )
-        )
-    return PlaceholderModule(node, specs)
-
-
-def _event_script(node: Node, settings: dict[str, Any], robot: Robot) -> object:
-    events = settings.get("events")
-    if not isinstance(events, list) or not all(isinstance(e, str) for e in events):
-        raise ConfigError(
-            f"module {node.name!r}: 'events' must be a list of event names; fix: e.g. events: [music_play]"
-        )
-    return EventScript(node, events, float(settings.get("every", 10.0)))
-
-
-def _idle(node: Node, settings: dict[str, Any], robot: Robot) -> object:
-    unknown = set(settings) - {"kind", "interval", "boredom", "action"}
-    if unknown:
-        raise ConfigError(
-            f"module {node.name!r}: unknown keys {sorted(unknown)}; fix: use interval, boredom [p, a, d], action"
-        )
-    defaults = IdleSettings()
-    boredom = settings.get("boredom", defaults.boredom)
-    if not (isinstance(boredom, list | tuple) and len(boredom) == 3):
-        raise ConfigError(f"module {node.name!r}: boredom must be [p, a, d], got {boredom!r}")
-    idle = IdleSettings(
-        interval=float(settings.get("interval", defaults.interval)),
-        boredom=(float(boredom[0]), float(boredom[1]), float(boredom[2])),
-    )  # type: ignore[arg-type]
-    return IdleModule(node, idle, action=str(settings.get("action", "cyborg_idle/idle")))
-
-
-MODULE_KINDS: dict[str, ModuleFactory] = {
-    "placeholder": _placeholder,
-    "event_script": _event_script,
-    "idle": _idle,
-}
-
-
 def build_robot(
     config: LoadedConfig,
     transport: Transport,
     *,
     data_dir: Path,
-    kinds: dict[str, ModuleFactory] | None = None,
+    kinds: dict[str, ModuleKind] | None = None,
 ) -> Robot:
     """Create the controller (state machine, emotion system, motivator) and the configured modules.
 
@@ -136,15 +69,16 @@ def build_robot(
         store=store,
         data_dir=data_dir,
     )
-    for node_name, settings in config.model.modules.items():
-        kind = settings.get("kind", "placeholder") if isinstance(settings, dict) else None
-        factory = factories.get(str(kind))
-        if factory is None:
-            raise ConfigError(
-                f"module {node_name!r}: unknown kind {kind!r}; fix: use one of {', '.join(sorted(factories))}",
-                source=config.source,
-            )
-        robot.components[node_name] = factory(transport.node(node_name), settings, robot)
+    for name, raw in config.model.modules.items():
+        kind, module_settings = parse_module_settings(name, raw, factories, config.source)
+        robot.components[name] = kind.build(transport.node(name), module_settings, robot)
+    for gate in settings.gatekeepers:
+        robot.components[gate.name] = Gatekeeper(
+            transport.node(gate.name),
+            input_topic=gate.input,
+            output_topic=gate.output,
+            resource=gate.resource,
+        )
     served = _served_actions(robot)
     for leaf in config.machine.leaves():
         assert leaf.action is not None

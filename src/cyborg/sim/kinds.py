@@ -1,0 +1,146 @@
+"""Module kinds that the YAML's ``modules:`` section can start, each with validated settings.
+
+A kind is a settings model (pydantic, unknown keys rejected) plus a factory that
+builds the component on its own node. New kinds register in :data:`MODULE_KINDS`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from cyborg.errors import ConfigError
+from cyborg.modules.conversation import ConversationModule, QuestionModule
+from cyborg.modules.event_script import EventScript
+from cyborg.modules.idle import IdleModule, IdleSettings
+from cyborg.modules.music import MusicModule
+from cyborg.modules.placeholder import PlaceholderModule, PlaceholderSpec
+from cyborg.modules.speech import TextToSpeech
+from cyborg.transport.base import Node
+
+if TYPE_CHECKING:
+    from cyborg.sim.robot import Robot
+
+
+class KindSettings(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    kind: str
+
+
+class PlaceholderServer(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    action: str
+    say: str = ""
+    duration: float | None = Field(None, ge=0)
+    emotion: tuple[float, float, float] | None = None
+    honour_cancel: bool = True
+
+
+class PlaceholderSettings(KindSettings):
+    servers: list[PlaceholderServer] = Field(min_length=1)
+
+
+class EventScriptSettings(KindSettings):
+    events: list[str] = Field(min_length=1)
+    every: float = Field(10.0, gt=0)
+
+
+class IdleKindSettings(KindSettings):
+    action: str = "cyborg_idle/idle"
+    interval: float = Field(IdleSettings.interval, gt=0)
+    boredom: tuple[float, float, float] = IdleSettings.boredom
+
+
+class ConversationSettings(KindSettings):
+    action: str = "cyborg_conversation/conversation"
+    quiet_seconds: float = Field(90.0, gt=0)
+
+
+class QuestionSettings(KindSettings):
+    action: str
+    question: str = Field(min_length=1)
+    answer_seconds: float = Field(6.0, ge=0)
+
+
+class MusicSettings(KindSettings):
+    action: str = "cyborg_music/play"
+    play_audio: bool | None = None
+
+
+class TtsSettings(KindSettings):
+    queue_size: int = Field(10, ge=1)
+    play_audio: bool | None = None
+    wav_dir: str | None = None
+    voice: str = "en"
+
+
+@dataclass(frozen=True)
+class ModuleKind:
+    settings: type[KindSettings]
+    build: Callable[[Node, Any, Robot], object]
+
+
+def _placeholder(node: Node, s: PlaceholderSettings, robot: Robot) -> object:
+    return PlaceholderModule(node, [PlaceholderSpec(**server.model_dump()) for server in s.servers])
+
+
+def _tts(node: Node, s: TtsSettings, robot: Robot) -> object:
+    from pathlib import Path
+
+    wav_dir = Path(s.wav_dir) if s.wav_dir else None
+    return TextToSpeech(
+        node, queue_size=s.queue_size, play_audio=s.play_audio, wav_dir=wav_dir, voice=s.voice
+    )
+
+
+MODULE_KINDS: dict[str, ModuleKind] = {
+    "placeholder": ModuleKind(PlaceholderSettings, _placeholder),
+    "event_script": ModuleKind(EventScriptSettings, lambda n, s, r: EventScript(n, s.events, s.every)),
+    "idle": ModuleKind(
+        IdleKindSettings,
+        lambda n, s, r: IdleModule(n, IdleSettings(interval=s.interval, boredom=s.boredom), action=s.action),
+    ),
+    "conversation": ModuleKind(
+        ConversationSettings,
+        lambda n, s, r: ConversationModule(n, quiet_seconds=s.quiet_seconds, action=s.action),
+    ),
+    "question": ModuleKind(
+        QuestionSettings,
+        lambda n, s, r: QuestionModule(
+            n, action=s.action, question=s.question, answer_seconds=s.answer_seconds
+        ),
+    ),
+    "music": ModuleKind(
+        MusicSettings,
+        lambda n, s, r: MusicModule(n, action=s.action, tune_dir=r.data_dir, play_audio=s.play_audio),
+    ),
+    "tts": ModuleKind(TtsSettings, _tts),
+}
+
+
+def parse_module_settings(
+    node_name: str, raw: Any, kinds: dict[str, ModuleKind], source: str
+) -> tuple[ModuleKind, KindSettings]:
+    """Validate one ``modules:`` entry; errors name the module and the fix."""
+    if not isinstance(raw, dict) or "kind" not in raw:
+        raise ConfigError(
+            f"module {node_name!r}: needs 'kind:' (one of {', '.join(sorted(kinds))})", source=source
+        )
+    kind = kinds.get(str(raw["kind"]))
+    if kind is None:
+        raise ConfigError(
+            f"module {node_name!r}: unknown kind {raw['kind']!r}; fix: use one of {', '.join(sorted(kinds))}",
+            source=source,
+        )
+    try:
+        return kind, kind.settings.model_validate(raw)
+    except ValidationError as exc:
+        problems = [
+            f"module {node_name!r} > {'.'.join(str(p) for p in e['loc'])}: {e['msg']}"
+            + ("; fix: remove it or check its spelling" if e["type"] == "extra_forbidden" else "")
+            for e in exc.errors()
+        ]
+        raise ConfigError(problems, source=source) from exc
