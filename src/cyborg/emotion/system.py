@@ -126,19 +126,25 @@ class EmotionSystem:
         self.pad = update(self.pad, delta, self.settings.decay_rate)
         self._changed()
 
-    def _on_set_name(self, message: String, info: MessageInfo) -> None:
-        name = message.data.strip().lower()
+    def set_named(self, name: str) -> None:
+        """Jump to the prototype ``name`` (or the origin for neutral); ValueError if unknown."""
+        name = name.strip().lower()
         if name == NEUTRAL:
             self.pad = PAD(0.0, 0.0, 0.0)
         elif name in self.settings.prototypes:
             self.pad = PAD.of(self.settings.prototypes[name])
         else:
-            self.stats.rejected += 1
             known = ", ".join([NEUTRAL, *sorted(self.settings.prototypes)])
-            log.warning("unknown emotion %r from %s; use one of %s", message.data, info.sender, known)
-            return
+            raise ValueError(f"unknown emotion {name!r}; use one of {known}")
         self._last_decay = self.node.clock.now()
         self._changed()
+
+    def _on_set_name(self, message: String, info: MessageInfo) -> None:
+        try:
+            self.set_named(message.data)
+        except ValueError as exc:
+            self.stats.rejected += 1
+            log.warning("%s (sent by %s)", exc, info.sender)
 
     def _on_set_values(self, message: EmotionalFeedback, info: MessageInfo) -> None:
         values = (message.delta_pleasure, message.delta_arousal, message.delta_dominance)

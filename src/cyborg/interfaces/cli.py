@@ -118,6 +118,12 @@ def _parse_speed(value: str | None) -> float | str | None:
     type=click.Path(path_type=Path),
     help="state machine YAML (default: the packaged Cyborg)",
 )
+@click.option(
+    "--map",
+    "map_path",
+    type=click.Path(path_type=Path),
+    help="map for the simulated base: ARNL .map or map_server .yaml",
+)
 @click.option("--speed", default=None, help="virtual time: a factor (10) or 'max'; default real time")
 @click.option("--duration", type=float, default=None, help="stop after this many (virtual) seconds")
 @click.option("--host", default="127.0.0.1", show_default=True, help="address the API and dashboard bind to")
@@ -129,51 +135,104 @@ def _parse_speed(value: str | None) -> float | str | None:
     help="port of the API and dashboard (0: any free port)",
 )
 @click.option(
+    "--db",
     "--data-dir",
+    "data_dir",
     type=click.Path(path_type=Path),
     default=None,
-    help="databases (default: $CYBORG_DATA_DIR or ~/.local/share/cyborg)",
+    help="folder of the databases (default: $CYBORG_DATA_DIR or ~/.local/share/cyborg; scripts: a temporary one)",
+)
+@click.option(
+    "--script", "script_path", type=click.Path(path_type=Path), help="scenario script to run (YAML)"
+)
+@click.option(
+    "--transcript",
+    "transcript_path",
+    type=click.Path(path_type=Path),
+    help="write the run's records here (JSON lines)",
 )
 def sim(
     config_path: Path | None,
+    map_path: Path | None,
     speed: str | None,
     duration: float | None,
     host: str,
     port: int,
     data_dir: Path | None,
+    script_path: Path | None,
+    transcript_path: Path | None,
 ) -> None:
-    """Run the whole simulated robot in this process, with its API and dashboard."""
-    from cyborg.interfaces.api import RobotAPI
-    from cyborg.sim.runner import run_sim
+    """Run the whole simulated robot in this process, with its API and dashboard.
 
-    async def serve(transport, robot):  # type: ignore[no-untyped-def]
-        api = RobotAPI(transport.node("cyborg_api"), machine=robot.config.machine)
-        try:
-            url = await api.start(host, port)
-        except OSError as exc:
-            raise CyborgError(
-                f"cannot serve on {host}:{port}: {exc.strerror}; fix: pass --port 0 or another port"
-            ) from exc
-        click.secho(f"dashboard and API: {url}  (try: cyborg status --url {url.rstrip('/')})", fg="green")
-        return api.stop
-
+    With --script, run a scenario on a fresh robot in virtual time and write its transcript.
+    """
     try:
         config = _load(config_path)
+        check_modules(config)
         for warning in config.warnings:
             click.secho(f"warning: {warning}", fg="yellow", err=True)
+        if map_path is not None and not map_path.exists():
+            raise CyborgError(
+                f"map file {map_path} does not exist; fix: check the path (e.g. ../shared/maps/glassgarden.map)"
+            )
+        if script_path is not None:
+            _run_script(config, script_path, transcript_path, speed, data_dir, map_path)
+            return
+        if transcript_path is not None:
+            raise click.UsageError("--transcript goes with --script")
+        from cyborg.interfaces.serve import serve_api
+        from cyborg.sim.runner import run_sim
+
         asyncio.set_event_loop(None)
         run_sim(
             config,
             speed=_parse_speed(speed),
             duration=duration,
             echo=click.echo,
-            serve=serve,
+            serve=serve_api(host, port, click.secho),
             data_dir=data_dir,
+            map_path=map_path,
         )
     except CyborgError as exc:
         _fail(exc)
     except KeyboardInterrupt:
         click.echo("stopped")
+
+
+def _run_script(
+    config: LoadedConfig,
+    script_path: Path,
+    transcript_path: Path | None,
+    speed: str | None,
+    data_dir: Path | None,
+    map_path: Path | None,
+) -> None:
+    import contextlib
+
+    from cyborg.sim.scenario import run_scenario
+    from cyborg.sim.script import load_script
+
+    script = load_script(script_path)
+    parsed = _parse_speed(speed)
+    virtual_speed = 1.0 if parsed == "real" else (None if parsed is None else float(parsed))
+    with contextlib.ExitStack() as stack:
+        out = stack.enter_context(transcript_path.open("w", encoding="utf-8")) if transcript_path else None
+        records = run_scenario(
+            config,
+            script,
+            transcript=out,
+            data_dir=data_dir,
+            speed=virtual_speed,
+            map_path=map_path,
+        )
+    for record in records:
+        if record["type"] == "state":
+            click.echo(f"[{record['t']:8.1f}s] {record['from'] or '-'} --{record['event']}--> {record['to']}")
+        elif record["type"] in ("say", "heard"):
+            who = "Cyborg" if record["type"] == "say" else "User"
+            click.echo(f"[{record['t']:8.1f}s] {who}: {record['text']}")
+    if transcript_path:
+        click.secho(f"wrote {len(records)} records to {transcript_path}", fg="green")
 
 
 def _add_tool_commands() -> None:

@@ -8,8 +8,11 @@ sim`` runs the result; tests build it on a virtual clock.
 from __future__ import annotations
 
 import logging
+import random
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from cyborg.controller.config import LoadedConfig
 from cyborg.controller.runtime import Controller
@@ -34,7 +37,10 @@ class Robot:
     motivator: Motivator
     store: ControllerStore
     data_dir: Path
+    rng: random.Random
+    map_path: Path | None = None
     components: dict[str, object] = field(default_factory=dict)
+    calendar: Callable[[Any], None] | None = None  # set by the navigation module: adds a calendar entry
 
     def start(self) -> None:
         self.controller.start()
@@ -45,6 +51,8 @@ def build_robot(
     transport: Transport,
     *,
     data_dir: Path,
+    rng: random.Random | None = None,
+    map_path: Path | None = None,
     kinds: dict[str, ModuleKind] | None = None,
 ) -> Robot:
     """Create the controller (state machine, emotion system, motivator) and the configured modules.
@@ -68,6 +76,8 @@ def build_robot(
         motivator=motivator,
         store=store,
         data_dir=data_dir,
+        rng=rng or random.Random(0),
+        map_path=map_path,
     )
     for name, raw in config.model.modules.items():
         kind, module_settings = parse_module_settings(name, raw, factories, config.source)

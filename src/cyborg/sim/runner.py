@@ -10,7 +10,7 @@ from pathlib import Path
 from cyborg.controller.config import LoadedConfig
 from cyborg.sim.robot import Robot, build_robot
 from cyborg.transport import topics
-from cyborg.transport.base import MessageInfo
+from cyborg.transport.base import MessageInfo, Transport
 from cyborg.transport.clock import Clock, RealClock, VirtualClock
 from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import String, SystemState
@@ -37,12 +37,13 @@ def run_sim(
     speed: float | str | None = "real",
     duration: float | None = None,
     echo: Callable[[str], None] = print,
-    serve: Callable[[EmbeddedTransport, Robot], Awaitable[Callable[[], Awaitable[None]]]] | None = None,
+    serve: Callable[[Transport, Robot], Awaitable[Callable[[], Awaitable[None]]]] | None = None,
     data_dir: Path | None = None,
+    map_path: Path | None = None,
 ) -> None:
     clock = make_clock(speed)
     transport = EmbeddedTransport(clock)
-    robot = build_robot(config, transport, data_dir=data_dir or default_data_dir())
+    robot = build_robot(config, transport, data_dir=data_dir or default_data_dir(), map_path=map_path)
     monitor = transport.node("cyborg_console")
     start = clock.monotonic()
 

@@ -1,0 +1,30 @@
+"""Serve the API (and, once present, the dashboard) next to a running robot."""
+
+from __future__ import annotations
+
+from collections.abc import Awaitable, Callable
+from typing import Any
+
+from cyborg.errors import CyborgError
+from cyborg.interfaces.api import RobotAPI
+from cyborg.sim.robot import Robot
+from cyborg.transport.base import Transport
+
+Stop = Callable[[], Awaitable[None]]
+
+
+def serve_api(host: str, port: int, say: Callable[..., Any]) -> Callable[[Transport, Robot], Awaitable[Stop]]:
+    """A ``serve`` hook for :func:`cyborg.sim.runner.run_sim` that starts the HTTP API."""
+
+    async def serve(transport: Transport, robot: Robot) -> Stop:
+        api = RobotAPI(transport.node("cyborg_api"), machine=robot.config.machine)
+        try:
+            url = await api.start(host, port)
+        except OSError as exc:
+            raise CyborgError(
+                f"cannot serve on {host}:{port}: {exc.strerror}; fix: pass --port 0 or another port"
+            ) from exc
+        say(f"dashboard and API: {url}  (command tool: cyborg status --url {url.rstrip('/')})", fg="green")
+        return api.stop
+
+    return serve
