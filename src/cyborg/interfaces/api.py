@@ -45,9 +45,12 @@ class RobotAPI:
         *,
         machine: MachineSpec | None = None,
         extra_status: Callable[[], dict[str, Any]] | None = None,
+        emotions: dict[str, tuple[float, float, float]] | None = None,
     ) -> None:
         self.node = node
         self.machine = machine
+        self.emotions = emotions or {}
+        self._graph_svg: bytes | None = None
         self.extra_status = extra_status
         self.records: deque[Record] = deque(maxlen=RECORD_BUFFER)
         self.sequence = 0
@@ -80,6 +83,9 @@ class RobotAPI:
                 web.get("/api/records", self.get_records),
                 web.get("/api/openapi.json", self.get_openapi),
                 web.get("/api/ws", self.websocket),
+                web.get("/api/machine", self.get_machine),
+                web.get("/api/graph.svg", self.get_graph),
+                web.get("/api/emotions", self.get_emotions),
             ]
         )
         self._runner: web.AppRunner | None = None
@@ -188,6 +194,36 @@ class RobotAPI:
         kinds = set(filter(None, request.query.get("type", "").split(",")))
         out = [r for r in self.records if r["seq"] > since and (not kinds or r["type"] in kinds)]
         return web.json_response(out)
+
+    async def get_machine(self, request: web.Request) -> web.Response:
+        if self.machine is None:
+            raise web.HTTPNotFound(text="this robot's state machine is not known here")
+        states = [
+            {
+                "name": st.name,
+                "parent": st.parent,
+                "action": st.action,
+                "leaf": st.is_leaf,
+                "transitions": dict(st.transitions),
+                "resources": self.machine.resources_of(st.name) if st.is_leaf else dict(st.resources),
+            }
+            for st in self.machine.states.values()
+        ]
+        return web.json_response({"initial": self.machine.initial, "states": states})
+
+    async def get_graph(self, request: web.Request) -> web.Response:
+        """The machine drawn by Graphviz; nodes have ids ``state:<name>`` for live highlighting."""
+        if self.machine is None:
+            raise web.HTTPNotFound(text="this robot's state machine is not known here")
+        if self._graph_svg is None:
+            from cyborg.controller.graph import render_bytes, to_graph
+
+            loop = asyncio.get_running_loop()
+            self._graph_svg = await loop.run_in_executor(None, render_bytes, to_graph(self.machine), "svg")
+        return web.Response(body=self._graph_svg, content_type="image/svg+xml")
+
+    async def get_emotions(self, request: web.Request) -> web.Response:
+        return web.json_response({"prototypes": {k: list(v) for k, v in self.emotions.items()}})
 
     async def get_openapi(self, request: web.Request) -> web.Response:
         from cyborg.interfaces.openapi import OPENAPI

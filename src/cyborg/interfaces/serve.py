@@ -12,12 +12,21 @@ from cyborg.transport.base import Transport
 
 Stop = Callable[[], Awaitable[None]]
 
+# Functions that add routes to the API for a robot (the dashboard registers itself here).
+EXTENSIONS: list[Callable[[RobotAPI, Robot], None]] = []
+
 
 def serve_api(host: str, port: int, say: Callable[..., Any]) -> Callable[[Transport, Robot], Awaitable[Stop]]:
     """A ``serve`` hook for :func:`cyborg.sim.runner.run_sim` that starts the HTTP API."""
 
     async def serve(transport: Transport, robot: Robot) -> Stop:
-        api = RobotAPI(transport.node("cyborg_api"), machine=robot.config.machine)
+        api = RobotAPI(
+            transport.node("cyborg_api"),
+            machine=robot.config.machine,
+            emotions=dict(robot.config.model.emotion.prototypes),
+        )
+        for extend in EXTENSIONS:
+            extend(api, robot)
         try:
             url = await api.start(host, port)
         except OSError as exc:
