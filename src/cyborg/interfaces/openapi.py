@@ -97,6 +97,24 @@ OPENAPI: dict[str, Any] = {
                 },
             }
         },
+        "/api/machine": {
+            "get": {
+                "summary": "The state machine: states, superstates, transitions, resources",
+                "responses": {"200": {"description": "machine"}},
+            }
+        },
+        "/api/graph.svg": {
+            "get": {
+                "summary": "The state machine drawn by Graphviz (node ids state:<name>)",
+                "responses": {"200": {"description": "SVG"}},
+            }
+        },
+        "/api/emotions": {
+            "get": {
+                "summary": "The emotion prototypes (PAD points)",
+                "responses": {"200": {"description": "prototypes"}},
+            }
+        },
         "/api/ws": {
             "get": {
                 "summary": "Websocket: a hello with the status, then every record as JSON",
