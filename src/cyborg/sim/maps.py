@@ -173,7 +173,8 @@ def segment_cells(start: Point, end: Point) -> tuple[NDArray[np.int64], NDArray[
             low, high = sorted((a, b))
             borders = np.arange(math.floor(low) + 1, math.ceil(high), dtype=float)
             cuts.append((borders - a) / (b - a))
-    t = np.unique(np.concatenate(cuts))
+    # Rounding merges a corner's two crossings, which floating point would leave a hair apart.
+    t = np.unique(np.round(np.concatenate(cuts), 9))
     middles = (t[:-1] + t[1:]) / 2 if t.size > 1 else np.array([0.0])
     cols = np.floor(x0 + middles * (x1 - x0)).astype(np.int64)
     rows = np.floor(y0 + middles * (y1 - y0)).astype(np.int64)
@@ -414,7 +415,8 @@ def _parse_numbers(path: Path, rows: list[tuple[int, str]], section: str) -> NDA
     for (number, text), values in zip(rows, split_rows, strict=True):
         if len(values) != width:
             raise MapError(
-                f"{path}: line {number}: {section} needs {width} numbers per line, got {text[:40]!r}; {_ARNL_FIX}"
+                f"{path}: line {number}: {section} needs {width} numbers per line, "
+                f"got {text[:40]!r}; {_ARNL_FIX}"
             )
     try:
         return np.array(split_rows, dtype=np.float64).reshape(-1, width)

@@ -1,0 +1,1 @@
+"""Simulation layer: a simulated robot base, its maps and route planning, and scenario runs."""

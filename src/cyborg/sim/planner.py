@@ -1,0 +1,252 @@
+"""Route planning for the simulated robot base on an :class:`~cyborg.sim.maps.OccupancyMap`.
+
+Part of the simulation layer, between the map (:mod:`cyborg.sim.maps`) and the
+simulated base that drives along the result. At construction the planner grows
+every wall and keep-out zone by the robot's radius and labels the connected
+free areas; a query then asks ``pyastar2d`` (A* in C++) for a grid path and
+pulls it taut into a few straight, collision-free legs. Pure: no I/O, no clock.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import random
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pyastar2d
+from numpy.typing import NDArray
+from scipy import ndimage
+
+from cyborg.errors import PlanningError
+from cyborg.sim.maps import Cell, KeepOutZone, NamedPose, OccupancyMap, Point, segment_cells
+
+Location = Point | NamedPose
+"""Where a route starts or ends: a world point in metres, or a named pose from the map."""
+
+_EIGHT_NEIGHBOURS = np.ones((3, 3), dtype=bool)
+
+
+@dataclass(frozen=True)
+class Route:
+    """A collision-free route: straight legs between ``waypoints`` (metres), start and goal included."""
+
+    waypoints: tuple[Point, ...]
+    length: float
+
+    @staticmethod
+    def through(waypoints: Sequence[Point]) -> Route:
+        return Route(tuple(waypoints), sum(math.dist(a, b) for a, b in itertools.pairwise(waypoints)))
+
+
+class RoutePlanner:
+    """Shortest collision-free routes for a round robot of ``robot_radius`` metres.
+
+    ``keep_out`` replaces the map's own keep-out zones when given. The robot's
+    centre stays more than ``robot_radius`` (plus half a cell, for the cells'
+    own size) from every wall, unknown cell and keep-out zone.
+    """
+
+    def __init__(
+        self,
+        occupancy_map: OccupancyMap,
+        robot_radius: float = 0.35,
+        keep_out: Sequence[KeepOutZone] | None = None,
+    ) -> None:
+        if robot_radius < 0:
+            raise ValueError(f"robot_radius must be >= 0 m, got {robot_radius}")
+        self.map = occupancy_map
+        self.robot_radius = robot_radius
+        self.keep_out = tuple(occupancy_map.keep_out if keep_out is None else keep_out)
+        self._keep_out_cells = occupancy_map.keep_out_mask(self.keep_out)
+        self.inflated: NDArray[np.bool_] = self._inflate(occupancy_map.blocked | self._keep_out_cells)
+        """True where the robot's centre may not be."""
+        self._components, _ = ndimage.label(~self.inflated, structure=_EIGHT_NEIGHBOURS)
+        self._weights = np.where(self.inflated, np.inf, 1.0).astype(np.float32)
+        self._cells_by_component: dict[int, NDArray[np.intp]] = {}
+
+    def _inflate(self, blocked: NDArray[np.bool_]) -> NDArray[np.bool_]:
+        if not blocked.any():
+            return blocked.copy()
+        clearance = ndimage.distance_transform_edt(~blocked) * self.map.resolution
+        return np.asarray(clearance < self.robot_radius + self.map.resolution / 2)
+
+    @property
+    def safety_distance(self) -> float:
+        """How far (m) the robot's centre keeps from a wall cell's centre."""
+        return self.robot_radius + self.map.resolution / 2
+
+    def is_free(self, x: float, y: float) -> bool:
+        """True when the robot may stand with its centre at (x, y)."""
+        row, col = self.map.world_to_cell(x, y)
+        return self.map.contains(x, y) and not self.inflated[row, col]
+
+    def segment_is_free(self, start: Point, end: Point) -> bool:
+        """True when the robot can drive straight from ``start`` to ``end`` (metres)."""
+        if not (self.map.contains(*start) and self.map.contains(*end)):
+            return False
+        rows, cols = segment_cells(self._grid_point(start), self._grid_point(end))
+        return not self.inflated[rows, cols].any()
+
+    def plan(self, start: Location, goal: Location) -> Route:
+        """The shortest route from ``start`` to ``goal``; PlanningError saying why when there is none."""
+        start_point, goal_point = _point(start), _point(goal)
+        start_cell = self._check_endpoint("start", start)
+        goal_cell = self._check_endpoint("goal", goal)
+        self._check_connected(start, start_cell, goal, goal_cell)
+        if start_cell == goal_cell:
+            return Route.through([start_point, goal_point])
+        path = pyastar2d.astar_path(self._weights, start_cell, goal_cell, allow_diagonal=True)
+        if path is None:  # cannot happen after _check_connected, unless the library disagrees with it
+            raise PlanningError(
+                f"no route from {_describe(start)} to {_describe(goal)}: the search found none"
+            )
+        return Route.through(self._pull_taut(start_point, path, goal_point))
+
+    def random_reachable_point(self, rng: random.Random, near: Location | None = None) -> Point:
+        """A random free point (cell centre) reachable from ``near``, or in the largest free area.
+
+        Deterministic for a given ``rng`` state; PlanningError if the map has no free space.
+        """
+        if near is None:
+            component = self._largest_component()
+        else:
+            component = int(self._components[self._check_endpoint("start", near)])
+        if component not in self._cells_by_component:
+            self._cells_by_component[component] = np.flatnonzero(self._components.ravel() == component)
+        cells = self._cells_by_component[component]
+        row, col = np.unravel_index(cells[rng.randrange(len(cells))], self._components.shape)
+        return self.map.cell_to_world(int(row), int(col))
+
+    def _largest_component(self) -> int:
+        sizes = np.bincount(self._components.ravel())
+        sizes[0] = 0
+        if not sizes.any():
+            raise PlanningError(
+                f"{self.map.source or 'map'}: no free space for a robot of radius {self.robot_radius} m; "
+                "fix: use a smaller robot_radius or a map with open space"
+            )
+        return int(sizes.argmax())
+
+    def _grid_point(self, point: Point) -> Point:
+        """World metres -> continuous grid coordinates (col, row)."""
+        return (
+            (point[0] - self.map.origin[0]) / self.map.resolution,
+            (point[1] - self.map.origin[1]) / self.map.resolution,
+        )
+
+    def _check_endpoint(self, role: str, location: Location) -> tuple[int, int]:
+        """The free cell of a start or goal; PlanningError naming what is in the way otherwise."""
+        x, y = _point(location)
+        if not self.map.contains(x, y):
+            width, height = self.map.size_m
+            left, bottom = self.map.origin
+            raise PlanningError(
+                f"{role} {_describe(location)} is off the map, which spans "
+                f"x {left:.1f}..{left + width:.1f} m and y {bottom:.1f}..{bottom + height:.1f} m"
+            )
+        cell = self.map.world_to_cell(x, y)
+        if self.inflated[cell]:
+            raise PlanningError(f"{role} {_describe(location)} is {self._obstacle_near(cell)}")
+        return cell
+
+    def _obstacle_near(self, cell: tuple[int, int]) -> str:
+        """Say what keeps the robot's centre out of ``cell``: a wall, unknown space or a keep-out zone."""
+        reach = math.ceil(self.safety_distance / self.map.resolution)
+        row, col = cell
+        rows = slice(max(0, row - reach), row + reach + 1)
+        cols = slice(max(0, col - reach), col + reach + 1)
+        margin = f"{self.robot_radius:.2f} m"
+        if self._keep_out_cells[cell]:
+            return f"inside {self._zone_at(cell)}"
+        if self.map.grid[cell] == Cell.OCCUPIED:
+            return f"inside a wall or within {margin} of one"
+        if self.map.grid[cell] == Cell.UNKNOWN:
+            return "in unmapped (unknown) space"
+        if (self.map.grid[rows, cols] == Cell.OCCUPIED).any():
+            return f"inside a wall or within {margin} of one"
+        if self._keep_out_cells[rows, cols].any():
+            return f"within {margin} of a keep-out zone"
+        return f"within {margin} of unmapped (unknown) space"
+
+    def _zone_at(self, cell: tuple[int, int]) -> str:
+        for zone in self.keep_out:
+            if self.map.keep_out_mask([zone])[cell]:
+                return zone.describe()
+        return "a keep-out zone"
+
+    def _check_connected(
+        self, start: Location, start_cell: tuple[int, int], goal: Location, goal_cell: tuple[int, int]
+    ) -> None:
+        start_area, goal_area = int(self._components[start_cell]), int(self._components[goal_cell])
+        if start_area == goal_area:
+            return
+        sizes = np.bincount(self._components.ravel())
+        enclosed, other = ("goal", "start") if sizes[goal_area] <= sizes[start_area] else ("start", "goal")
+        where = _describe(goal if enclosed == "goal" else start)
+        raise PlanningError(
+            f"no route from {_describe(start)} to {_describe(goal)}: the {enclosed} {where} is enclosed, "
+            f"walls or keep-out zones (with {self.robot_radius:.2f} m clearance) cut it off from the {other}"
+        )
+
+    def _pull_taut(self, start: Point, path: NDArray[np.int32], goal: Point) -> list[Point]:
+        """Replace a cell path by the few waypoints where it must turn to stay collision-free."""
+        corners = [self.map.cell_to_world(int(r), int(c)) for r, c in path[_turning_points(path)]]
+        points = [start, *corners, goal]
+        waypoints = [start]
+        anchor = 0
+        while anchor < len(points) - 1:
+            anchor = self._furthest_in_sight(points, anchor)
+            waypoints.append(points[anchor])
+        return self._drop_needless(waypoints)
+
+    def _furthest_in_sight(self, points: list[Point], anchor: int) -> int:
+        """Index of a far point seen in a straight line from ``points[anchor]`` (at least the next one).
+
+        Gallops ahead, then bisects: a few segment checks instead of one per point.
+        """
+        seen, step = anchor + 1, 1
+        while seen < len(points) - 1:
+            probe = min(anchor + 2 * step, len(points) - 1)
+            if not self.segment_is_free(points[anchor], points[probe]):
+                break
+            seen, step = probe, 2 * step
+        else:
+            return seen
+        blocked = probe
+        while blocked - seen > 1:
+            middle = (seen + blocked) // 2
+            if self.segment_is_free(points[anchor], points[middle]):
+                seen = middle
+            else:
+                blocked = middle
+        return seen
+
+    def _drop_needless(self, waypoints: list[Point]) -> list[Point]:
+        """Remove waypoints whose neighbours can see each other."""
+        index = 1
+        while index < len(waypoints) - 1:
+            if self.segment_is_free(waypoints[index - 1], waypoints[index + 1]):
+                del waypoints[index]
+            else:
+                index += 1
+        return waypoints
+
+
+def _turning_points(path: NDArray[np.int32]) -> NDArray[np.bool_]:
+    """True at the first and last cell of a path and wherever its direction changes."""
+    steps = np.diff(path, axis=0)
+    turns = np.any(steps[1:] != steps[:-1], axis=1)
+    return np.concatenate([[True], turns, [True]])
+
+
+def _point(location: Location) -> Point:
+    return location.position if isinstance(location, NamedPose) else (float(location[0]), float(location[1]))
+
+
+def _describe(location: Location) -> str:
+    x, y = _point(location)
+    name = f"{location.name!r} " if isinstance(location, NamedPose) else ""
+    return f"{name}({x:.1f}, {y:.1f})"
