@@ -1,0 +1,100 @@
+"""The command tool against a running `cyborg sim`, as a user drives it from a terminal."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import subprocess
+import sys
+import time
+import urllib.error
+import urllib.request
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from cyborg.interfaces.cli import packaged_config
+
+CYBORG = [sys.executable, "-m", "cyborg.interfaces.cli"]
+
+
+@pytest.fixture
+def running_sim(tmp_path: Path) -> Iterator[str]:
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    process = subprocess.Popen(
+        [*CYBORG, "sim", "--config", str(packaged_config("demo.yaml")), "--port", "0", "--db", str(tmp_path)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env=env,
+    )
+    assert process.stdout is not None
+    url = None
+    deadline = time.monotonic() + 30
+    while url is None and time.monotonic() < deadline:
+        line = process.stdout.readline()
+        match = re.search(r"(http://127\.0\.0\.1:\d+)/", line)
+        if match:
+            url = match.group(1)
+    assert url, "the sim did not print its address"
+    try:
+        yield url
+    finally:
+        process.terminate()
+        process.wait(timeout=10)
+
+
+def tool(url: str, *args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([*CYBORG, *args, "--url", url], capture_output=True, text=True, timeout=30)
+
+
+def wait_for_state(url: str, state: str) -> dict[str, object]:
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:
+        with urllib.request.urlopen(url + "/api/status") as response:
+            status = json.loads(response.read())
+        if status["state"] == state:
+            return status  # type: ignore[no-any-return]
+        time.sleep(0.05)
+    raise AssertionError(f"never reached {state}")
+
+
+def test_event_say_emotion_and_status(running_sim: str) -> None:
+    url = running_sim
+    wait_for_state(url, "idle")
+    result = tool(url, "event", "music_play")
+    assert result.returncode == 0 and "sent event music_play" in result.stdout
+    status = wait_for_state(url, "music")
+    assert status["previous_state"] == "idle" and status["event"] == "music_play"
+    assert tool(url, "say", "hello", "there").stdout.strip() == "heard: hello there"
+    assert tool(url, "emotion", "set", "angry").returncode == 0
+    time.sleep(0.3)
+    shown = tool(url, "status").stdout
+    assert "idle --music_play--> music" in shown and "emotion angry" in shown and "P -0.51" in shown
+    assert tool(url, "emotion", "values", "0.5", "0.4", "0.2").returncode == 0
+    time.sleep(0.3)
+    assert "P +0.50 A +0.40 D +0.20" in tool(url, "status").stdout
+
+
+def test_bad_input_is_refused_with_the_reason(running_sim: str) -> None:
+    result = tool(running_sim, "emotion", "values", "0.5", "3", "0")
+    assert result.returncode != 0
+    assert "'arousal' must be a number in [-1, 1], got 3.0" in result.stderr
+    request = urllib.request.Request(running_sim + "/api/event", data=b"not json", method="POST")
+    with pytest.raises(urllib.error.HTTPError) as info:
+        urllib.request.urlopen(request)
+    assert info.value.code == 400 and "not JSON" in info.value.read().decode()
+
+
+def test_no_robot_running_is_explained() -> None:
+    result = tool("http://127.0.0.1:9", "status")
+    assert result.returncode != 0 and "no robot answers" in result.stderr and "cyborg sim" in result.stderr
+
+
+def test_openapi_document_lists_the_commands(running_sim: str) -> None:
+    with urllib.request.urlopen(running_sim + "/api/openapi.json") as response:
+        spec = json.loads(response.read())
+    assert spec["openapi"].startswith("3.")
+    assert {"/api/event", "/api/say", "/api/emotion/set", "/api/status"} <= set(spec["paths"])
