@@ -1,0 +1,845 @@
+"""The navigation module's database: known places, scheduled visits and things to say (SQLite).
+
+Part of the navigation module's pure logic/persistence layer. One SQLite file
+holds three kinds of data:
+
+* locations: a name, aliases (what speech-to-text hears instead), the map they are
+  on, a pose (x, y in m, heading in rad), how close counts as arrived, whether the
+  place is usually crowded and how pleasant the robot finds it (-1..1);
+* calendar events: be at a location between two times, optionally recurring
+  (RFC 5545 RRULE), optionally ignored, with a UID so an .ics import updates;
+* responses: sentences with the placeholder ``LOCATION``, by response type and
+  emotion (NULL emotion = fits any emotion).
+
+A missing file is created with defaults. A file that is not a database, fails
+``PRAGMA integrity_check`` or holds someone else's tables is moved aside to
+``<name>.corrupt-<timestamp>`` with a warning and recreated, so the robot always
+starts. Writes are committed at once (WAL, synchronous=FULL). The schema version
+lives in ``PRAGMA user_version`` and older files are migrated on open.
+"""
+
+from __future__ import annotations
+
+import enum
+import logging
+import math
+import re
+import sqlite3
+from collections.abc import Iterable, Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass, replace
+from datetime import UTC, datetime, timedelta, timezone, tzinfo
+from pathlib import Path
+from types import TracebackType
+from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
+
+from cyborg.errors import DatabaseError
+from cyborg.navigation.calendar import normalise_recurrence, occurrences_between
+from cyborg.navigation.keywords import LocationMatcher, normalise
+
+log = logging.getLogger(__name__)
+
+PLACEHOLDER = "LOCATION"
+"""Word in a response sentence that is replaced by the location's name."""
+
+# Each migration takes the file from version i to i + 1 (index i).
+_MIGRATIONS: tuple[tuple[str, ...], ...] = (
+    (
+        "CREATE TABLE locations (id INTEGER PRIMARY KEY, name TEXT NOT NULL UNIQUE COLLATE NOCASE, "
+        "map TEXT NOT NULL DEFAULT '', x REAL NOT NULL DEFAULT 0, y REAL NOT NULL DEFAULT 0, "
+        "heading REAL NOT NULL DEFAULT 0, tolerance REAL NOT NULL DEFAULT 0.5 CHECK (tolerance > 0), "
+        "crowded INTEGER NOT NULL DEFAULT 0 CHECK (crowded IN (0, 1)), "
+        "pleasantness REAL NOT NULL DEFAULT 0 CHECK (pleasantness BETWEEN -1 AND 1))",
+        "CREATE TABLE location_aliases (alias TEXT PRIMARY KEY COLLATE NOCASE, "
+        "location_id INTEGER NOT NULL REFERENCES locations(id) ON DELETE CASCADE)",
+        "CREATE TABLE events (id INTEGER PRIMARY KEY, "
+        "location_id INTEGER NOT NULL REFERENCES locations(id) ON DELETE RESTRICT, "
+        "start_utc TEXT NOT NULL, end_utc TEXT NOT NULL, timezone TEXT NOT NULL, "
+        "ignored INTEGER NOT NULL DEFAULT 0 CHECK (ignored IN (0, 1)), "
+        "recurrence TEXT, summary TEXT, uid TEXT UNIQUE)",
+        "CREATE TABLE responses (id INTEGER PRIMARY KEY, sentence TEXT NOT NULL, "
+        "type TEXT NOT NULL, emotion TEXT)",
+        "CREATE INDEX responses_by_type ON responses (type, emotion)",
+    ),
+)
+SCHEMA_VERSION = len(_MIGRATIONS)
+_COLUMNS: dict[str, set[str]] = {
+    "locations": {"id", "name", "map", "x", "y", "heading", "tolerance", "crowded", "pleasantness"},
+    "location_aliases": {"alias", "location_id"},
+    "events": {
+        "id",
+        "location_id",
+        "start_utc",
+        "end_utc",
+        "timezone",
+        "ignored",
+        "recurrence",
+        "summary",
+        "uid",
+    },
+    "responses": {"id", "sentence", "type", "emotion"},
+}
+
+
+class ResponseType(enum.Enum):
+    """What a sentence is for; some kinds must name the place (contain ``LOCATION``)."""
+
+    OPINION = "opinion"
+    ARRIVED = "arrived"
+    STUCK = "stuck"
+    OFFER_GUIDE = "offer_guide"
+    CONFIRM = "confirm"
+    REFUSE = "refuse"
+    ASK_LOCATION = "ask_location"
+    UNKNOWN_LOCATION = "unknown_location"
+    DECLINED = "declined"
+
+    @property
+    def needs_location(self) -> bool:
+        return self in (ResponseType.OPINION, ResponseType.ARRIVED, ResponseType.STUCK)
+
+
+EMOTION_SYNONYMS = {"elated": "happy", "inhibited": "sad", "puzzled": "surprised"}
+"""Names from the spec's Table 2.2 mapped to the names the emotion system uses."""
+
+
+@dataclass(frozen=True)
+class Location:
+    """A known place on the map."""
+
+    name: str
+    aliases: tuple[str, ...] = ()
+    map: str = ""
+    x: float = 0.0
+    y: float = 0.0
+    heading: float = 0.0
+    tolerance: float = 0.5
+    crowded: bool = False
+    pleasantness: float = 0.0
+
+
+@dataclass(frozen=True)
+class CalendarEvent:
+    """Be at ``location`` from ``start`` to ``end`` (aware datetimes), maybe recurring."""
+
+    location: str
+    start: datetime
+    end: datetime
+    ignored: bool = False
+    recurrence: str | None = None
+    summary: str | None = None
+    uid: str | None = None
+    id: int | None = None
+
+
+@dataclass(frozen=True)
+class Occurrence:
+    """One occurrence of a (possibly recurring) calendar event."""
+
+    event: CalendarEvent
+    start: datetime
+    end: datetime
+
+
+@dataclass(frozen=True)
+class Response:
+    """A sentence the robot can say; ``emotion`` None fits every emotion."""
+
+    sentence: str
+    type: ResponseType
+    emotion: str | None = None
+    id: int | None = None
+
+    def say(self, location: str) -> str:
+        """The sentence with ``LOCATION`` replaced by ``location``."""
+        return self.sentence.replace(PLACEHOLDER, location)
+
+
+DEFAULT_LOCATIONS: tuple[Location, ...] = (
+    Location("information desk", ("info", "information"), crowded=True, pleasantness=0.3),
+    Location("cafeteria", ("canteen",), crowded=True, pleasantness=0.8),
+    Location("entrance", ("main entrance",), crowded=True, pleasantness=0.1),
+    Location("entrance 2", ("entrance2",), pleasantness=0.0),
+    Location("el5", (), pleasantness=0.2),
+    Location("el6", ("e16",), pleasantness=0.2),
+    Location("waiting area", (), crowded=True, pleasantness=0.4),
+    Location("elevator", ("lift",), pleasantness=-0.3),
+)
+"""Glassgården, NTNU; poses are 0,0 placeholders until ``cyborg db import-map`` fills them."""
+
+_R = ResponseType
+DEFAULT_RESPONSES: tuple[Response, ...] = (
+    Response("I like the LOCATION.", _R.OPINION),
+    Response("I am happy about LOCATION", _R.OPINION, "neutral"),
+    Response("I love the LOCATION, it is one of my favourite places!", _R.OPINION, "happy"),
+    Response("The LOCATION makes me smile.", _R.OPINION, "happy"),
+    Response("What is this place? A LOCATION you say?", _R.OPINION, "curious"),
+    Response("I wonder what goes on at the LOCATION.", _R.OPINION, "curious"),
+    Response("I hate the LOCATION.", _R.OPINION, "angry"),
+    Response("Do not talk to me about the LOCATION.", _R.OPINION, "angry"),
+    Response("The LOCATION is so boring.", _R.OPINION, "bored"),
+    Response("Nothing ever happens at the LOCATION.", _R.OPINION, "bored"),
+    Response("The LOCATION makes me feel a bit down.", _R.OPINION, "sad"),
+    Response("The LOCATION is fine, I suppose.", _R.OPINION, "unconcerned"),
+    Response("Oh! The LOCATION? I did not expect that.", _R.OPINION, "surprised"),
+    Response("The LOCATION is a place of some importance, like me.", _R.OPINION, "dignified"),
+    Response("Everyone at the LOCATION is so kind to me.", _R.OPINION, "loved"),
+    Response("Human, this is LOCATION", _R.ARRIVED),
+    Response("There. The LOCATION. Happy now?", _R.ARRIVED, "angry"),
+    Response("I am stuck and cannot get to the LOCATION.", _R.STUCK),
+    Response("Something is blocking my way to the LOCATION!", _R.STUCK, "angry"),
+    Response("I tried, but I could not reach the LOCATION.", _R.STUCK, "sad"),
+    Response("I think I know where that is, would you like me to show you?", _R.OFFER_GUIDE),
+    Response("At once.", _R.CONFIRM),
+    Response("Fine, if I must.", _R.CONFIRM, "bored"),
+    Response("No. Go there yourself.", _R.REFUSE),
+    Response("I will not go to the LOCATION, leave me alone.", _R.REFUSE, "angry"),
+    Response("Where would you like me to go?", _R.ASK_LOCATION),
+    Response("I am sorry, I do not know that place.", _R.UNKNOWN_LOCATION),
+    Response("All right, maybe another time.", _R.DECLINED),
+)
+
+
+class _Unusable(Exception):
+    """The file exists but is not this database (reason in args[0])."""
+
+
+class NavigationDatabase:
+    """The SQLite file of the navigation module; every method commits before returning."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self._conn = self._open_or_recover()
+
+    # --- opening -----------------------------------------------------------------------------
+
+    def _open_or_recover(self) -> sqlite3.Connection:
+        if self.path.is_dir():
+            raise DatabaseError(f"{self.path} is a folder; give a file name such as navigation.db")
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise DatabaseError(
+                f"cannot create the folder of {self.path}: {exc}; pick a writable path"
+            ) from exc
+        try:
+            conn = self._connect()
+            try:
+                self._prepare(conn)
+            except BaseException:
+                conn.close()
+                raise
+            return conn
+        except _Unusable as exc:
+            self._move_aside(str(exc.args[0]))
+        conn = self._connect()
+        self._prepare(conn)
+        return conn
+
+    def _connect(self) -> sqlite3.Connection:
+        try:
+            conn = sqlite3.connect(self.path, isolation_level=None)
+        except sqlite3.Error as exc:
+            raise DatabaseError(f"cannot open {self.path}: {exc}; check the file's permissions") from exc
+        try:
+            conn.execute("PRAGMA journal_mode=WAL")
+            conn.execute("PRAGMA synchronous=FULL")
+            conn.execute("PRAGMA foreign_keys=ON")
+        except sqlite3.OperationalError as exc:
+            conn.close()
+            raise DatabaseError(
+                f"cannot use {self.path}: {exc}; check permissions and that no other program locks it"
+            ) from exc
+        except sqlite3.DatabaseError as exc:
+            conn.close()
+            raise _Unusable(f"not an SQLite database ({exc})") from exc
+        return conn
+
+    def _prepare(self, conn: sqlite3.Connection) -> None:
+        """Check the file, migrate it to SCHEMA_VERSION and seed a new one."""
+        try:
+            check = conn.execute("PRAGMA integrity_check").fetchall()
+            version = int(conn.execute("PRAGMA user_version").fetchone()[0])
+            tables = {row[0] for row in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
+        except sqlite3.DatabaseError as exc:
+            raise _Unusable(str(exc)) from exc
+        if check != [("ok",)]:
+            raise _Unusable(f"integrity_check failed: {check[:3]}")
+        if version > SCHEMA_VERSION:
+            raise DatabaseError(
+                f"{self.path} has schema version {version}, newer than this program's {SCHEMA_VERSION}; "
+                "update cyborg, or point --db at another file"
+            )
+        if version == 0 and tables:
+            raise _Unusable(f"it holds other tables ({', '.join(sorted(tables))}) and no schema version")
+        for step in range(version, SCHEMA_VERSION):
+            try:
+                with self._transaction(conn):
+                    for sql in _MIGRATIONS[step]:
+                        conn.execute(sql)
+                    if step == 0:
+                        self._seed(conn)
+                    conn.execute(f"PRAGMA user_version = {step + 1}")
+            except sqlite3.Error as exc:
+                raise DatabaseError(
+                    f"could not migrate {self.path} to schema version {step + 1}: {exc}; "
+                    "check the disk, or move the file away to start afresh"
+                ) from exc
+            log.info("navigation database %s migrated to schema version %d", self.path, step + 1)
+        self._check_columns(conn)
+
+    @staticmethod
+    def _check_columns(conn: sqlite3.Connection) -> None:
+        for table, columns in _COLUMNS.items():
+            found = {row[1] for row in conn.execute(f"PRAGMA table_info({table})")}
+            if not columns <= found:
+                raise _Unusable(f"table {table} lacks columns {sorted(columns - found)}")
+
+    def _move_aside(self, reason: str) -> None:
+        stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%SZ")
+        target = self.path.with_name(f"{self.path.name}.corrupt-{stamp}")
+        n = 1
+        while target.exists():
+            target = self.path.with_name(f"{self.path.name}.corrupt-{stamp}-{n}")
+            n += 1
+        try:
+            self.path.rename(target)
+            for suffix in ("-wal", "-shm"):
+                side = self.path.with_name(self.path.name + suffix)
+                if side.exists():
+                    side.rename(target.with_name(target.name + suffix))
+        except OSError as exc:
+            raise DatabaseError(
+                f"{self.path} is unusable ({reason}) and could not be moved aside: {exc}; move it by hand"
+            ) from exc
+        log.warning(
+            "navigation database %s is unusable (%s); moved it to %s and started afresh",
+            self.path,
+            reason,
+            target,
+        )
+
+    def _seed(self, conn: sqlite3.Connection) -> None:
+        for location in DEFAULT_LOCATIONS:
+            self._insert_location(conn, location)
+        for response in DEFAULT_RESPONSES:
+            conn.execute(
+                "INSERT INTO responses (sentence, type, emotion) VALUES (?, ?, ?)",
+                (response.sentence, response.type.value, response.emotion),
+            )
+
+    # --- plumbing ----------------------------------------------------------------------------
+
+    @staticmethod
+    @contextmanager
+    def _transaction(conn: sqlite3.Connection) -> Iterator[None]:
+        conn.execute("BEGIN IMMEDIATE")
+        try:
+            yield
+        except BaseException:
+            conn.execute("ROLLBACK")
+            raise
+        conn.execute("COMMIT")
+
+    @contextmanager
+    def _writing(self, what: str) -> Iterator[sqlite3.Connection]:
+        try:
+            with self._transaction(self._conn):
+                yield self._conn
+        except sqlite3.Error as exc:
+            raise DatabaseError(
+                f"could not {what} in {self.path}: {exc}; check the disk and permissions"
+            ) from exc
+
+    def _read(self, sql: str, params: Sequence[object] = ()) -> list[tuple[object, ...]]:
+        try:
+            return self._conn.execute(sql, tuple(params)).fetchall()
+        except sqlite3.Error as exc:
+            raise DatabaseError(
+                f"could not read {self.path}: {exc}; reopen the database to recover it"
+            ) from exc
+
+    def close(self) -> None:
+        self._conn.close()
+
+    def __enter__(self) -> NavigationDatabase:
+        return self
+
+    def __exit__(
+        self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        self.close()
+
+    # --- locations ---------------------------------------------------------------------------
+
+    def list_locations(self) -> list[Location]:
+        rows = self._read("SELECT * FROM locations ORDER BY name COLLATE NOCASE")
+        return [self._location_from_row(row) for row in rows]
+
+    def find_location(self, name_or_alias: str) -> Location | None:
+        """The location called ``name_or_alias`` (name or alias, any case), or None."""
+        location_id = self._location_id(name_or_alias)
+        if location_id is None:
+            return None
+        [row] = self._read("SELECT * FROM locations WHERE id = ?", (location_id,))
+        return self._location_from_row(row)
+
+    def get_location(self, name_or_alias: str) -> Location:
+        """Like :meth:`find_location` but raises DatabaseError naming the known places."""
+        found = self.find_location(name_or_alias)
+        if found is None:
+            raise self._unknown_location(name_or_alias)
+        return found
+
+    def matcher(self, threshold: float | None = None) -> LocationMatcher:
+        """A keyword matcher over the current locations and their aliases."""
+        places = [(loc.name, loc.aliases) for loc in self.list_locations()]
+        return LocationMatcher(places) if threshold is None else LocationMatcher(places, threshold)
+
+    def add_location(self, location: Location) -> Location:
+        """Add a new place; DatabaseError if its name or an alias is taken or a value is out of range."""
+        location = self._checked_location(location, own_id=None)
+        with self._writing(f"add location {location.name!r}") as conn:
+            self._insert_location(conn, location)
+        return location
+
+    def update_location(self, name_or_alias: str, location: Location) -> Location:
+        """Replace the place called ``name_or_alias`` by ``location`` (which may rename it)."""
+        location_id = self._location_id(name_or_alias)
+        if location_id is None:
+            raise self._unknown_location(name_or_alias)
+        location = self._checked_location(location, own_id=location_id)
+        with self._writing(f"update location {location.name!r}") as conn:
+            conn.execute(
+                "UPDATE locations SET name = ?, map = ?, x = ?, y = ?, heading = ?, tolerance = ?, "
+                "crowded = ?, pleasantness = ? WHERE id = ?",
+                (*self._location_values(location), location_id),
+            )
+            conn.execute("DELETE FROM location_aliases WHERE location_id = ?", (location_id,))
+            self._insert_aliases(conn, location_id, location.aliases)
+        return location
+
+    def remove_location(self, name_or_alias: str, *, with_events: bool = False) -> Location:
+        """Remove a place; its calendar events too if ``with_events``, else refuse while it has any."""
+        location = self.get_location(name_or_alias)
+        location_id = self._location_id(location.name)
+        event_ids = [
+            int(str(r[0])) for r in self._read("SELECT id FROM events WHERE location_id = ?", (location_id,))
+        ]
+        if event_ids and not with_events:
+            raise DatabaseError(
+                f"location {location.name!r} has calendar events {event_ids}; remove them first "
+                "or remove the location with its events (--with-events)"
+            )
+        with self._writing(f"remove location {location.name!r}") as conn:
+            conn.execute("DELETE FROM events WHERE location_id = ?", (location_id,))
+            conn.execute("DELETE FROM locations WHERE id = ?", (location_id,))
+        return location
+
+    def _location_id(self, name_or_alias: str) -> int | None:
+        key = " ".join(name_or_alias.split())
+        rows = self._read(
+            "SELECT id FROM locations WHERE name = ? UNION "
+            "SELECT location_id FROM location_aliases WHERE alias = ?",
+            (key, key),
+        )
+        return int(str(rows[0][0])) if rows else None
+
+    def _unknown_location(self, name: str) -> DatabaseError:
+        known = ", ".join(loc.name for loc in self.list_locations()) or "none"
+        guess = self.matcher().find(name)
+        hint = f"; did you mean {guess.location!r}?" if guess else ""
+        return DatabaseError(f"unknown location {name!r}{hint} Known locations: {known}; add it first")
+
+    def _checked_location(self, location: Location, own_id: int | None) -> Location:
+        location = _valid_location(location)
+        taken = self._spoken_forms(exclude_id=own_id)
+        for form in (location.name, *location.aliases):
+            owner = taken.get(normalise(form))
+            if owner is not None:
+                raise DatabaseError(
+                    f"{form!r} is already used by location {owner!r}; choose another name or alias"
+                )
+        return location
+
+    def _spoken_forms(self, exclude_id: int | None) -> dict[str, str]:
+        """Normalised names and aliases of all other locations -> the name they belong to."""
+        forms: dict[str, str] = {}
+        for location_id, name in self._read("SELECT id, name FROM locations"):
+            if location_id != exclude_id:
+                forms[normalise(str(name))] = str(name)
+        for alias, name, location_id in self._read(
+            "SELECT a.alias, l.name, l.id FROM location_aliases a JOIN locations l ON l.id = a.location_id"
+        ):
+            if location_id != exclude_id:
+                forms[normalise(str(alias))] = str(name)
+        return forms
+
+    @staticmethod
+    def _location_values(location: Location) -> tuple[object, ...]:
+        return (
+            location.name,
+            location.map,
+            location.x,
+            location.y,
+            location.heading,
+            location.tolerance,
+            int(location.crowded),
+            location.pleasantness,
+        )
+
+    def _insert_location(self, conn: sqlite3.Connection, location: Location) -> None:
+        cursor = conn.execute(
+            "INSERT INTO locations (name, map, x, y, heading, tolerance, crowded, pleasantness) "
+            "VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
+            self._location_values(location),
+        )
+        assert cursor.lastrowid is not None
+        self._insert_aliases(conn, cursor.lastrowid, location.aliases)
+
+    @staticmethod
+    def _insert_aliases(conn: sqlite3.Connection, location_id: int, aliases: Iterable[str]) -> None:
+        conn.executemany(
+            "INSERT INTO location_aliases (alias, location_id) VALUES (?, ?)",
+            [(alias, location_id) for alias in aliases],
+        )
+
+    def _location_from_row(self, row: tuple[object, ...]) -> Location:
+        location_id, name, map_name, x, y, heading, tolerance, crowded, pleasant = row[:9]
+        aliases = self._read(
+            "SELECT alias FROM location_aliases WHERE location_id = ? ORDER BY alias", (location_id,)
+        )
+        return Location(
+            name=str(name),
+            aliases=tuple(str(a[0]) for a in aliases),
+            map=str(map_name),
+            x=_number(x, f"x of {name}"),
+            y=_number(y, f"y of {name}"),
+            heading=_number(heading, f"heading of {name}"),
+            tolerance=_number(tolerance, f"tolerance of {name}", 0.5),
+            crowded=bool(crowded),
+            pleasantness=_number(pleasant, f"pleasantness of {name}"),
+        )
+
+    # --- calendar events ---------------------------------------------------------------------
+
+    def list_events(
+        self, location: str | None = None, *, include_ignored: bool = True
+    ) -> list[CalendarEvent]:
+        """All events (of one location if given), by start time."""
+        sql = (
+            "SELECT e.id, l.name, e.start_utc, e.end_utc, e.timezone, e.ignored, e.recurrence, e.summary, e.uid "
+            "FROM events e JOIN locations l ON l.id = e.location_id"
+        )
+        where: list[str] = []
+        params: list[object] = []
+        if location is not None:
+            where.append("l.name = ?")
+            params.append(self.get_location(location).name)
+        if not include_ignored:
+            where.append("e.ignored = 0")
+        if where:
+            sql += " WHERE " + " AND ".join(where)
+        events = [
+            self._event_from_row(row) for row in self._read(sql + " ORDER BY e.start_utc, e.id", params)
+        ]
+        return [event for event in events if event is not None]
+
+    def get_event(self, event_id: int) -> CalendarEvent:
+        found = [event for event in self.list_events() if event.id == event_id]
+        if not found:
+            raise DatabaseError(
+                f"no calendar event with id {event_id}; list them with `cyborg db events list`"
+            )
+        return found[0]
+
+    def validate_event(self, event: CalendarEvent) -> CalendarEvent:
+        """``event`` checked and normalised (stored location name, stored recurrence form)."""
+        for label, moment in (("start", event.start), ("end", event.end)):
+            if moment.tzinfo is None or moment.utcoffset() is None:
+                raise DatabaseError(
+                    f"{label} {moment.isoformat()} has no time zone; give one, e.g. {moment.isoformat()}+01:00"
+                )
+        if event.end <= event.start:
+            raise DatabaseError(
+                f"end {event.end.isoformat()} is not after start {event.start.isoformat()}; swap or fix them"
+            )
+        recurrence = event.recurrence.strip() if event.recurrence else None
+        return replace(
+            event,
+            location=self.get_location(event.location).name,
+            recurrence=normalise_recurrence(recurrence, event.start) if recurrence else None,
+            summary=(event.summary or "").strip() or None,
+            uid=(event.uid or "").strip() or None,
+        )
+
+    def add_event(self, event: CalendarEvent) -> CalendarEvent:
+        """Add a calendar event; returns it with its id. DatabaseError if its UID exists."""
+        event = self.validate_event(event)
+        if event.uid is not None and self._event_id_by_uid(event.uid) is not None:
+            raise DatabaseError(f"an event with uid {event.uid!r} exists; update it or give another uid")
+        with self._writing("add a calendar event") as conn:
+            return self._insert_event(conn, event)
+
+    def update_event(self, event_id: int, event: CalendarEvent) -> CalendarEvent:
+        """Replace event ``event_id`` by ``event`` (its id field is ignored)."""
+        self.get_event(event_id)
+        event = replace(self.validate_event(event), id=event_id)
+        other = self._event_id_by_uid(event.uid) if event.uid else None
+        if other is not None and other != event_id:
+            raise DatabaseError(f"uid {event.uid!r} belongs to event {other}; give another uid")
+        with self._writing(f"update calendar event {event_id}") as conn:
+            conn.execute(
+                "UPDATE events SET location_id = (SELECT id FROM locations WHERE name = ?), start_utc = ?, "
+                "end_utc = ?, timezone = ?, ignored = ?, recurrence = ?, summary = ?, uid = ? WHERE id = ?",
+                (*self._event_values(event), event_id),
+            )
+        return event
+
+    def upsert_events(self, events: Sequence[CalendarEvent]) -> list[tuple[CalendarEvent, bool]]:
+        """Add events, or update those whose UID exists (keeping their ignored flag), in one transaction.
+
+        Returns each stored event with True if it was added, False if updated.
+        """
+        checked = [self.validate_event(event) for event in events]
+        results: list[tuple[CalendarEvent, bool]] = []
+        with self._writing("import calendar events") as conn:
+            for event in checked:
+                existing = self._event_id_by_uid(event.uid) if event.uid else None
+                if existing is None:
+                    results.append((self._insert_event(conn, event), True))
+                    continue
+                [(ignored,)] = conn.execute("SELECT ignored FROM events WHERE id = ?", (existing,)).fetchall()
+                event = replace(event, id=existing, ignored=bool(ignored))
+                conn.execute(
+                    "UPDATE events SET location_id = (SELECT id FROM locations WHERE name = ?), start_utc = ?, "
+                    "end_utc = ?, timezone = ?, ignored = ?, recurrence = ?, summary = ?, uid = ? WHERE id = ?",
+                    (*self._event_values(event), existing),
+                )
+                results.append((event, False))
+        return results
+
+    def remove_event(self, event_id: int) -> CalendarEvent:
+        event = self.get_event(event_id)
+        with self._writing(f"remove calendar event {event_id}") as conn:
+            conn.execute("DELETE FROM events WHERE id = ?", (event_id,))
+        return event
+
+    def events_between(self, window_start: datetime, window_end: datetime) -> list[Occurrence]:
+        """Occurrences of non-ignored events overlapping ``[window_start, window_end)``, by start."""
+        for label, moment in (("window_start", window_start), ("window_end", window_end)):
+            if moment.tzinfo is None:
+                raise ValueError(f"{label}={moment.isoformat()} is naive; pass an aware datetime")
+        found = [
+            Occurrence(event, start, end)
+            for event in self.list_events(include_ignored=False)
+            for start, end in occurrences_between(
+                event.start, event.end, event.recurrence, window_start, window_end
+            )
+        ]
+        return sorted(found, key=lambda occ: (occ.start, occ.event.id or 0))
+
+    def ongoing_events(self, now: datetime) -> list[Occurrence]:
+        """Occurrences of non-ignored events with ``start <= now < end`` (recurring ones expanded)."""
+        if now.tzinfo is None:
+            raise ValueError(
+                f"now={now.isoformat()} is naive; pass an aware time, e.g. datetime.now(timezone.utc)"
+            )
+        return [occ for occ in self.events_between(now, now + timedelta(microseconds=1)) if occ.start <= now]
+
+    def _event_id_by_uid(self, uid: str) -> int | None:
+        rows = self._read("SELECT id FROM events WHERE uid = ?", (uid,))
+        return int(str(rows[0][0])) if rows else None
+
+    def _insert_event(self, conn: sqlite3.Connection, event: CalendarEvent) -> CalendarEvent:
+        cursor = conn.execute(
+            "INSERT INTO events (location_id, start_utc, end_utc, timezone, ignored, recurrence, summary, uid) "
+            "VALUES ((SELECT id FROM locations WHERE name = ?), ?, ?, ?, ?, ?, ?, ?)",
+            self._event_values(event),
+        )
+        return replace(event, id=cursor.lastrowid)
+
+    @staticmethod
+    def _event_values(event: CalendarEvent) -> tuple[object, ...]:
+        return (
+            event.location,
+            event.start.astimezone(UTC).isoformat(),
+            event.end.astimezone(UTC).isoformat(),
+            _zone_key(event.start),
+            int(event.ignored),
+            event.recurrence,
+            event.summary,
+            event.uid,
+        )
+
+    def _event_from_row(self, row: tuple[object, ...]) -> CalendarEvent | None:
+        event_id, location, start, end, zone_key, ignored, recurrence, summary, uid = row
+        try:
+            zone = _zone_from_key(str(zone_key))
+            return CalendarEvent(
+                location=str(location),
+                start=datetime.fromisoformat(str(start)).astimezone(zone),
+                end=datetime.fromisoformat(str(end)).astimezone(zone),
+                ignored=bool(ignored),
+                recurrence=None if recurrence is None else str(recurrence),
+                summary=None if summary is None else str(summary),
+                uid=None if uid is None else str(uid),
+                id=int(str(event_id)),
+            )
+        except (ValueError, ZoneInfoNotFoundError) as exc:
+            log.warning("skipping calendar event %s in %s: %s", event_id, self.path, exc)
+            return None
+
+    # --- responses ---------------------------------------------------------------------------
+
+    def list_responses(
+        self, response_type: ResponseType | None = None, emotion: str | None = None
+    ) -> list[Response]:
+        """Stored responses, filtered by type and exact emotion if given (no fallback)."""
+        rows = self._read("SELECT id, sentence, type, emotion FROM responses ORDER BY type, emotion, id")
+        wanted = _emotion_key(emotion) if emotion is not None else None
+        found = []
+        for row in rows:
+            response = self._response_from_row(row)
+            if response is None or (response_type is not None and response.type is not response_type):
+                continue
+            if wanted is None or response.emotion == wanted:
+                found.append(response)
+        return found
+
+    def responses(self, response_type: ResponseType, emotion: str | None) -> list[Response]:
+        """Sentences of ``response_type`` for ``emotion``; those for any emotion if there are none."""
+        key = _emotion_key(emotion)
+        of_type = self.list_responses(response_type)
+        specific = [r for r in of_type if key is not None and r.emotion == key]
+        return specific or [r for r in of_type if r.emotion is None]
+
+    def add_response(self, response: Response) -> Response:
+        response = self._checked_response(response, own_id=None)
+        with self._writing("add a response") as conn:
+            cursor = conn.execute(
+                "INSERT INTO responses (sentence, type, emotion) VALUES (?, ?, ?)",
+                (response.sentence, response.type.value, response.emotion),
+            )
+        return replace(response, id=cursor.lastrowid)
+
+    def update_response(self, response_id: int, response: Response) -> Response:
+        self._get_response(response_id)
+        response = replace(self._checked_response(response, own_id=response_id), id=response_id)
+        with self._writing(f"update response {response_id}") as conn:
+            conn.execute(
+                "UPDATE responses SET sentence = ?, type = ?, emotion = ? WHERE id = ?",
+                (response.sentence, response.type.value, response.emotion, response_id),
+            )
+        return response
+
+    def remove_response(self, response_id: int) -> Response:
+        response = self._get_response(response_id)
+        with self._writing(f"remove response {response_id}") as conn:
+            conn.execute("DELETE FROM responses WHERE id = ?", (response_id,))
+        return response
+
+    def _get_response(self, response_id: int) -> Response:
+        found = [r for r in self.list_responses() if r.id == response_id]
+        if not found:
+            raise DatabaseError(
+                f"no response with id {response_id}; list them with `cyborg db responses list`"
+            )
+        return found[0]
+
+    def _checked_response(self, response: Response, own_id: int | None) -> Response:
+        sentence = " ".join(response.sentence.split())
+        if not sentence:
+            raise DatabaseError("the response sentence is empty; write what the robot should say")
+        if response.type.needs_location and PLACEHOLDER not in sentence:
+            raise DatabaseError(
+                f"{response.type.value} sentence {sentence!r} lacks the placeholder {PLACEHOLDER}; "
+                f"write e.g. 'I like the {PLACEHOLDER}'"
+            )
+        checked = replace(response, sentence=sentence, emotion=_emotion_key(response.emotion))
+        for other in self.list_responses(checked.type):
+            if other.id != own_id and (other.sentence, other.emotion) == (checked.sentence, checked.emotion):
+                raise DatabaseError(f"response {sentence!r} exists already (id {other.id}); nothing to add")
+        return checked
+
+    def _response_from_row(self, row: tuple[object, ...]) -> Response | None:
+        response_id, sentence, kind, emotion = row
+        try:
+            response_type = ResponseType(str(kind))
+        except ValueError:
+            log.warning("skipping response %s in %s: unknown type %r", response_id, self.path, kind)
+            return None
+        return Response(
+            str(sentence), response_type, None if emotion is None else str(emotion), int(str(response_id))
+        )
+
+
+# --- validation helpers ----------------------------------------------------------------------
+
+
+def _valid_location(location: Location) -> Location:
+    """``location`` with tidy names and a heading in [-pi, pi]; DatabaseError on bad values."""
+    name = " ".join(location.name.split())
+    if not normalise(name):
+        raise DatabaseError(
+            f"location name {location.name!r} has no letters or digits; give a name like 'cafeteria'"
+        )
+    aliases = tuple(dict.fromkeys(" ".join(a.split()) for a in location.aliases))
+    spoken = [normalise(name)]
+    for alias in aliases:
+        if not normalise(alias):
+            raise DatabaseError(
+                f"alias {alias!r} of {name!r} has no letters or digits; remove it or spell it out"
+            )
+        if normalise(alias) in spoken:
+            raise DatabaseError(f"alias {alias!r} of {name!r} repeats its name or another alias; remove it")
+        spoken.append(normalise(alias))
+    for label, value in (("x", location.x), ("y", location.y), ("heading", location.heading)):
+        if not math.isfinite(value):
+            raise DatabaseError(f"{label}={value} of {name!r} is not a finite number; give metres/radians")
+    if not (math.isfinite(location.tolerance) and location.tolerance > 0):
+        raise DatabaseError(f"tolerance={location.tolerance} of {name!r} must be > 0 m; e.g. 0.5")
+    if not -1.0 <= location.pleasantness <= 1.0:
+        raise DatabaseError(f"pleasantness={location.pleasantness} of {name!r} is outside -1..1; e.g. 0.5")
+    heading = math.remainder(location.heading, 2 * math.pi)
+    return replace(location, name=name, aliases=aliases, map=location.map.strip(), heading=heading)
+
+
+def _emotion_key(emotion: str | None) -> str | None:
+    """Canonical emotion name (lower case, Table 2.2 synonyms mapped); None/'' means any emotion."""
+    if emotion is None or not emotion.strip():
+        return None
+    key = "_".join(emotion.strip().lower().split())
+    if not re.fullmatch(r"[a-z][a-z0-9_]*", key):
+        raise DatabaseError(f"emotion {emotion!r} is not a name; use e.g. happy, angry or curious")
+    return EMOTION_SYNONYMS.get(key, key)
+
+
+def _zone_key(moment: datetime) -> str:
+    """How the zone of ``moment`` is stored: an IANA key, 'UTC' or a fixed offset '+01:00'."""
+    if isinstance(moment.tzinfo, ZoneInfo):
+        return moment.tzinfo.key
+    offset = moment.utcoffset() or timedelta(0)
+    if not offset:
+        return "UTC"
+    sign = "-" if offset < timedelta(0) else "+"
+    minutes = abs(int(offset.total_seconds())) // 60
+    return f"{sign}{minutes // 60:02d}:{minutes % 60:02d}"
+
+
+def _zone_from_key(key: str) -> tzinfo:
+    if key == "UTC":
+        return UTC
+    fixed = re.fullmatch(r"([+-])(\d\d):(\d\d)", key)
+    if fixed:
+        offset = timedelta(hours=int(fixed.group(2)), minutes=int(fixed.group(3)))
+        return timezone(-offset if fixed.group(1) == "-" else offset)
+    return ZoneInfo(key)
+
+
+def _number(value: object, what: str, default: float = 0.0) -> float:
+    """A stored number hand-edited into nonsense becomes ``default`` (logged) instead of a crash."""
+    if isinstance(value, int | float) and math.isfinite(value):
+        return float(value)
+    log.warning("%s is %r, not a finite number; using %s", what, value, default)
+    return default

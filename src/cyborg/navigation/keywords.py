@@ -1,0 +1,253 @@
+"""Keyword detection in speech-to-text: navigation requests, questions and yes/no answers.
+
+Part of the navigation module's pure logic layer (no I/O). The module listens to
+the text the STT publishes and turns it into one of a few intents: a command to
+go somewhere ("go to" / "move to"), a question where a place is ("where is"), a
+request for the robot's opinion of a place ("think of") or a yes/no answer.
+
+Place names are matched tolerantly with rapidfuzz, because STT mishears: small
+typos ("cafetria"), split or joined words ("el 6", "entrance2") and numbers spoken
+as words ("entrance two") still match, while unrelated words do not (a score
+threshold, and digits in a name must match exactly, so "el5" never matches "el6").
+"""
+
+from __future__ import annotations
+
+import enum
+import re
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+from rapidfuzz import fuzz
+
+DEFAULT_THRESHOLD = 80.0
+"""Lowest rapidfuzz ratio (0-100) at which a span of text counts as a place name."""
+
+NUMBER_WORDS: dict[str, str] = {
+    word: str(n)
+    for n, word in enumerate(
+        [
+            "zero",
+            "one",
+            "two",
+            "three",
+            "four",
+            "five",
+            "six",
+            "seven",
+            "eight",
+            "nine",
+            "ten",
+            "eleven",
+            "twelve",
+            "thirteen",
+            "fourteen",
+            "fifteen",
+            "sixteen",
+            "seventeen",
+            "eighteen",
+            "nineteen",
+            "twenty",
+        ]
+    )
+}
+
+FILLER_WORDS = frozenset({"the", "a", "an", "my", "this", "that", "to", "at", "of", "is"})
+"""Words a place-name match may not start or end with (unless the name itself does)."""
+
+
+class Intent(enum.Enum):
+    """What a sentence asks of the robot; the navigation values are the controller's event names."""
+
+    NAVIGATION_COMMAND = "navigation_command"
+    NAVIGATION_INFORMATION = "navigation_information"
+    NAVIGATION_FEEDBACK = "navigation_feedback"
+    YES = "yes"
+    NO = "no"
+
+
+TRIGGERS: dict[Intent, tuple[str, ...]] = {
+    Intent.NAVIGATION_COMMAND: ("go to", "goto", "move to", "drive to"),
+    Intent.NAVIGATION_INFORMATION: ("where is", "wheres", "where can i find"),
+    Intent.NAVIGATION_FEEDBACK: ("think of", "think about", "feel about"),
+}
+"""Phrases (normalised) that start a navigation request; the place must come after them."""
+
+YES_PHRASES = (
+    "yes",
+    "yeah",
+    "yea",
+    "yep",
+    "yup",
+    "sure",
+    "ok",
+    "okay",
+    "alright",
+    "all right",
+    "of course",
+    "please",
+    "why not",
+    "go ahead",
+    "definitely",
+    "absolutely",
+    "certainly",
+)
+NO_PHRASES = ("no", "nope", "nah", "not really", "no thanks", "never", "dont", "do not", "not now")
+
+
+@dataclass(frozen=True)
+class LocationMatch:
+    """A place name found in text: the stored name, the words that matched and the score (0-100)."""
+
+    location: str
+    matched: str
+    score: float
+    start: int
+    """Index of the first matched word in the normalised text."""
+
+
+@dataclass(frozen=True)
+class Detection:
+    """The intent of one sentence; ``location`` is the stored name (None for yes/no)."""
+
+    intent: Intent
+    location: str | None
+    matched: str
+    score: float
+
+
+def normalise(text: str) -> str:
+    """Lower-case, drop punctuation and apostrophes, spell numbers as digits, single spaces.
+
+    >>> normalise("Where's  Entrance-Two?")
+    'wheres entrance 2'
+    """
+    text = text.casefold().replace("'", "").replace("\u2019", "")
+    words = re.sub(r"[\W_]+", " ", text).split()
+    return " ".join(NUMBER_WORDS.get(word, word) for word in words)
+
+
+def _compact(words: Sequence[str]) -> str:
+    return "".join(words)
+
+
+def _digits(text: str) -> str:
+    return "".join(re.findall(r"\d+", text))
+
+
+@dataclass(frozen=True)
+class _Spoken:
+    location: str
+    words: tuple[str, ...]
+    compact: str
+    digits: str
+
+
+class LocationMatcher:
+    """Finds known place names (or their aliases) in normalised text, tolerating STT errors."""
+
+    def __init__(
+        self, places: Iterable[tuple[str, Iterable[str]]], threshold: float = DEFAULT_THRESHOLD
+    ) -> None:
+        """``places`` is (stored name, aliases) pairs; ``threshold`` the lowest ratio that matches."""
+        if not 0 < threshold <= 100:
+            raise ValueError(f"threshold={threshold} is outside (0, 100]; use e.g. {DEFAULT_THRESHOLD}")
+        self.threshold = threshold
+        self._spoken: list[_Spoken] = []
+        for name, aliases in places:
+            for form in (name, *aliases):
+                words = tuple(normalise(form).split())
+                if words:
+                    compact = _compact(words)
+                    self._spoken.append(_Spoken(name, words, compact, _digits(compact)))
+
+    @property
+    def names(self) -> list[str]:
+        """The stored names this matcher knows, in order, without duplicates."""
+        return list(dict.fromkeys(s.location for s in self._spoken))
+
+    def find(self, text: str) -> LocationMatch | None:
+        """The best place name in ``text`` (earliest; then highest score; then longest), or None."""
+        words = normalise(text).split()
+        best: tuple[int, float, int] | None = None
+        found: LocationMatch | None = None
+        for spoken in self._spoken:
+            for match in self._matches(spoken, words):
+                key = (-match.start, match.score, len(spoken.compact))
+                if best is None or key > best:
+                    best, found = key, match
+        return found
+
+    def _matches(self, spoken: _Spoken, words: list[str]) -> Iterable[LocationMatch]:
+        n = len(spoken.words)
+        for size in range(max(1, n - 1), n + 3):
+            for start in range(len(words) - size + 1):
+                window = words[start : start + size]
+                if not self._plausible(spoken, window, words, start + size):
+                    continue
+                score = fuzz.ratio(_compact(window), spoken.compact)
+                if score >= self.threshold:
+                    yield LocationMatch(spoken.location, " ".join(window), score, start)
+
+    @staticmethod
+    def _plausible(spoken: _Spoken, window: list[str], words: list[str], end: int) -> bool:
+        """Cheap rules that reject spans before scoring: fillers at the edges, digits that differ."""
+        if window[0] in FILLER_WORDS and window[0] != spoken.words[0]:
+            return False
+        if window[-1] in FILLER_WORDS and window[-1] != spoken.words[-1]:
+            return False
+        if _digits(_compact(window)) != spoken.digits:
+            return False
+        # "entrance 3" is not "entrance": a number right after the span belongs to the name.
+        return not (end < len(words) and words[end].isdigit() and not spoken.digits)
+
+
+def _find_phrase(words: list[str], phrase: str) -> int | None:
+    """Index just after the first occurrence of ``phrase`` (normalised words) in ``words``."""
+    target = phrase.split()
+    for i in range(len(words) - len(target) + 1):
+        if words[i : i + len(target)] == target:
+            return i + len(target)
+    return None
+
+
+def detect_navigation(text: str, matcher: LocationMatcher) -> Detection | None:
+    """A navigation request in ``text``: the earliest trigger phrase followed by a known place."""
+    words = normalise(text).split()
+    candidates: list[tuple[int, Intent, LocationMatch]] = []
+    for intent, phrases in TRIGGERS.items():
+        for phrase in phrases:
+            after = _find_phrase(words, phrase)
+            if after is None:
+                continue
+            match = matcher.find(" ".join(words[after:]))
+            if match is not None:
+                candidates.append((after, intent, match))
+    if not candidates:
+        return None
+    _, intent, match = min(candidates, key=lambda c: c[0])
+    return Detection(intent, match.location, match.matched, match.score)
+
+
+def detect_answer(text: str) -> Detection | None:
+    """YES or NO if ``text`` holds yes-words or no-words but not both; None otherwise."""
+    words = normalise(text).split()
+    found: dict[Intent, tuple[int, str]] = {}
+    taken: set[int] = set()
+    phrases = [(p, Intent.YES) for p in YES_PHRASES] + [(p, Intent.NO) for p in NO_PHRASES]
+    for phrase, intent in sorted(phrases, key=lambda p: -len(p[0].split())):
+        target = phrase.split()
+        for i in range(len(words) - len(target) + 1):
+            span = set(range(i, i + len(target)))
+            if words[i : i + len(target)] == target and not span & taken:
+                taken |= span
+                found[intent] = min(found.get(intent, (i, phrase)), (i, phrase))
+    if len(found) != 1:
+        return None
+    [(intent, (_, phrase))] = found.items()
+    return Detection(intent, None, phrase, 100.0)
+
+
+def detect(text: str, matcher: LocationMatcher) -> Detection | None:
+    """The intent of one STT sentence: a navigation request first, else a yes/no answer, else None."""
+    return detect_navigation(text, matcher) or detect_answer(text)
