@@ -1,0 +1,454 @@
+"""The navigation database: defaults, lookups, validation, persistence and recovery."""
+
+from __future__ import annotations
+
+import logging
+import math
+import sqlite3
+from dataclasses import replace
+from datetime import UTC, datetime, timedelta
+from pathlib import Path
+from zoneinfo import ZoneInfo
+
+import pytest
+
+from cyborg.errors import DatabaseError
+from cyborg.navigation import database
+from cyborg.navigation.database import (
+    SCHEMA_VERSION,
+    CalendarEvent,
+    Location,
+    NavigationDatabase,
+    Response,
+    ResponseType,
+)
+from cyborg.navigation.keywords import Intent, detect
+
+OSLO = ZoneInfo("Europe/Oslo")
+
+
+@pytest.fixture
+def db(tmp_path: Path) -> NavigationDatabase:
+    return NavigationDatabase(tmp_path / "nav.db")
+
+
+def at(year: int, month: int, day: int, hour: int = 0, minute: int = 0, second: int = 0) -> datetime:
+    return datetime(year, month, day, hour, minute, second, tzinfo=OSLO)
+
+
+def corrupt_files(path: Path) -> list[Path]:
+    return sorted(
+        p for p in path.parent.glob(path.name + ".corrupt-*") if not p.name.endswith(("-wal", "-shm"))
+    )
+
+
+# --- defaults --------------------------------------------------------------------------------
+
+
+def test_new_database_has_the_default_places(db: NavigationDatabase) -> None:
+    names = {loc.name for loc in db.list_locations()}
+    assert names == {
+        "information desk",
+        "cafeteria",
+        "entrance",
+        "entrance 2",
+        "el5",
+        "el6",
+        "waiting area",
+        "elevator",
+    }
+    assert db.get_location("e16").name == "el6"
+    assert db.get_location("info").name == "information desk"
+    assert db.get_location("entrance2").name == "entrance 2"
+    assert all((loc.x, loc.y) == (0.0, 0.0) for loc in db.list_locations())
+
+
+@pytest.mark.parametrize(
+    ("kind", "emotion", "sentence"),
+    [
+        (ResponseType.OPINION, "neutral", "I am happy about cafeteria"),
+        (ResponseType.OPINION, "curious", "What is this place? A el6 you say?"),
+        (ResponseType.ARRIVED, "neutral", "Human, this is cafeteria"),
+        (ResponseType.OFFER_GUIDE, "curious", "I think I know where that is, would you like me to show you?"),
+        (ResponseType.CONFIRM, "happy", "At once."),
+    ],
+)
+def test_default_responses_include_the_spec_scenarios(
+    db: NavigationDatabase, kind: ResponseType, emotion: str, sentence: str
+) -> None:
+    place = "el6" if "el6" in sentence else "cafeteria"
+    assert sentence in [r.say(place) for r in db.responses(kind, emotion)]
+
+
+def test_every_response_type_has_a_sentence_for_any_emotion(db: NavigationDatabase) -> None:
+    for kind in ResponseType:
+        assert db.responses(kind, "some-new-emotion".replace("-", "_")), kind
+        assert db.responses(kind, None), kind
+
+
+def test_angry_robot_refuses_and_dislikes(db: NavigationDatabase) -> None:
+    refusals = db.responses(ResponseType.REFUSE, "angry")
+    assert refusals and all(r.emotion == "angry" for r in refusals)
+    opinions = [r.say("cafeteria") for r in db.responses(ResponseType.OPINION, "angry")]
+    assert "I hate the cafeteria." in opinions
+
+
+def test_seeded_places_work_with_keyword_detection(db: NavigationDatabase) -> None:
+    found = detect("where is the e16", db.matcher())
+    assert found is not None and (found.intent, found.location) == (Intent.NAVIGATION_INFORMATION, "el6")
+
+
+# --- locations -------------------------------------------------------------------------------
+
+
+def test_lookup_is_case_insensitive_by_name_and_alias(db: NavigationDatabase) -> None:
+    assert db.get_location("CAFETERIA").name == "cafeteria"
+    assert db.get_location("  Information   Desk ").name == "information desk"
+    assert db.get_location("E16").name == "el6"
+    assert db.find_location("gym") is None
+
+
+def test_unknown_location_error_names_it_and_suggests(db: NavigationDatabase) -> None:
+    with pytest.raises(DatabaseError, match=r"unknown location 'cafetria'.*did you mean 'cafeteria'"):
+        db.get_location("cafetria")
+
+
+def test_add_update_remove_location(db: NavigationDatabase) -> None:
+    gym = db.add_location(Location("gym", ("sports hall",), "glassgarden", 1.5, -2.0, 4.0, 0.3, True, 0.5))
+    assert db.get_location("Sports Hall") == gym
+    assert -math.pi <= gym.heading <= math.pi and math.isclose(gym.heading, 4.0 - 2 * math.pi)
+    moved = db.update_location("gym", replace(gym, name="big gym", aliases=("hall",), x=9.0))
+    assert db.get_location("hall") == moved
+    assert db.find_location("sports hall") is None and db.find_location("gym") is None
+    assert db.remove_location("HALL") == moved
+    assert db.find_location("big gym") is None
+
+
+@pytest.mark.parametrize(
+    ("location", "message"),
+    [
+        (Location("Cafeteria"), r"'Cafeteria' is already used by location 'cafeteria'"),
+        (Location("canteen 2", ("e16",)), r"'e16' is already used by location 'el6'"),
+        (Location("Entrance-2"), r"'Entrance-2' is already used by location 'entrance 2'"),
+        (Location("entrance two"), r"already used by location 'entrance 2'"),
+        (Location("gym", ("gym",)), r"alias 'gym' of 'gym' repeats its name"),
+        (Location("  ?! "), r"has no letters or digits"),
+        (Location("gym", pleasantness=1.5), r"pleasantness=1.5 of 'gym' is outside -1..1"),
+        (Location("gym", tolerance=0.0), r"tolerance=0.0 of 'gym' must be > 0"),
+        (Location("gym", x=math.nan), r"x=nan of 'gym' is not a finite number"),
+    ],
+)
+def test_bad_locations_are_refused(db: NavigationDatabase, location: Location, message: str) -> None:
+    before = db.list_locations()
+    with pytest.raises(DatabaseError, match=message):
+        db.add_location(location)
+    assert db.list_locations() == before
+
+
+def test_update_may_keep_its_own_name_but_not_take_another(db: NavigationDatabase) -> None:
+    cafe = db.get_location("cafeteria")
+    db.update_location("cafeteria", replace(cafe, pleasantness=-0.5))
+    assert db.get_location("cafeteria").pleasantness == -0.5
+    with pytest.raises(DatabaseError, match="already used by location 'elevator'"):
+        db.update_location("cafeteria", replace(cafe, aliases=("lift",)))
+    with pytest.raises(DatabaseError, match="unknown location 'gym'"):
+        db.update_location("gym", cafe)
+
+
+def test_location_with_events_is_only_removed_with_them(db: NavigationDatabase) -> None:
+    event = db.add_event(CalendarEvent("cafeteria", at(2024, 3, 20, 15), at(2024, 3, 20, 16)))
+    with pytest.raises(DatabaseError, match=rf"calendar events \[{event.id}\].*--with-events"):
+        db.remove_location("cafeteria")
+    assert db.list_events() == [event]
+    db.remove_location("cafeteria", with_events=True)
+    assert db.list_events() == []
+
+
+# --- events ----------------------------------------------------------------------------------
+
+
+def test_scenario_c_scheduled_cafeteria_visit_is_ongoing(db: NavigationDatabase) -> None:
+    db.add_event(CalendarEvent("cafeteria", at(2024, 5, 6, 15, 0), at(2024, 5, 6, 15, 59), summary="coffee"))
+    [ongoing] = db.ongoing_events(at(2024, 5, 6, 15, 29))
+    assert ongoing.event.location == "cafeteria"
+    assert (ongoing.start, ongoing.end) == (at(2024, 5, 6, 15, 0), at(2024, 5, 6, 15, 59))
+
+
+@pytest.mark.parametrize(
+    ("now", "expected"),
+    [
+        (at(2024, 5, 6, 14, 59, 59), False),
+        (at(2024, 5, 6, 15, 0), True),  # start is inclusive
+        (at(2024, 5, 6, 15, 58, 59), True),
+        (at(2024, 5, 6, 15, 59), False),  # end is exclusive
+        (datetime(2024, 5, 6, 13, 30, tzinfo=UTC), True),  # same instant in another zone
+    ],
+)
+def test_ongoing_boundaries(db: NavigationDatabase, now: datetime, expected: bool) -> None:
+    db.add_event(CalendarEvent("cafeteria", at(2024, 5, 6, 15, 0), at(2024, 5, 6, 15, 59)))
+    assert bool(db.ongoing_events(now)) is expected
+
+
+def test_ignored_events_are_stored_but_never_ongoing(db: NavigationDatabase) -> None:
+    event = db.add_event(CalendarEvent("el5", at(2024, 5, 6, 10), at(2024, 5, 6, 12), ignored=True))
+    assert db.list_events() == [event]
+    assert db.ongoing_events(at(2024, 5, 6, 11)) == []
+    db.update_event(event.id or 0, replace(event, ignored=False))
+    assert [o.event.location for o in db.ongoing_events(at(2024, 5, 6, 11))] == ["el5"]
+
+
+def test_recurring_event_is_ongoing_on_later_weeks(db: NavigationDatabase) -> None:
+    db.add_event(
+        CalendarEvent("el6", at(2024, 5, 6, 10), at(2024, 5, 6, 12), recurrence="FREQ=WEEKLY;COUNT=3")
+    )
+    assert db.ongoing_events(at(2024, 5, 13, 11))
+    assert db.ongoing_events(at(2024, 5, 20, 11))
+    assert not db.ongoing_events(at(2024, 5, 27, 11))  # COUNT=3 is over
+    assert not db.ongoing_events(at(2024, 5, 14, 11))
+
+
+def test_event_is_stored_in_utc_and_read_back_in_its_zone(db: NavigationDatabase, tmp_path: Path) -> None:
+    event = db.add_event(CalendarEvent("el5", at(2024, 7, 1, 9), at(2024, 7, 1, 10)))
+    with sqlite3.connect(tmp_path / "nav.db") as raw:
+        [(start, zone)] = raw.execute("SELECT start_utc, timezone FROM events").fetchall()
+    assert (start, zone) == ("2024-07-01T07:00:00+00:00", "Europe/Oslo")
+    assert db.get_event(event.id or 0).start.tzinfo == OSLO
+
+
+@pytest.mark.parametrize(
+    ("event", "message"),
+    [
+        (CalendarEvent("gym", at(2024, 1, 1, 9), at(2024, 1, 1, 10)), "unknown location 'gym'"),
+        (CalendarEvent("el5", at(2024, 1, 1, 10), at(2024, 1, 1, 9)), "is not after start"),
+        (CalendarEvent("el5", at(2024, 1, 1, 10), at(2024, 1, 1, 10)), "is not after start"),
+        (
+            CalendarEvent("el5", datetime(2024, 1, 1, 9), at(2024, 1, 1, 10)),
+            "start 2024-01-01T09:00:00 has no time zone",
+        ),
+        (
+            CalendarEvent("el5", at(2024, 1, 1, 9), at(2024, 1, 1, 10), recurrence="FREQ=SOMETIMES"),
+            "SOMETIMES",
+        ),
+    ],
+)
+def test_bad_events_are_refused(db: NavigationDatabase, event: CalendarEvent, message: str) -> None:
+    with pytest.raises(DatabaseError, match=message):
+        db.add_event(event)
+    assert db.list_events() == []
+
+
+def test_uid_is_unique_and_upsert_updates_keeping_ignored(db: NavigationDatabase) -> None:
+    first = db.add_event(CalendarEvent("el5", at(2024, 1, 1, 9), at(2024, 1, 1, 10), ignored=True, uid="u1"))
+    with pytest.raises(DatabaseError, match="uid 'u1' exists"):
+        db.add_event(CalendarEvent("el6", at(2024, 1, 2, 9), at(2024, 1, 2, 10), uid="u1"))
+    [(updated, created)] = db.upsert_events(
+        [CalendarEvent("el6", at(2024, 1, 2, 9), at(2024, 1, 2, 10), uid="u1")]
+    )
+    assert not created and updated.id == first.id and updated.ignored
+    assert db.list_events() == [updated]
+    assert updated.location == "el6"
+
+
+def test_remove_event_and_missing_ids(db: NavigationDatabase) -> None:
+    event = db.add_event(CalendarEvent("el5", at(2024, 1, 1, 9), at(2024, 1, 1, 10)))
+    assert db.remove_event(event.id or 0) == event
+    with pytest.raises(DatabaseError, match=f"no calendar event with id {event.id}"):
+        db.remove_event(event.id or 0)
+
+
+def test_naive_now_is_refused(db: NavigationDatabase) -> None:
+    with pytest.raises(ValueError, match="naive"):
+        db.ongoing_events(datetime(2024, 1, 1, 9))
+
+
+# --- responses -------------------------------------------------------------------------------
+
+
+def test_responses_fall_back_to_any_emotion(db: NavigationDatabase) -> None:
+    db.add_response(Response("I adore the LOCATION", ResponseType.ARRIVED, "happy"))
+    assert [r.sentence for r in db.responses(ResponseType.ARRIVED, "happy")] == ["I adore the LOCATION"]
+    assert [r.sentence for r in db.responses(ResponseType.ARRIVED, "Elated")] == ["I adore the LOCATION"]
+    assert [r.sentence for r in db.responses(ResponseType.ARRIVED, "curious")] == ["Human, this is LOCATION"]
+    assert [r.sentence for r in db.responses(ResponseType.ARRIVED, None)] == ["Human, this is LOCATION"]
+
+
+def test_response_synonyms_and_removal(db: NavigationDatabase) -> None:
+    added = db.add_response(Response("The LOCATION   is grey.", ResponseType.OPINION, "Inhibited"))
+    assert (added.sentence, added.emotion) == ("The LOCATION is grey.", "sad")
+    assert added in db.list_responses(ResponseType.OPINION, "sad")
+    assert db.remove_response(added.id or 0) == added
+    assert added not in db.list_responses()
+
+
+@pytest.mark.parametrize(
+    ("response", "message"),
+    [
+        (Response("I like it here", ResponseType.OPINION), "lacks the placeholder LOCATION"),
+        (Response("I am stuck", ResponseType.STUCK, "sad"), "lacks the placeholder LOCATION"),
+        (Response("   ", ResponseType.CONFIRM), "empty"),
+        (Response("At once.", ResponseType.CONFIRM), r"exists already \(id \d+\)"),
+        (Response("Fine.", ResponseType.CONFIRM, "very angry!"), "emotion 'very angry!' is not a name"),
+    ],
+)
+def test_bad_responses_are_refused(db: NavigationDatabase, response: Response, message: str) -> None:
+    before = db.list_responses()
+    with pytest.raises(DatabaseError, match=message):
+        db.add_response(response)
+    assert db.list_responses() == before
+
+
+def test_confirmation_may_omit_the_place(db: NavigationDatabase) -> None:
+    added = db.add_response(Response("Right away!", ResponseType.CONFIRM, "happy"))
+    assert db.responses(ResponseType.CONFIRM, "happy") == [added]
+    assert added.say("cafeteria") == "Right away!"
+
+
+# --- persistence and recovery ------------------------------------------------------------------
+
+
+def test_everything_persists_across_reopen(tmp_path: Path) -> None:
+    path = tmp_path / "nav.db"
+    with NavigationDatabase(path) as db:
+        gym = db.add_location(Location("gym", ("hall",), "m", 1.0, 2.0, 0.5, 0.4, True, -0.2))
+        event = db.add_event(
+            CalendarEvent(
+                "gym", at(2024, 3, 1, 8), at(2024, 3, 1, 9), recurrence="FREQ=DAILY", summary="s", uid="u"
+            )
+        )
+        response = db.add_response(Response("LOCATION again?", ResponseType.OPINION, "bored"))
+        db.remove_location("elevator")
+    with NavigationDatabase(path) as db:
+        assert db.get_location("hall") == gym
+        assert db.list_events() == [event]
+        assert response in db.responses(ResponseType.OPINION, "bored")
+        assert db.find_location("elevator") is None  # defaults are not re-seeded
+
+
+def test_committed_write_is_visible_to_another_connection_at_once(
+    db: NavigationDatabase, tmp_path: Path
+) -> None:
+    db.add_location(Location("gym"))
+    with sqlite3.connect(tmp_path / "nav.db") as raw:
+        assert raw.execute("SELECT COUNT(*) FROM locations WHERE name = 'gym'").fetchone() == (1,)
+        assert raw.execute("PRAGMA journal_mode").fetchone() == ("wal",)
+        assert raw.execute("PRAGMA user_version").fetchone() == (SCHEMA_VERSION,)
+
+
+def test_not_a_database_is_moved_aside(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    path = tmp_path / "nav.db"
+    path.write_bytes(b"this is not sqlite " * 200)
+    with caplog.at_level(logging.WARNING, logger="cyborg.navigation.database"):
+        db = NavigationDatabase(path)
+    [aside] = corrupt_files(path)
+    assert aside.read_bytes().startswith(b"this is not sqlite")
+    assert db.get_location("cafeteria").name == "cafeteria"
+    assert any("unusable" in r.getMessage() and str(aside) in r.getMessage() for r in caplog.records)
+    db.close()
+
+
+def test_damaged_database_fails_integrity_check_and_is_moved_aside(tmp_path: Path) -> None:
+    path = tmp_path / "nav.db"
+    with NavigationDatabase(path) as db:
+        for i in range(300):
+            db.add_location(Location(f"room {i}", (f"r{i}",), "map", float(i), 1.0))
+    with sqlite3.connect(path) as raw:
+        raw.execute("PRAGMA wal_checkpoint(TRUNCATE)")
+    data = bytearray(path.read_bytes())
+    page = 4096
+    for offset in range(2 * page, len(data) - page, page):
+        data[offset : offset + 16] = b"\xff" * 16  # clobber every page header but the first
+    path.write_bytes(bytes(data))
+    with NavigationDatabase(path) as db:
+        assert db.find_location("room 1") is None
+        assert db.find_location("cafeteria") is not None
+    assert len(corrupt_files(path)) == 1
+
+
+def test_failing_integrity_check_is_moved_aside(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    path = tmp_path / "nav.db"
+    with NavigationDatabase(path) as db:
+        db.add_location(Location("gym"))
+    with sqlite3.connect(path) as raw:  # orphan the index's pages: readable, but not intact
+        raw.execute("PRAGMA writable_schema=ON")
+        raw.execute("DELETE FROM sqlite_master WHERE name = 'responses_by_type'")
+    with caplog.at_level(logging.WARNING), NavigationDatabase(path) as db:
+        assert db.find_location("gym") is None
+        assert db.find_location("cafeteria") is not None
+    assert "integrity_check failed" in caplog.text
+    assert len(corrupt_files(path)) == 1
+
+
+def test_foreign_sqlite_file_is_moved_aside(tmp_path: Path) -> None:
+    path = tmp_path / "nav.db"
+    with sqlite3.connect(path) as raw:
+        raw.execute("CREATE TABLE photos (id INTEGER)")
+    with NavigationDatabase(path) as db:
+        assert db.find_location("cafeteria") is not None
+    assert len(corrupt_files(path)) == 1
+
+
+def test_empty_file_is_initialised_without_moving_it(tmp_path: Path) -> None:
+    path = tmp_path / "nav.db"
+    path.touch()
+    with NavigationDatabase(path) as db:
+        assert db.find_location("cafeteria") is not None
+    assert corrupt_files(path) == []
+
+
+def test_newer_schema_is_refused_and_left_alone(tmp_path: Path) -> None:
+    path = tmp_path / "nav.db"
+    NavigationDatabase(path).close()
+    with sqlite3.connect(path) as raw:
+        raw.execute(f"PRAGMA user_version = {SCHEMA_VERSION + 1}")
+    with pytest.raises(DatabaseError, match=f"schema version {SCHEMA_VERSION + 1}, newer"):
+        NavigationDatabase(path)
+    assert corrupt_files(path) == []
+
+
+def test_older_schema_is_migrated_keeping_data(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    path = tmp_path / "nav.db"
+    with NavigationDatabase(path) as db:
+        db.add_location(Location("gym"))
+    step = ("CREATE TABLE visits (id INTEGER PRIMARY KEY)",)
+    monkeypatch.setattr(database, "_MIGRATIONS", (*database._MIGRATIONS, step))
+    monkeypatch.setattr(database, "SCHEMA_VERSION", SCHEMA_VERSION + 1)
+    with NavigationDatabase(path) as db:
+        assert db.find_location("gym") is not None
+    with sqlite3.connect(path) as raw:
+        assert raw.execute("PRAGMA user_version").fetchone() == (SCHEMA_VERSION + 1,)
+        assert raw.execute("SELECT COUNT(*) FROM visits").fetchone() == (0,)
+
+
+def test_hand_edited_nonsense_is_skipped_not_fatal(
+    db: NavigationDatabase, tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    good = db.add_event(CalendarEvent("el5", at(2024, 1, 1, 9), at(2024, 1, 1, 10)))
+    with sqlite3.connect(tmp_path / "nav.db") as raw:
+        raw.execute(
+            "INSERT INTO events (location_id, start_utc, end_utc, timezone) "
+            "SELECT id, 'yesterday', 'today', 'Europe/Oslo' FROM locations WHERE name = 'el6'"
+        )
+        raw.execute("INSERT INTO responses (sentence, type, emotion) VALUES ('LOCATION!', 'shout', NULL)")
+    with caplog.at_level(logging.WARNING):
+        assert db.list_events() == [good]
+        assert all(r.sentence != "LOCATION!" for r in db.list_responses())
+        assert db.ongoing_events(at(2024, 1, 1, 9, 30))[0].event == good
+    assert "skipping calendar event" in caplog.text and "unknown type 'shout'" in caplog.text
+
+
+def test_folder_path_is_a_clear_error(tmp_path: Path) -> None:
+    with pytest.raises(DatabaseError, match="is a folder"):
+        NavigationDatabase(tmp_path)
+
+
+def test_events_between_lists_occurrences_in_order(db: NavigationDatabase) -> None:
+    db.add_event(
+        CalendarEvent("el5", at(2024, 5, 6, 10), at(2024, 5, 6, 11), recurrence="FREQ=DAILY;COUNT=5")
+    )
+    db.add_event(CalendarEvent("cafeteria", at(2024, 5, 7, 12), at(2024, 5, 7, 13)))
+    found = db.events_between(at(2024, 5, 7, 0), at(2024, 5, 7, 0) + timedelta(days=2))
+    assert [(o.event.location, o.start) for o in found] == [
+        ("el5", at(2024, 5, 7, 10)),
+        ("cafeteria", at(2024, 5, 7, 12)),
+        ("el5", at(2024, 5, 8, 10)),
+    ]

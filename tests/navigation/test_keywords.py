@@ -1,0 +1,196 @@
+"""Keyword detection in STT text: intents, tolerant place names, yes/no answers."""
+
+from __future__ import annotations
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from cyborg.navigation.keywords import (
+    Intent,
+    LocationMatcher,
+    detect,
+    detect_answer,
+    detect_navigation,
+    normalise,
+)
+
+PLACES = [
+    ("information desk", ["info"]),
+    ("cafeteria", []),
+    ("entrance", []),
+    ("entrance 2", ["entrance2"]),
+    ("el5", []),
+    ("el6", ["e16"]),
+    ("waiting area", []),
+    ("elevator", []),
+]
+MATCHER = LocationMatcher(PLACES)
+CMD, INFO, FEEDBACK = Intent.NAVIGATION_COMMAND, Intent.NAVIGATION_INFORMATION, Intent.NAVIGATION_FEEDBACK
+
+
+@pytest.mark.parametrize(
+    ("text", "intent", "location"),
+    [
+        # the spec's scenarios
+        ("What do you think of el6?", FEEDBACK, "el6"),
+        ("Where is the cafeteria ?", INFO, "cafeteria"),
+        ("go to entrance 2", CMD, "entrance 2"),
+        ("Where is el6 ?", INFO, "el6"),
+        ("where is the e16", INFO, "el6"),
+        # case, punctuation, filler words
+        ("GO TO THE CAFETERIA!!!", CMD, "cafeteria"),
+        ("Could you please move to the waiting area, robot?", CMD, "waiting area"),
+        ("where's the elevator", INFO, "elevator"),
+        ("Where is the information desk?", INFO, "information desk"),
+        ("where is info", INFO, "information desk"),
+        # speech-to-text errors
+        ("go to the cafeteriaa", CMD, "cafeteria"),
+        ("where is the cafetria", INFO, "cafeteria"),
+        ("go to the entrence", CMD, "entrance"),
+        ("move to the waiting aria", CMD, "waiting area"),
+        ("go to el 6", CMD, "el6"),
+        ("go to el six", CMD, "el6"),
+        ("where is e sixteen", INFO, "el6"),
+        ("go to el five", CMD, "el5"),
+        ("go to entrance two", CMD, "entrance 2"),
+        ("go to entrance-2", CMD, "entrance 2"),
+        ("go to entrance2", CMD, "entrance 2"),
+        ("go to the entrance", CMD, "entrance"),
+        ("what do you think about the elevater", FEEDBACK, "elevator"),
+    ],
+)
+def test_navigation_requests_are_detected(text: str, intent: Intent, location: str) -> None:
+    found = detect(text, MATCHER)
+    assert found is not None, text
+    assert (found.intent, found.location) == (intent, location)
+    assert MATCHER.threshold <= found.score <= 100
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "go to bed",
+        "go to hell",
+        "go to el",
+        "go to el7",
+        "go to entrance 3",
+        "where is the toilet",
+        "where is my dog",
+        "I think of nothing",
+        "cafeteria",  # a place but no request
+        "go to the",
+        "",
+        "?!.",
+    ],
+)
+def test_unrelated_text_is_not_a_navigation_request(text: str) -> None:
+    assert detect_navigation(text, MATCHER) is None
+
+
+def test_the_place_must_come_after_the_trigger() -> None:
+    assert detect_navigation("cafeteria, go to", MATCHER) is None
+
+
+def test_earliest_trigger_and_earliest_place_win() -> None:
+    found = detect("where is the cafeteria, or go to the elevator", MATCHER)
+    assert found is not None
+    assert (found.intent, found.location) == (INFO, "cafeteria")
+    found = detect("go to the cafeteria near the entrance", MATCHER)
+    assert found is not None and found.location == "cafeteria"
+
+
+def test_longer_name_wins_over_its_prefix() -> None:
+    for text, expected in [("go to entrance 2 now", "entrance 2"), ("go to entrance now", "entrance")]:
+        found = detect(text, MATCHER)
+        assert found is not None and found.location == expected, text
+
+
+def test_matched_text_is_the_words_heard() -> None:
+    found = detect("Go to the Cafetria, please", MATCHER)
+    assert found is not None
+    assert found.matched == "cafetria"
+    assert found.score < 100
+
+
+@pytest.mark.parametrize(
+    ("text", "intent"),
+    [
+        ("yes", Intent.YES),
+        ("Yes!", Intent.YES),
+        ("yeah", Intent.YES),
+        ("Sure.", Intent.YES),
+        ("ok", Intent.YES),
+        ("okay then", Intent.YES),
+        ("yes please", Intent.YES),
+        ("why not", Intent.YES),
+        ("of course", Intent.YES),
+        ("no", Intent.NO),
+        ("No.", Intent.NO),
+        ("nope", Intent.NO),
+        ("no thanks", Intent.NO),
+        ("not really", Intent.NO),
+        ("I don't", Intent.NO),
+    ],
+)
+def test_yes_and_no(text: str, intent: Intent) -> None:
+    found = detect(text, MATCHER)
+    assert found is not None and found.intent is intent, text
+    assert found.location is None
+
+
+@pytest.mark.parametrize("text", ["yes no", "ok, no", "hello", "cafeteria", "knowledge", "yesterday", ""])
+def test_ambiguous_or_missing_answers_are_none(text: str) -> None:
+    assert detect_answer(text) is None
+
+
+def test_navigation_takes_precedence_over_yes() -> None:
+    found = detect("yes, go to the cafeteria", MATCHER)
+    assert found is not None and found.intent is CMD
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ("Where's  Entrance-Two?", "wheres entrance 2"),
+        ("EL 6!", "el 6"),
+        ("e sixteen", "e 16"),
+        ("go to the ... cafeteria", "go to the cafeteria"),
+        ("Glassgården", "glassgården"),
+    ],
+)
+def test_normalise(text: str, expected: str) -> None:
+    assert normalise(text) == expected
+
+
+@given(st.text())
+def test_normalise_is_idempotent(text: str) -> None:
+    once = normalise(text)
+    assert normalise(once) == once
+
+
+@given(st.sampled_from([name for name, _ in PLACES]), st.sampled_from(["go to", "move to"]))
+def test_every_place_is_found_by_its_own_name(name: str, trigger: str) -> None:
+    found = detect(f"{trigger} the {name}", MATCHER)
+    assert found is not None and found.location == name
+
+
+@given(st.sampled_from(["cafeteria", "elevator", "entrance", "waiting area"]), st.data())
+def test_one_dropped_letter_in_a_long_name_still_matches(name: str, data: st.DataObject) -> None:
+    letters = [i for i, c in enumerate(name) if c != " "]
+    i = data.draw(st.sampled_from(letters))
+    heard = name[:i] + name[i + 1 :]
+    found = detect(f"where is the {heard}", MATCHER)
+    assert found is not None and found.location == name, heard
+
+
+def test_threshold_controls_tolerance() -> None:
+    strict = LocationMatcher(PLACES, threshold=100)
+    assert detect("go to the cafetria", strict) is None
+    assert detect("go to the cafeteria", strict) is not None
+    with pytest.raises(ValueError, match="threshold"):
+        LocationMatcher(PLACES, threshold=0)
+
+
+def test_matcher_lists_names_once() -> None:
+    assert MATCHER.names == [name for name, _ in PLACES]
