@@ -15,6 +15,7 @@ import re
 import shlex
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -147,13 +148,15 @@ class OccupancyMap:
         mask = np.zeros(self.shape, dtype=bool)
         for zone in self.keep_out if zones is None else zones:
             if zone.is_line:
-                mark_segment(mask, self._to_grid(zone.corners[0]), self._to_grid(zone.corners[1]))
+                mark_segment(
+                    mask, self.grid_coordinates(zone.corners[0]), self.grid_coordinates(zone.corners[1])
+                )
             else:
-                _fill_polygon(mask, [self._to_grid(corner) for corner in zone.corners])
+                _fill_polygon(mask, [self.grid_coordinates(corner) for corner in zone.corners])
         return mask
 
-    def _to_grid(self, point: Point) -> Point:
-        """World metres -> continuous grid coordinates (col, row); cell centres at +0.5."""
+    def grid_coordinates(self, point: Point) -> Point:
+        """World metres -> continuous grid coordinates (col, row); cell (r, c) spans c..c+1, r..r+1."""
         return (
             (point[0] - self.origin[0]) / self.resolution,
             (point[1] - self.origin[1]) / self.resolution,
@@ -161,10 +164,12 @@ class OccupancyMap:
 
 
 def segment_cells(start: Point, end: Point) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-    """Every cell (rows, cols) a segment passes through, in continuous grid coordinates (col, row).
+    """Every cell (rows, cols) a segment touches, in continuous grid coordinates (col, row).
 
-    Exact: the segment is cut at each cell border it crosses and the middle of
-    each piece names one cell, so no corner it clips is missed.
+    The segment is cut at each cell border it crosses; each cut point and the
+    middle of each piece names the cells it lies in. A point on a border lies
+    in the cells on both sides of it (all four at a corner), so a segment that
+    only grazes a cell still counts it. May repeat cells.
     """
     (x0, y0), (x1, y1) = start, end
     cuts = [np.array([0.0, 1.0])]
@@ -175,10 +180,21 @@ def segment_cells(start: Point, end: Point) -> tuple[NDArray[np.int64], NDArray[
             cuts.append((borders - a) / (b - a))
     # Rounding merges a corner's two crossings, which floating point would leave a hair apart.
     t = np.unique(np.round(np.concatenate(cuts), 9))
-    middles = (t[:-1] + t[1:]) / 2 if t.size > 1 else np.array([0.0])
-    cols = np.floor(x0 + middles * (x1 - x0)).astype(np.int64)
-    rows = np.floor(y0 + middles * (y1 - y0)).astype(np.int64)
-    return rows, cols
+    t = np.concatenate([t, (t[:-1] + t[1:]) / 2])
+    cols, on_col_border = _cells_touching(x0 + t * (x1 - x0))
+    rows, on_row_border = _cells_touching(y0 + t * (y1 - y0))
+    return (
+        np.concatenate([rows, rows - on_row_border, rows, rows - on_row_border]),
+        np.concatenate([cols, cols, cols - on_col_border, cols - on_col_border]),
+    )
+
+
+def _cells_touching(values: NDArray[np.float64]) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """The cell index of each coordinate, and 1 where it sits on the border with the cell below."""
+    nearest = np.round(values)
+    on_border = np.abs(values - nearest) < 1e-9
+    cells = np.where(on_border, nearest, np.floor(values)).astype(np.int64)
+    return cells, on_border.astype(np.int64)
 
 
 def mark_segment(mask: NDArray[np.bool_], start: Point, end: Point) -> None:
@@ -207,6 +223,11 @@ def _fill_polygon(mask: NDArray[np.bool_], corners: Sequence[Point]) -> None:
     mask[row_lo:row_hi, col_lo:col_hi] |= inside
     for a, b in zip(corners, [*corners[1:], corners[0]], strict=True):
         mark_segment(mask, a, b)
+
+
+def default_map_path() -> Path:
+    """The campus map shipped with the package (``cyborg/data/maps/campus.map``)."""
+    return Path(str(resources.files("cyborg") / "data" / "maps" / "campus.map"))
 
 
 def load_map(path: str | Path, *, resolution: float = 0.05) -> OccupancyMap:
@@ -300,6 +321,10 @@ def read_pgm(path: str | Path) -> NDArray[np.float64]:
         data = path.read_bytes()
     except OSError as error:
         raise MapError(f"{path}: cannot read the map image ({error.strerror}); fix: check 'image:'") from None
+    if data[:2] not in (b"P5", b"P2"):
+        raise MapError(
+            f"{path}: not a PGM image (starts with {data[:8]!r}); fix: export it as PGM (P5 or P2)"
+        )
     header: list[bytes] = []
     position = 0
     while len(header) < 4:
@@ -309,14 +334,12 @@ def read_pgm(path: str | Path) -> NDArray[np.float64]:
         header.append(match.group(1))
         position = match.end()
     magic, width_text, height_text, maxval_text = header
-    if magic not in (b"P5", b"P2"):
-        raise MapError(
-            f"{path}: not a PGM image (starts with {magic[:8]!r}); fix: export it as PGM (P5 or P2)"
-        )
     try:
         width, height, maxval = int(width_text), int(height_text), int(maxval_text)
     except ValueError:
-        raise MapError(f"{path}: bad PGM header {header!r}; fix: re-export the image as PGM") from None
+        width = height = maxval = 0
+    if min(width, height, maxval) <= 0 or maxval > 65535:
+        raise MapError(f"{path}: bad PGM header {b' '.join(header)!r}; fix: re-export the image as PGM")
     return _pgm_pixels(
         path, data[position + 1 :] if magic == b"P5" else data[position:], magic, (height, width), maxval
     )

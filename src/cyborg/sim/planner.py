@@ -71,7 +71,7 @@ class RoutePlanner:
         if not blocked.any():
             return blocked.copy()
         clearance = ndimage.distance_transform_edt(~blocked) * self.map.resolution
-        return np.asarray(clearance < self.robot_radius + self.map.resolution / 2)
+        return _close_diagonal_gaps(np.asarray(clearance < self.robot_radius + self.map.resolution / 2))
 
     @property
     def safety_distance(self) -> float:
@@ -87,7 +87,7 @@ class RoutePlanner:
         """True when the robot can drive straight from ``start`` to ``end`` (metres)."""
         if not (self.map.contains(*start) and self.map.contains(*end)):
             return False
-        rows, cols = segment_cells(self._grid_point(start), self._grid_point(end))
+        rows, cols = segment_cells(self.map.grid_coordinates(start), self.map.grid_coordinates(end))
         return not self.inflated[rows, cols].any()
 
     def plan(self, start: Location, goal: Location) -> Route:
@@ -103,7 +103,7 @@ class RoutePlanner:
             raise PlanningError(
                 f"no route from {_describe(start)} to {_describe(goal)}: the search found none"
             )
-        return Route.through(self._pull_taut(start_point, path, goal_point))
+        return Route.through(self._pull_taut(start_point, self._without_corner_cuts(path), goal_point))
 
     def random_reachable_point(self, rng: random.Random, near: Location | None = None) -> Point:
         """A random free point (cell centre) reachable from ``near``, or in the largest free area.
@@ -129,13 +129,6 @@ class RoutePlanner:
                 "fix: use a smaller robot_radius or a map with open space"
             )
         return int(sizes.argmax())
-
-    def _grid_point(self, point: Point) -> Point:
-        """World metres -> continuous grid coordinates (col, row)."""
-        return (
-            (point[0] - self.map.origin[0]) / self.map.resolution,
-            (point[1] - self.map.origin[1]) / self.map.resolution,
-        )
 
     def _check_endpoint(self, role: str, location: Location) -> tuple[int, int]:
         """The free cell of a start or goal; PlanningError naming what is in the way otherwise."""
@@ -191,6 +184,18 @@ class RoutePlanner:
             f"walls or keep-out zones (with {self.robot_radius:.2f} m clearance) cut it off from the {other}"
         )
 
+    def _without_corner_cuts(self, path: NDArray[np.int32]) -> NDArray[np.int32]:
+        """Route each diagonal step that grazes a blocked cell's corner through the free side cell."""
+        here, there = path[:-1], path[1:]
+        diagonal = np.all(here != there, axis=1)
+        side_a = np.stack([here[:, 0], there[:, 1]], axis=1)
+        side_b = np.stack([there[:, 0], here[:, 1]], axis=1)
+        a_blocked = self.inflated[side_a[:, 0], side_a[:, 1]]
+        b_blocked = self.inflated[side_b[:, 0], side_b[:, 1]]
+        grazing = np.flatnonzero(diagonal & (a_blocked | b_blocked))
+        detours = np.where(a_blocked[grazing, None], side_b[grazing], side_a[grazing])
+        return np.insert(path, grazing + 1, detours, axis=0)
+
     def _pull_taut(self, start: Point, path: NDArray[np.int32], goal: Point) -> list[Point]:
         """Replace a cell path by the few waypoints where it must turn to stay collision-free."""
         corners = [self.map.cell_to_world(int(r), int(c)) for r, c in path[_turning_points(path)]]
@@ -225,14 +230,37 @@ class RoutePlanner:
         return seen
 
     def _drop_needless(self, waypoints: list[Point]) -> list[Point]:
-        """Remove waypoints whose neighbours can see each other."""
-        index = 1
+        """From each kept waypoint, go straight to the last one in sight (skipping detours around specks)."""
+        kept = [waypoints[0]]
+        index = 0
         while index < len(waypoints) - 1:
-            if self.segment_is_free(waypoints[index - 1], waypoints[index + 1]):
-                del waypoints[index]
-            else:
-                index += 1
-        return waypoints
+            index = next(
+                later
+                for later in range(len(waypoints) - 1, index, -1)
+                if later == index + 1 or self.segment_is_free(waypoints[index], waypoints[later])
+            )
+            kept.append(waypoints[index])
+        return kept
+
+
+def _close_diagonal_gaps(blocked: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """Block both free cells of every 2x2 square whose blocked cells touch only at a corner.
+
+    Free space then never narrows to a single corner point, so every diagonal
+    step has at least one free side cell to go through instead.
+    """
+    blocked = blocked.copy()
+    while True:
+        low_left, low_right = blocked[:-1, :-1], blocked[:-1, 1:]
+        high_left, high_right = blocked[1:, :-1], blocked[1:, 1:]
+        rising = low_left & high_right & ~low_right & ~high_left
+        falling = low_right & high_left & ~low_left & ~high_right
+        if not (rising.any() or falling.any()):
+            return blocked
+        low_right |= rising
+        high_left |= rising
+        low_left |= falling
+        high_right |= falling
 
 
 def _turning_points(path: NDArray[np.int32]) -> NDArray[np.bool_]:

@@ -1,0 +1,270 @@
+"""Route planner: detours around walls and keep-out zones, clearance, reasons for failure, real maps."""
+
+from __future__ import annotations
+
+import itertools
+import math
+import random
+from pathlib import Path
+
+import numpy as np
+import pytest
+from numpy.typing import NDArray
+
+from cyborg.errors import PlanningError
+from cyborg.sim.maps import Cell, KeepOutZone, OccupancyMap, Point, default_map_path, load_map
+from cyborg.sim.planner import Route, RoutePlanner
+
+MAPS = Path(__file__).resolve().parents[2].parent / "shared" / "maps"
+RESOLUTION = 0.05
+
+
+def room(
+    width_m: float = 10.0, height_m: float = 6.0, keep_out: tuple[KeepOutZone, ...] = ()
+) -> OccupancyMap:
+    """An empty room with walls one cell thick all round; origin at its lower-left corner."""
+    grid = np.zeros((round(height_m / RESOLUTION), round(width_m / RESOLUTION)), dtype=np.uint8)
+    grid[[0, -1], :] = Cell.OCCUPIED
+    grid[:, [0, -1]] = Cell.OCCUPIED
+    return OccupancyMap(grid, RESOLUTION, (0.0, 0.0), keep_out=keep_out, source="room")
+
+
+def add_wall(grid: NDArray[np.uint8], x0: float, y0: float, x1: float, y1: float) -> None:
+    """Fill the rectangle x0..x1, y0..y1 (metres) with wall."""
+    rows = slice(round(y0 / RESOLUTION), round(y1 / RESOLUTION))
+    cols = slice(round(x0 / RESOLUTION), round(x1 / RESOLUTION))
+    grid[rows, cols] = Cell.OCCUPIED
+
+
+def route_samples(route: Route, step: float = RESOLUTION / 10) -> NDArray[np.float64]:
+    """Points every ``step`` metres along every leg of the route."""
+    pieces = []
+    for a, b in itertools.pairwise(route.waypoints):
+        count = max(2, math.ceil(math.dist(a, b) / step) + 1)
+        pieces.append(np.linspace(a, b, count))
+    return np.concatenate(pieces)
+
+
+def sample_cells(occupancy_map: OccupancyMap, points: NDArray[np.float64]) -> tuple[NDArray[np.intp], ...]:
+    cols = np.floor((points[:, 0] - occupancy_map.origin[0]) / occupancy_map.resolution).astype(np.intp)
+    rows = np.floor((points[:, 1] - occupancy_map.origin[1]) / occupancy_map.resolution).astype(np.intp)
+    return rows, cols
+
+
+def assert_valid_route(planner: RoutePlanner, route: Route, start: Point, goal: Point) -> None:
+    assert route.waypoints[0] == pytest.approx(start)
+    assert route.waypoints[-1] == pytest.approx(goal)
+    legs = sum(math.dist(a, b) for a, b in itertools.pairwise(route.waypoints))
+    assert route.length == pytest.approx(legs)
+    assert route.length >= math.dist(start, goal) - 1e-9
+    rows, cols = sample_cells(planner.map, route_samples(route))
+    assert not planner.inflated[rows, cols].any(), "a leg of the route crosses an inflated obstacle"
+
+
+# --- walls and keep-out zones ---------------------------------------------------------------------------
+
+
+def test_open_room_gives_a_straight_route() -> None:
+    planner = RoutePlanner(room())
+    route = planner.plan((2.0, 3.0), (8.0, 1.0))
+    assert route.waypoints == ((2.0, 3.0), (8.0, 1.0))
+    assert route.length == pytest.approx(math.dist((2, 3), (8, 1)))
+
+
+def test_route_goes_around_a_wall_in_between() -> None:
+    hall = room()
+    add_wall(hall.grid, 4.9, 0.0, 5.1, 4.5)  # wall from the floor up to y = 4.5, open above
+    planner = RoutePlanner(hall)
+    start, goal = (2.0, 1.0), (8.0, 1.0)
+    route = planner.plan(start, goal)
+    assert_valid_route(planner, route, start, goal)
+    # The centre must pass above the wall's end plus the clearance: at least this long.
+    over_the_top = (4.9 - planner.safety_distance, 4.5 + planner.safety_distance)
+    assert route.length >= math.dist(start, over_the_top) + math.dist(over_the_top, goal) - 0.1
+    assert route.length < 11.0
+    assert max(y for _, y in route.waypoints) > 4.5
+    assert len(route.waypoints) <= 10  # a few hug the rounded end of the wall
+
+
+def test_route_avoids_a_keep_out_zone_that_the_straight_line_crosses() -> None:
+    pillar = KeepOutZone(((4.0, 1.5), (6.0, 1.5), (6.0, 4.5), (4.0, 4.5)), name="pillar")
+    hall = room(keep_out=(pillar,))
+    start, goal = (2.0, 3.0), (8.0, 3.0)
+    planner = RoutePlanner(hall)
+    route = planner.plan(start, goal)
+    assert_valid_route(planner, route, start, goal)
+    points = route_samples(route)
+    outside_x = np.maximum(np.maximum(4.0 - points[:, 0], points[:, 0] - 6.0), 0.0)
+    outside_y = np.maximum(np.maximum(1.5 - points[:, 1], points[:, 1] - 4.5), 0.0)
+    assert np.hypot(outside_x, outside_y).min() >= planner.robot_radius
+    assert route.length > 6.5
+
+    ignoring_zones = RoutePlanner(hall, keep_out=[])
+    assert ignoring_zones.plan(start, goal).length == pytest.approx(6.0)
+
+
+def test_keep_out_line_blocks_like_a_wall() -> None:
+    rope = KeepOutZone(((5.0, 0.0), (5.0, 6.0)), name="rope")
+    planner = RoutePlanner(room(), keep_out=[rope])
+    with pytest.raises(PlanningError, match="enclosed"):
+        planner.plan((2.0, 3.0), (8.0, 3.0))
+
+
+def test_robot_radius_decides_whether_a_doorway_is_passable() -> None:
+    hall = room()
+    add_wall(hall.grid, 4.9, 0.0, 5.1, 2.5)
+    add_wall(hall.grid, 4.9, 3.5, 5.1, 6.0)  # a 1.0 m doorway at y 2.5..3.5
+    start, goal = (2.0, 1.0), (8.0, 5.0)
+    slim = RoutePlanner(hall, robot_radius=0.35)
+    route = slim.plan(start, goal)
+    assert_valid_route(slim, route, start, goal)
+    wide = RoutePlanner(hall, robot_radius=0.6)
+    with pytest.raises(PlanningError, match="enclosed"):
+        wide.plan(start, goal)
+
+
+# --- reasons when there is no route ---------------------------------------------------------------------
+
+
+def test_goal_inside_or_next_to_a_wall() -> None:
+    hall = room()
+    add_wall(hall.grid, 4.9, 0.0, 5.1, 4.5)
+    planner = RoutePlanner(hall)
+    with pytest.raises(PlanningError, match=r"goal \(5\.0, 1\.0\) is inside a wall or within 0\.35 m of one"):
+        planner.plan((2.0, 1.0), (5.0, 1.0))
+    with pytest.raises(
+        PlanningError, match=r"start \(5\.3, 1\.0\) is inside a wall or within 0\.35 m of one"
+    ):
+        planner.plan((5.3, 1.0), (2.0, 1.0))
+
+
+def test_goal_inside_or_next_to_a_keep_out_zone() -> None:
+    pillar = KeepOutZone(((4.0, 1.5), (6.0, 1.5), (6.0, 4.5), (4.0, 4.5)), name="pillar", source="test")
+    planner = RoutePlanner(room(keep_out=(pillar,)))
+    with pytest.raises(PlanningError, match=r"goal \(5\.0, 3\.0\) is inside keep-out zone 'pillar' \(test\)"):
+        planner.plan((2.0, 3.0), (5.0, 3.0))
+    with pytest.raises(PlanningError, match=r"goal \(6\.2, 3\.0\) is within 0\.35 m of a keep-out zone"):
+        planner.plan((2.0, 3.0), (6.2, 3.0))
+
+
+def test_goal_off_the_map() -> None:
+    planner = RoutePlanner(room())
+    with pytest.raises(
+        PlanningError, match=r"goal \(12\.3, 4\.0\) is off the map, which spans x 0\.0\.\.10\.0 m"
+    ):
+        planner.plan((2.0, 3.0), (12.3, 4.0))
+
+
+def test_goal_in_an_enclosed_box() -> None:
+    hall = room()
+    add_wall(hall.grid, 6.0, 1.0, 9.0, 1.1)
+    add_wall(hall.grid, 6.0, 4.0, 9.0, 4.1)
+    add_wall(hall.grid, 6.0, 1.0, 6.1, 4.1)
+    add_wall(hall.grid, 8.9, 1.0, 9.0, 4.1)
+    planner = RoutePlanner(hall)
+    with pytest.raises(
+        PlanningError, match=r"no route from \(2\.0, 3\.0\) to \(7\.5, 2\.5\): the goal .* is enclosed"
+    ):
+        planner.plan((2.0, 3.0), (7.5, 2.5))
+    with pytest.raises(PlanningError, match=r"the start \(7\.5, 2\.5\) is enclosed"):
+        planner.plan((7.5, 2.5), (2.0, 3.0))
+    inside = planner.plan((6.8, 1.8), (8.2, 3.2))
+    assert_valid_route(planner, inside, (6.8, 1.8), (8.2, 3.2))
+
+
+def test_goal_in_unknown_space() -> None:
+    hall = room()
+    hall.grid[:, 150:] = Cell.UNKNOWN
+    planner = RoutePlanner(hall)
+    with pytest.raises(PlanningError, match=r"goal \(8\.0, 3\.0\) is in unmapped \(unknown\) space"):
+        planner.plan((2.0, 3.0), (8.0, 3.0))
+
+
+# --- wandering -------------------------------------------------------------------------------------------
+
+
+def test_random_reachable_points_are_free_reachable_and_repeatable() -> None:
+    hall = room()
+    add_wall(hall.grid, 3.9, 0.0, 4.1, 6.0)  # two separate parts, the right one larger
+    planner = RoutePlanner(hall)
+    rng = random.Random(4)
+    points = [planner.random_reachable_point(rng, near=(2.0, 3.0)) for _ in range(50)]
+    assert all(planner.is_free(*p) and p[0] < 3.9 for p in points)
+    for point in points[:5]:
+        planner.plan((2.0, 3.0), point)
+    again = random.Random(4)
+    assert [planner.random_reachable_point(again, near=(2.0, 3.0)) for _ in range(50)] == points
+    assert len(set(points)) > 40
+    anywhere = [planner.random_reachable_point(rng) for _ in range(50)]
+    assert all(planner.is_free(*p) and p[0] > 4.1 for p in anywhere)
+
+
+# --- real maps -----------------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def glassgarden_planner() -> RoutePlanner:
+    return RoutePlanner(load_map(MAPS / "glassgarden.map"))
+
+
+def test_glassgarden_every_pair_of_places_plans_or_says_why(glassgarden_planner: RoutePlanner) -> None:
+    planner = glassgarden_planner
+    keep_out = planner.map.keep_out_mask()
+    routes, enclosed = 0, 0
+    for start, goal in itertools.permutations(planner.map.poses, 2):
+        try:
+            route = planner.plan(start, goal)
+        except PlanningError as error:
+            assert "is enclosed" in str(error)
+            enclosed += 1
+            continue
+        routes += 1
+        assert_valid_route(planner, route, start.position, goal.position)
+        assert not keep_out[sample_cells(planner.map, route_samples(route, step=0.01))].any()
+    # The keep-out zones split the map in two: 15 places on one side, 6 on the other.
+    assert (routes, enclosed) == (15 * 14 + 6 * 5, 21 * 20 - 15 * 14 - 6 * 5)
+
+
+def test_glassgarden_route_bends_where_the_straight_line_is_blocked(
+    glassgarden_planner: RoutePlanner,
+) -> None:
+    planner = glassgarden_planner
+    start, goal = planner.map.pose("info"), planner.map.pose("cafeteria")
+    assert not planner.segment_is_free(start.position, goal.position)
+    route = planner.plan(start, goal)
+    straight = math.dist(start.position, goal.position)
+    assert straight < route.length < 1.3 * straight
+    assert len(route.waypoints) > 2
+    el6_route = planner.plan(planner.map.pose("el6"), planner.map.pose("entrance2"))
+    assert el6_route.length > math.dist(
+        planner.map.pose("el6").position, planner.map.pose("entrance2").position
+    )
+
+
+def test_glassgarden_named_goal_in_a_message(glassgarden_planner: RoutePlanner) -> None:
+    with pytest.raises(
+        PlanningError, match=r"no route from 'info' \(-33\.5, 1\.1\) to 'hallway1' \(1\.1, -6\.0\)"
+    ):
+        glassgarden_planner.plan(
+            glassgarden_planner.map.pose("info"), glassgarden_planner.map.pose("hallway1")
+        )
+
+
+def test_campus_places_are_all_mutually_reachable_and_avoid_the_staircase() -> None:
+    campus = load_map(default_map_path())
+    planner = RoutePlanner(campus)
+    staircase = campus.keep_out_mask()
+    for start, goal in itertools.permutations(campus.poses, 2):
+        route = planner.plan(start, goal)
+        assert_valid_route(planner, route, start.position, goal.position)
+        assert not staircase[sample_cells(campus, route_samples(route, step=0.01))].any()
+
+
+def test_willow_plans_between_random_points() -> None:
+    planner = RoutePlanner(load_map(MAPS / "willow.yaml"))
+    rng = random.Random(1)
+    for _ in range(10):
+        start = planner.random_reachable_point(rng)
+        goal = planner.random_reachable_point(rng, near=start)
+        route = planner.plan(start, goal)
+        assert_valid_route(planner, route, start, goal)
