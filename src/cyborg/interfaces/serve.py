@@ -7,13 +7,14 @@ from typing import Any
 
 from cyborg.errors import CyborgError
 from cyborg.interfaces.api import RobotAPI
+from cyborg.interfaces.dashboard import register as register_dashboard
 from cyborg.sim.robot import Robot
 from cyborg.transport.base import Transport
 
 Stop = Callable[[], Awaitable[None]]
 
 # Functions that add routes to the API for a robot (the dashboard registers itself here).
-EXTENSIONS: list[Callable[[RobotAPI, Robot], None]] = []
+EXTENSIONS: list[Callable[[RobotAPI, Robot], None]] = [register_dashboard]
 
 
 def serve_api(host: str, port: int, say: Callable[..., Any]) -> Callable[[Transport, Robot], Awaitable[Stop]]:

@@ -1,0 +1,205 @@
+"""The dashboard's JSON endpoints and map image, on an in-process robot (no browser)."""
+
+from __future__ import annotations
+
+import struct
+import zlib
+from collections.abc import Awaitable, Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from aiohttp import ClientSession
+
+from cyborg.controller.config import load_config
+from cyborg.interfaces.api import RobotAPI
+from cyborg.interfaces.dashboard import MAP_COLOURS, NO_BASE, png_bytes, register, route_points
+from cyborg.sim.maps import Cell, KeepOutZone, NamedPose, OccupancyMap
+from cyborg.sim.robot import Robot, build_robot
+from cyborg.transport.clock import RealClock
+from cyborg.transport.embedded import EmbeddedTransport
+
+MACHINE = """
+initial: idle
+timeouts: {connect: 0.5, preempt: 0.5}
+states:
+  idle: {action: cyborg_idle/idle, transitions: {music_play: music, aborted: idle}}
+  music: {action: cyborg_music/play, transitions: {succeeded: idle, aborted: idle}}
+modules:
+  cyborg_idle: {kind: idle}
+  cyborg_music: {kind: placeholder, servers: [{action: cyborg_music/play, duration: 30}]}
+"""
+
+
+class FakeBase:
+    """Stands in for the simulated base: what the dashboard reads from it is ``map`` and ``route``."""
+
+    def __init__(self, occupancy: OccupancyMap, route: Any) -> None:
+        self.map = occupancy
+        self.route = route
+
+
+def small_map() -> OccupancyMap:
+    grid = np.zeros((4, 6), dtype=np.uint8)  # row 0 is the southern edge
+    grid[0, :] = Cell.OCCUPIED
+    grid[3, 5] = Cell.UNKNOWN
+    return OccupancyMap(
+        grid=grid,
+        resolution=0.5,
+        origin=(-1.0, -2.0),
+        poses=(NamedPose("cafeteria", 1.0, -0.5, 0.0, kind="GoalWithHeading"),),
+        keep_out=(KeepOutZone(((0.0, 0.0), (0.5, 0.0), (0.5, 0.5)), name="stairs"),),
+        source="/somewhere/small.map",
+    )
+
+
+Fetch = Callable[[str], Awaitable[tuple[int, Any]]]
+
+
+def serve(tmp_path: Path, base: object | None, check: Callable[[Fetch, Robot], Awaitable[None]]) -> None:
+    """Start a robot with the dashboard on a free port, run ``check`` against it, stop everything."""
+    config_path = tmp_path / "machine.yaml"
+    config_path.write_text(MACHINE)
+    clock = RealClock()
+    transport = EmbeddedTransport(clock)
+    robot = build_robot(load_config(config_path), transport, data_dir=tmp_path / "data")
+    if base is not None:
+        robot.components["rosarnl_node"] = base
+
+    async def main() -> None:
+        api = RobotAPI(transport.node("cyborg_api"), machine=robot.config.machine)
+        register(api, robot)
+        url = (await api.start("127.0.0.1", 0)).rstrip("/")
+        robot.start()
+        async with ClientSession() as session:
+
+            async def fetch(path: str) -> tuple[int, Any]:
+                async with session.get(url + path) as response:
+                    if response.content_type == "application/json":
+                        return response.status, await response.json()
+                    return response.status, await response.read()
+
+            try:
+                await check(fetch, robot)
+            finally:
+                await robot.controller.stop()
+                await api.stop()
+
+    try:
+        clock.run(main())
+    finally:
+        transport.shutdown()
+        clock.close()
+
+
+def read_png(data: bytes) -> tuple[np.ndarray[Any, Any], list[tuple[int, int, int, int]]]:
+    """Decode the indexed PNG that png_bytes writes: (indices top row first, RGBA palette)."""
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    chunks: dict[bytes, bytes] = {}
+    position = 8
+    while position < len(data):
+        (length,) = struct.unpack(">I", data[position : position + 4])
+        kind = data[position + 4 : position + 8]
+        body = data[position + 8 : position + 8 + length]
+        assert struct.unpack(">I", data[position + 8 + length : position + 12 + length])[0] == zlib.crc32(
+            kind + body
+        )
+        chunks[kind] = chunks.get(kind, b"") + body
+        position += 12 + length
+    width, height, depth, colour_type = struct.unpack(">IIBB", chunks[b"IHDR"][:10])
+    assert (depth, colour_type) == (8, 3)
+    rows = np.frombuffer(zlib.decompress(chunks[b"IDAT"]), dtype=np.uint8).reshape(height, width + 1)
+    assert not rows[:, 0].any(), "every row uses filter type 0"
+    rgb = chunks[b"PLTE"]
+    alpha = chunks[b"tRNS"]
+    palette = [(rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2], alpha[i]) for i in range(len(alpha))]
+    return rows[:, 1:], palette
+
+
+def test_health_reports_the_controller_and_each_module(tmp_path: Path) -> None:
+    async def check(fetch: Fetch, robot: Robot) -> None:
+        for _ in range(100):
+            status, health = await fetch("/api/health")
+            if health["active_state"] == "idle" and health["goal_status"] == "ACTIVE":
+                break
+            await robot.controller.node.clock.sleep(0.02)
+        assert status == 200
+        assert health["phase"] == "active" and health["active_module"] == "cyborg_idle"
+        assert health["stats"]["handovers"] == 1 and "events_invalid" in health["stats"]
+        assert health["has_base"] is False and health["emotion_enabled"] is True
+        assert 0 <= health["seconds_in_state"] < 5
+        modules = {m["name"]: m for m in health["modules"]}
+        assert modules["cyborg_idle"]["active"] and modules["cyborg_idle"]["goal_status"] == "ACTIVE"
+        assert modules["cyborg_music"] == {
+            "name": "cyborg_music",
+            "states": ["music"],
+            "active": False,
+            "goal_status": None,
+            "seconds_since_active": None,
+        }
+
+    serve(tmp_path, None, check)
+
+
+def test_without_a_base_the_map_endpoints_say_so_and_how_to_fix_it(tmp_path: Path) -> None:
+    async def check(fetch: Fetch, robot: Robot) -> None:
+        for path in ("/api/map", "/api/route"):
+            status, body = await fetch(path)
+            assert status == 404 and body == {"error": NO_BASE, "has_base": False}
+        status, text = await fetch("/api/map.png")
+        assert status == 404 and b"no simulated base" in text and b"fix:" in text
+        assert "simulated_base" in NO_BASE
+
+    serve(tmp_path, None, check)
+
+
+def test_map_route_and_png_with_a_base(tmp_path: Path) -> None:
+    occupancy = small_map()
+    base = FakeBase(occupancy, [(0.0, 0.0), (1.0, -0.5)])
+
+    async def check(fetch: Fetch, robot: Robot) -> None:
+        status, info = await fetch("/api/map")
+        assert status == 200
+        assert info["source"] == "small.map" and info["resolution"] == 0.5
+        assert info["origin"] == [-1.0, -2.0] and info["cells"] == [6, 4] and info["size_m"] == [3.0, 2.0]
+        assert info["locations"] == [
+            {"name": "cafeteria", "x": 1.0, "y": -0.5, "theta": 0.0, "kind": "GoalWithHeading"}
+        ]
+        assert info["keep_out"] == [
+            {"name": "stairs", "line": False, "corners": [[0.0, 0.0], [0.5, 0.0], [0.5, 0.5]]}
+        ]
+        status, png = await fetch(info["image"])
+        assert status == 200
+        pixels, palette = read_png(png)
+        colours = np.array(palette)[pixels]
+        assert colours.shape == (4, 6, 4)
+        assert (colours[-1] == MAP_COLOURS[Cell.OCCUPIED]).all(), (
+            "the southern wall is the image's bottom row"
+        )
+        assert tuple(colours[0, 5]) == MAP_COLOURS[Cell.UNKNOWN] and MAP_COLOURS[Cell.UNKNOWN][3] == 0
+        assert tuple(colours[1, 1]) == MAP_COLOURS[Cell.FREE]
+
+        status, route = await fetch("/api/route")
+        assert status == 200 and route["route"] == [[0.0, 0.0], [1.0, -0.5]] and route["pose"] is None
+        base.route = None
+        assert (await fetch("/api/route"))[1]["route"] is None
+        assert (await fetch("/api/health"))[1]["has_base"] is True
+
+    serve(tmp_path, base, check)
+
+
+def test_route_points_accepts_lists_and_route_objects() -> None:
+    class Route:
+        waypoints = ((0, 1), (2.5, 3))
+
+    assert route_points(Route()) == [[0.0, 1.0], [2.5, 3.0]]
+    assert route_points([(1, 2), (float("nan"), 0)]) == [[1.0, 2.0]]
+    assert route_points(None) is None and route_points(42) is None
+
+
+def test_png_bytes_refuses_values_outside_the_palette() -> None:
+    with pytest.raises(ValueError, match="palette has 1 colours"):
+        png_bytes(np.array([[0, 1]], dtype=np.uint8), [(0, 0, 0, 255)])
+    with pytest.raises(ValueError, match="non-empty 2-D"):
+        png_bytes(np.zeros((0, 3), dtype=np.uint8), [(0, 0, 0, 255)])
