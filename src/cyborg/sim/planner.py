@@ -64,6 +64,8 @@ class RoutePlanner:
         self.inflated: NDArray[np.bool_] = self._inflate(occupancy_map.blocked | self._keep_out_cells)
         """True where the robot's centre may not be."""
         self._components, _ = ndimage.label(~self.inflated, structure=_EIGHT_NEIGHBOURS)
+        self._component_sizes = np.bincount(self._components.ravel())
+        self._component_sizes[0] = 0  # label 0 is the blocked cells
         self._weights = np.where(self.inflated, np.inf, 1.0).astype(np.float32)
         self._cells_by_component: dict[int, NDArray[np.intp]] = {}
 
@@ -121,14 +123,12 @@ class RoutePlanner:
         return self.map.cell_to_world(int(row), int(col))
 
     def _largest_component(self) -> int:
-        sizes = np.bincount(self._components.ravel())
-        sizes[0] = 0
-        if not sizes.any():
+        if not self._component_sizes.any():
             raise PlanningError(
                 f"{self.map.source or 'map'}: no free space for a robot of radius {self.robot_radius} m; "
                 "fix: use a smaller robot_radius or a map with open space"
             )
-        return int(sizes.argmax())
+        return int(self._component_sizes.argmax())
 
     def _check_endpoint(self, role: str, location: Location) -> tuple[int, int]:
         """The free cell of a start or goal; PlanningError naming what is in the way otherwise."""
@@ -176,7 +176,7 @@ class RoutePlanner:
         start_area, goal_area = int(self._components[start_cell]), int(self._components[goal_cell])
         if start_area == goal_area:
             return
-        sizes = np.bincount(self._components.ravel())
+        sizes = self._component_sizes
         enclosed, other = ("goal", "start") if sizes[goal_area] <= sizes[start_area] else ("start", "goal")
         where = _describe(goal if enclosed == "goal" else start)
         raise PlanningError(
