@@ -81,7 +81,7 @@ def normalise_recurrence(text: str, start: datetime) -> str:
             if not raw:
                 continue
             head, sep, value = raw.partition(":")
-            if not sep or "=" in head:
+            if not sep or "=" in head.partition(";")[0]:
                 head, value = "RRULE", raw
             name, _, params = head.partition(";")
             name = name.upper()
