@@ -123,6 +123,14 @@ def test_robot_radius_decides_whether_a_doorway_is_passable() -> None:
         wide.plan(start, goal)
 
 
+def test_segment_on_the_map_edge_does_not_wrap_around() -> None:
+    grid = np.zeros((20, 20), dtype=np.uint8)
+    grid[:, -1] = Cell.OCCUPIED  # the far right column
+    planner = RoutePlanner(OccupancyMap(grid, RESOLUTION, (0.0, 0.0)), robot_radius=0.0)
+    assert planner.segment_is_free((0.0, 0.2), (0.0, 0.8))
+    assert not planner.segment_is_free((0.2, 0.5), (0.99, 0.5))
+
+
 # --- reasons when there is no route ---------------------------------------------------------------------
 
 

@@ -42,7 +42,11 @@ class Route:
 
 
 class RoutePlanner:
-    """Shortest collision-free routes for a round robot of ``robot_radius`` metres.
+    """Short collision-free routes for a round robot of ``robot_radius`` metres.
+
+    A route is the A* grid path (diagonal steps cost as much as straight ones)
+    pulled taut; on Glassgården it is on average 0.2 % and at worst 11 % longer
+    than a true-Euclidean grid search would give (docs/bench-planner.md).
 
     ``keep_out`` replaces the map's own keep-out zones when given. The robot's
     centre stays more than ``robot_radius`` (plus half a cell, for the cells'
@@ -90,10 +94,12 @@ class RoutePlanner:
         if not (self.map.contains(*start) and self.map.contains(*end)):
             return False
         rows, cols = segment_cells(self.map.grid_coordinates(start), self.map.grid_coordinates(end))
+        rows = np.clip(rows, 0, self.inflated.shape[0] - 1)  # a point on the map's outer edge
+        cols = np.clip(cols, 0, self.inflated.shape[1] - 1)
         return not self.inflated[rows, cols].any()
 
     def plan(self, start: Location, goal: Location) -> Route:
-        """The shortest route from ``start`` to ``goal``; PlanningError saying why when there is none."""
+        """A short collision-free route from ``start`` to ``goal``; PlanningError saying why if there is none."""
         start_point, goal_point = _point(start), _point(goal)
         start_cell = self._check_endpoint("start", start)
         goal_cell = self._check_endpoint("goal", goal)
