@@ -237,9 +237,11 @@ def _run_script(
 
 def _add_tool_commands() -> None:
     from cyborg.interfaces.command_tool import COMMANDS
+    from cyborg.navigation.db_cli import db_group
 
     for command in COMMANDS:
         cli.add_command(command)
+    cli.add_command(db_group)
 
 
 _add_tool_commands()

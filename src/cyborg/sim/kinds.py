@@ -77,6 +77,21 @@ class TtsSettings(KindSettings):
     voice: str = "en"
 
 
+class NavigationSettings(KindSettings):
+    db: str | None = Field(None, description="navigation database (default: <data dir>/navigation.db)")
+    scheduler_interval: float = Field(10.0, gt=0)
+    scheduler_repeat: float = Field(60.0, gt=0)
+    answer_timeout: float = Field(20.0, gt=0)
+    feedback_interval: float = Field(15.0, gt=0)
+    wander_limit: float = Field(600.0, gt=0)
+
+
+class BaseSettings(KindSettings):
+    speed: float = Field(0.6, gt=0, description="driving speed in m/s")
+    robot_radius: float = Field(0.35, ge=0)
+    start: str | None = Field(None, description="named pose to start at (default: RobotHome)")
+
+
 @dataclass(frozen=True)
 class ModuleKind:
     settings: type[KindSettings]
@@ -96,7 +111,51 @@ def _tts(node: Node, s: TtsSettings, robot: Robot) -> object:
     )
 
 
+def _navigation(node: Node, s: NavigationSettings, robot: Robot) -> object:
+    from pathlib import Path
+
+    from cyborg.navigation.database import CalendarEvent, NavigationDatabase
+    from cyborg.navigation.module import NavigationModule, import_map_locations
+
+    db = NavigationDatabase(Path(s.db) if s.db else robot.data_dir / "navigation.db")
+    occupancy = robot.occupancy_map()
+    goals = [p for p in occupancy.poses if p.kind in ("Goal", "GoalWithHeading")]
+    import_map_locations(db, goals, Path(occupancy.source).stem if occupancy.source else "map")
+
+    def add_calendar_entry(entry: Any) -> None:
+        from datetime import UTC
+
+        start, end = (t if t.tzinfo else t.replace(tzinfo=UTC) for t in (entry.start, entry.end))
+        db.add_event(
+            CalendarEvent(entry.location, start, end, ignored=entry.ignore, recurrence=entry.recurrence)
+        )
+
+    robot.calendar = add_calendar_entry
+    return NavigationModule(
+        node,
+        db,
+        rng=robot.rng,
+        scheduler_interval=s.scheduler_interval,
+        scheduler_repeat=s.scheduler_repeat,
+        answer_timeout=s.answer_timeout,
+        feedback_interval=s.feedback_interval,
+        wander_limit=s.wander_limit,
+    )
+
+
+def _simulated_base(node: Node, s: BaseSettings, robot: Robot) -> object:
+    from cyborg.sim.base import SimulatedBase
+
+    occupancy = robot.occupancy_map()
+    start = occupancy.pose(s.start) if s.start else None
+    return SimulatedBase(
+        node, occupancy, rng=robot.rng, speed=s.speed, robot_radius=s.robot_radius, start=start
+    )
+
+
 MODULE_KINDS: dict[str, ModuleKind] = {
+    "navigation": ModuleKind(NavigationSettings, _navigation),
+    "simulated_base": ModuleKind(BaseSettings, _simulated_base),
     "placeholder": ModuleKind(PlaceholderSettings, _placeholder),
     "event_script": ModuleKind(EventScriptSettings, lambda n, s, r: EventScript(n, s.events, s.every)),
     "idle": ModuleKind(

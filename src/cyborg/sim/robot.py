@@ -42,6 +42,16 @@ class Robot:
     components: dict[str, object] = field(default_factory=dict)
     calendar: Callable[[Any], None] | None = None  # set by the navigation module: adds a calendar entry
 
+    _map: Any = None
+
+    def occupancy_map(self) -> Any:
+        """The map of the simulated world (``--map`` or the packaged campus), loaded once."""
+        if self._map is None:
+            from cyborg.sim.maps import default_map_path, load_map
+
+            self._map = load_map(self.map_path or default_map_path())
+        return self._map
+
     def start(self) -> None:
         self.controller.start()
 

@@ -1,0 +1,156 @@
+"""Pure decisions of the navigation module: where to go and what to say (thesis 7.5-7.7).
+
+No I/O: the module passes in the emotion, the event that led to the state, the
+known places and a random generator, and carries out what comes back.
+"""
+
+from __future__ import annotations
+
+import enum
+import random
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from cyborg.navigation.database import Location, Response, ResponseType
+
+HAPPY = frozenset({"happy", "loved", "dignified"})
+WANDERING_MOODS = frozenset({"bored", "curious", "unconcerned"})
+ANGRY = "angry"
+
+
+class Origin(enum.Enum):
+    """Why the robot is going somewhere."""
+
+    COMMAND = "command"  # "go to X"
+    GUIDE = "guide"  # "where is X?" ... "yes"
+    SCHEDULE = "schedule"  # a calendar event
+    MOTIVATOR = "motivator"  # navigation_emotional
+
+
+class PlanKind(enum.Enum):
+    MOVE = "move"
+    WANDER = "wander"
+    REFUSE = "refuse"
+    NOTHING = "nothing"
+
+
+@dataclass(frozen=True)
+class Plan:
+    kind: PlanKind
+    reason: str
+    target: Location | None = None
+    feedback: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
+BOSSED_AROUND = (0.0, 0.0, -0.2)
+SCHEDULED = (0.0, 0.0, -0.1)
+OWN_CHOICE = (0.0, 0.0, 0.1)
+
+
+def origin_of(event: str, guiding: bool) -> Origin | None:
+    if event == "navigation_command":
+        return Origin.GUIDE if guiding else Origin.COMMAND
+    if event == "navigation_scheduler":
+        return Origin.SCHEDULE
+    if event == "navigation_emotional":
+        return Origin.MOTIVATOR
+    return None
+
+
+def plan(
+    origin: Origin | None,
+    emotion: str,
+    *,
+    requested: Location | None,
+    scheduled: Location | None,
+    places: Sequence[Location],
+    rng: random.Random,
+    here: Location | None = None,
+) -> Plan:
+    """Choose the target (or wandering) from why we plan and how the robot feels."""
+    if origin in (Origin.COMMAND, Origin.GUIDE):
+        if requested is None:
+            return Plan(PlanKind.NOTHING, "a command without a known place")
+        if origin is Origin.COMMAND and emotion == ANGRY:
+            return Plan(
+                PlanKind.REFUSE, f"angry: refuses to go to {requested.name}", requested, BOSSED_AROUND
+            )
+        return Plan(PlanKind.MOVE, f"asked to go to {requested.name}", requested, BOSSED_AROUND)
+    others = [p for p in places if here is None or p.name != here.name]
+    if origin is Origin.SCHEDULE:
+        if emotion == ANGRY:
+            quiet = [p for p in others if not p.crowded]
+            if quiet:
+                target = rng.choice(quiet)
+                return Plan(
+                    PlanKind.MOVE,
+                    f"angry: ignores the schedule, wants to be alone at {target.name}",
+                    target,
+                    OWN_CHOICE,
+                )
+        if scheduled is None:
+            return Plan(PlanKind.NOTHING, "the scheduled event is over")
+        return Plan(PlanKind.MOVE, f"scheduled to be at {scheduled.name}", scheduled, SCHEDULED)
+    if origin is Origin.MOTIVATOR:
+        if emotion in HAPPY:
+            crowded = [p for p in others if p.crowded]
+            if crowded:
+                target = rng.choice(crowded)
+                return Plan(
+                    PlanKind.MOVE, f"{emotion}: looks for people at {target.name}", target, OWN_CHOICE
+                )
+        if emotion == ANGRY:
+            quiet = [p for p in others if not p.crowded]
+            if quiet:
+                target = rng.choice(quiet)
+                return Plan(PlanKind.MOVE, f"angry: wants to be alone at {target.name}", target, OWN_CHOICE)
+        if emotion == "sad" and others:
+            target = max(others, key=lambda p: p.pleasantness)
+            return Plan(PlanKind.MOVE, f"sad: goes somewhere pleasant, {target.name}", target, OWN_CHOICE)
+        return Plan(PlanKind.WANDER, f"{emotion}: wanders around", None, OWN_CHOICE)
+    return Plan(PlanKind.NOTHING, "no reason to move")
+
+
+def should_stop_wandering(emotion: str) -> bool:
+    """Wandering ends once the robot is in a positive mood.
+
+    The spec says "no longer bored, unconcerned or curious"; on the way from
+    unconcerned to happy the mood passes ``neutral`` for a while, so stopping on
+    a positive mood reproduces the scenarios' two minutes of wandering.
+    """
+    return emotion in HAPPY
+
+
+class TalkKind(enum.Enum):
+    ARRIVED = "arrived"
+    STUCK = "stuck"
+    OPINION = "opinion"
+    OFFER_GUIDE = "offer_guide"
+    NOTHING = "nothing"
+
+
+def talk_kind(event: str, origin: Origin | None) -> TalkKind:
+    """What the talking state says, from the event that led there (7.7)."""
+    if event in ("succeeded", "navigation_feedback") and origin is Origin.GUIDE:
+        return TalkKind.ARRIVED
+    if event in ("succeeded", "navigation_feedback"):
+        return TalkKind.OPINION
+    if event == "aborted":
+        return TalkKind.STUCK
+    if event == "navigation_information":
+        return TalkKind.OFFER_GUIDE
+    return TalkKind.NOTHING
+
+
+def sentence(responses: Sequence[Response], location: str, rng: random.Random) -> str | None:
+    if not responses:
+        return None
+    return rng.choice(list(responses)).say(location)
+
+
+RESPONSE_FOR_TALK = {
+    TalkKind.ARRIVED: ResponseType.ARRIVED,
+    TalkKind.STUCK: ResponseType.STUCK,
+    TalkKind.OPINION: ResponseType.OPINION,
+    TalkKind.OFFER_GUIDE: ResponseType.OFFER_GUIDE,
+}

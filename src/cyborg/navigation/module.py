@@ -1,0 +1,305 @@
+"""The navigation module (thesis chapter 7 and 9.2) as a behaviour module.
+
+It listens to speech-to-text for commands and questions, keeps a calendar
+scheduler, and serves three states: planning (where to go, from the event and
+the emotion), moving (drives the base through the ROSARNL interface, or
+wanders) and talking (what to say, by event and emotion). It speaks on
+``/text_to_speech`` and sends emotional feedback like any module.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import math
+import random
+from dataclasses import replace
+
+from cyborg.modules.helper import Abort, BehaviourModule, GoalContext
+from cyborg.navigation.behaviour import (
+    RESPONSE_FOR_TALK,
+    Origin,
+    Plan,
+    PlanKind,
+    TalkKind,
+    origin_of,
+    plan,
+    sentence,
+    should_stop_wandering,
+    talk_kind,
+)
+from cyborg.navigation.database import Location, NavigationDatabase, ResponseType
+from cyborg.navigation.keywords import Intent, detect
+from cyborg.transport import topics
+from cyborg.transport.base import GoalStatus, MessageInfo, Node
+from cyborg.transport.messages import (
+    EmptyService,
+    Header,
+    MoveBaseAction,
+    MoveBaseGoal,
+    Point,
+    Pose,
+    PoseStamped,
+    PoseWithCovarianceStamped,
+    Quaternion,
+)
+
+log = logging.getLogger(__name__)
+
+PLANNING_ACTION = "cyborg_navigation/planning"
+MOVING_ACTION = "cyborg_navigation/moving"
+TALKING_ACTION = "cyborg_navigation/talking"
+
+MOVING_FEEDBACK = (0.0, 0.03, 0.01)
+WANDERING_FEEDBACK = (0.02, 0.05, 0.02)
+ARRIVAL_PLEASURE_SCALE = 0.125  # pleasantness 0.8 -> +0.1 pleasure on arrival
+AT_PLACE_DISTANCE = 1.0
+
+
+class NavigationModule(BehaviourModule):
+    """Planning, moving and talking states plus speech and calendar event detection."""
+
+    def __init__(
+        self,
+        node: Node,
+        db: NavigationDatabase,
+        *,
+        rng: random.Random,
+        scheduler_interval: float = 10.0,
+        scheduler_repeat: float = 60.0,
+        answer_timeout: float = 20.0,
+        feedback_interval: float = 15.0,
+        wander_limit: float = 600.0,
+    ) -> None:
+        super().__init__(node)
+        self.db = db
+        self.rng = rng
+        self.scheduler_interval = scheduler_interval
+        self.scheduler_repeat = scheduler_repeat
+        self.answer_timeout = answer_timeout
+        self.feedback_interval = feedback_interval
+        self.wander_limit = wander_limit
+        self.pose: tuple[float, float] | None = None
+        self.requested: Location | None = None
+        self.asked: Location | None = None
+        self.scheduled: Location | None = None
+        self.guiding = False
+        self.origin: Origin | None = None
+        self.current_plan: Plan | None = None
+        self.heading_to: Location | None = None
+        self.arrived_at: Location | None = None
+        self.failed_target: Location | None = None
+        self.last_scheduler_event = -math.inf
+        self._answer: asyncio.Future[Intent] | None = None
+        self.move_base = node.action_client(topics.MOVE_BASE, MoveBaseAction)
+        self.wander = node.service_proxy(topics.WANDER, EmptyService)
+        self.stop = node.service_proxy(topics.STOP, EmptyService)
+        node.subscribe(topics.AMCL_POSE, PoseWithCovarianceStamped, self._on_pose, queue_size=10)
+        self.on_speech_text(self._on_text)
+        self.serve(PLANNING_ACTION, self.planning)
+        self.serve(MOVING_ACTION, self.moving)
+        self.serve(TALKING_ACTION, self.talking)
+        node.clock.call_later(scheduler_interval, self._scheduler_tick)
+
+    # --- inputs ------------------------------------------------------------------------
+
+    def _on_pose(self, message: PoseWithCovarianceStamped, info: MessageInfo) -> None:
+        self.pose = (message.pose.position.x, message.pose.position.y)
+
+    def _on_text(self, text: str, info: MessageInfo) -> None:
+        found = detect(text, self.db.matcher())
+        if found is None:
+            return
+        if found.intent in (Intent.YES, Intent.NO):
+            if self._answer is not None and not self._answer.done():
+                self._answer.set_result(found.intent)
+            return
+        location = self.db.find_location(found.location) if found.location else None
+        if location is None:
+            return
+        if found.intent is Intent.NAVIGATION_COMMAND:
+            self.requested, self.guiding = location, False
+        else:
+            self.asked = location
+        log.info("heard %s about %s in %r", found.intent.value, location.name, text)
+        self.publish_event(found.intent.value)
+
+    def here(self) -> Location | None:
+        """The known place the robot is at, if any."""
+        if self.pose is None:
+            return None
+        for place in self.db.list_locations():
+            if math.dist(self.pose, (place.x, place.y)) <= max(place.tolerance, AT_PLACE_DISTANCE):
+                return place
+        return None
+
+    def _scheduler_tick(self) -> None:
+        try:
+            self._check_schedule()
+        except Exception:
+            log.exception("navigation scheduler failed; trying again")
+        finally:
+            self.node.clock.call_later(self.scheduler_interval, self._scheduler_tick)
+
+    def _check_schedule(self) -> None:
+        ongoing = self.db.ongoing_events(self.node.clock.datetime())
+        if not ongoing:
+            self.scheduled = None
+            return
+        place = self.db.find_location(ongoing[0].event.location)
+        if place is None:
+            return
+        self.scheduled = place
+        at_place = self.pose is not None and math.dist(self.pose, (place.x, place.y)) <= max(
+            place.tolerance, AT_PLACE_DISTANCE
+        )
+        heading_there = self.heading_to is not None and self.heading_to.name == place.name
+        now = self.node.clock.monotonic()
+        if at_place or heading_there or now - self.last_scheduler_event < self.scheduler_repeat:
+            return
+        self.last_scheduler_event = now
+        log.info("calendar: the robot should be at %s now", place.name)
+        self.publish_event("navigation_scheduler")
+
+    # --- planning ----------------------------------------------------------------------
+
+    async def planning(self, ctx: GoalContext) -> None:
+        origin = origin_of(ctx.event, self.guiding)
+        chosen = plan(
+            origin,
+            self.emotion,
+            requested=self.requested,
+            scheduled=self.scheduled,
+            places=self.db.list_locations(),
+            rng=self.rng,
+            here=self.here(),
+        )
+        log.info("planning (%s, %s): %s", ctx.event, self.emotion, chosen.reason)
+        self.origin, self.current_plan = origin, chosen
+        if any(chosen.feedback):
+            self.send_emotion(*chosen.feedback)
+        if chosen.kind is PlanKind.REFUSE:
+            self._say(ResponseType.REFUSE, chosen.target.name if chosen.target else "")
+            return
+        if chosen.kind is PlanKind.NOTHING:
+            raise Abort(chosen.reason)
+        self.publish_event(
+            "navigation_start_moving" if chosen.kind is PlanKind.MOVE else "navigation_start_wandering"
+        )
+        await ctx.wait_forever()
+
+    # --- moving ------------------------------------------------------------------------
+
+    async def moving(self, ctx: GoalContext) -> None:
+        chosen = self.current_plan
+        if chosen is None or chosen.kind not in (PlanKind.MOVE, PlanKind.WANDER):
+            raise Abort("nothing planned: the moving state needs the planning state first")
+        self.current_plan = None
+        if chosen.kind is PlanKind.WANDER:
+            await self._wander(ctx)
+            return
+        assert chosen.target is not None
+        await self._move_to(ctx, chosen.target)
+
+    async def _move_to(self, ctx: GoalContext, target: Location) -> None:
+        if not await self.move_base.wait_for_server(2.0):
+            self.failed_target = target
+            raise Abort("no robot base: /rosarnl_node/move_base is not offered")
+        goal = MoveBaseGoal(
+            PoseStamped(
+                Header(stamp=self.node.clock.now(), frame_id="map"),
+                Pose(
+                    Point(target.x, target.y, 0.0),
+                    Quaternion(0.0, 0.0, math.sin(target.heading / 2), math.cos(target.heading / 2)),
+                ),
+            )
+        )
+        self.heading_to = target
+        handle = self.move_base.send_goal(goal)
+        try:
+            while True:
+                try:
+                    status = await asyncio.wait_for(asyncio.shield(handle.wait()), self.feedback_interval)
+                    break
+                except TimeoutError:
+                    self.send_emotion(*MOVING_FEEDBACK)
+        finally:
+            self.heading_to = None
+            if not handle.status.is_terminal:
+                handle.cancel()
+        if status is not GoalStatus.SUCCEEDED:
+            self.failed_target = target
+            raise Abort(f"could not reach {target.name}: {handle.text or status.name}")
+        self.arrived_at = target
+        self.send_emotion(target.pleasantness * ARRIVAL_PLEASURE_SCALE, 0.0, 0.0)
+
+    async def _wander(self, ctx: GoalContext) -> None:
+        await self.wander.call(timeout=5.0)
+        started = self.node.clock.monotonic()
+        try:
+            while True:
+                await ctx.sleep(self.feedback_interval)
+                self.send_emotion(*WANDERING_FEEDBACK)
+                long_enough = self.node.clock.monotonic() - started >= self.wander_limit
+                if should_stop_wandering(self.emotion) or long_enough:
+                    break
+        finally:
+            await self.stop.call(timeout=5.0)
+        self.publish_event("navigation_wandering_completed")
+        await ctx.wait_forever()
+
+    # --- talking -----------------------------------------------------------------------
+
+    def _say(self, kind: ResponseType, place: str) -> bool:
+        text = sentence(self.db.responses(kind, self.emotion), place, self.rng)
+        if text is None:
+            return False
+        self.say(text)
+        return True
+
+    async def talking(self, ctx: GoalContext) -> None:
+        kind = talk_kind(ctx.event, self.origin)
+        place = {
+            TalkKind.ARRIVED: self.arrived_at,
+            TalkKind.OPINION: self.arrived_at if ctx.event == "succeeded" else self.asked,
+            TalkKind.STUCK: self.failed_target,
+            TalkKind.OFFER_GUIDE: self.asked,
+        }.get(kind)
+        self.origin = None
+        if kind is not TalkKind.NOTHING:
+            self._say(RESPONSE_FOR_TALK[kind], place.name if place else "place")
+        if kind is TalkKind.OFFER_GUIDE and place is not None:
+            answer = await self._await_answer()
+            if answer is Intent.YES:
+                self._say(ResponseType.CONFIRM, place.name)
+                self.requested, self.guiding = place, True
+                self.publish_event("navigation_command")
+                await ctx.wait_forever()
+            if answer is Intent.NO:
+                self._say(ResponseType.DECLINED, place.name)
+        if ctx.previous_state == "conversation":
+            self.publish_event("navigation_feedback_completed")
+            await ctx.wait_forever()
+
+    async def _await_answer(self) -> Intent | None:
+        self._answer = self.node.clock.loop.create_future()
+        try:
+            return await asyncio.wait_for(self._answer, self.answer_timeout)
+        except TimeoutError:
+            return None
+        finally:
+            self._answer = None
+
+
+def import_map_locations(db: NavigationDatabase, poses: list[object], map_name: str) -> int:
+    """Give known places the map's coordinates (by name or alias) and add the map's other goals."""
+    count = 0
+    for pose in poses:
+        name, x, y, theta = (getattr(pose, a) for a in ("name", "x", "y", "theta"))
+        known = db.find_location(name)
+        if known is None:
+            db.add_location(Location(name, map=map_name, x=x, y=y, heading=theta))
+        else:
+            db.update_location(known.name, replace(known, map=map_name, x=x, y=y, heading=theta))
+        count += 1
+    return count

@@ -1,0 +1,266 @@
+"""The simulated robot base: stands in for ROSARNL and MobileSim (thesis 2.7).
+
+It offers the ROSARNL interface the navigation module uses: the action
+``/rosarnl_node/move_base`` (goal: a pose in the map frame; feedback: the
+current pose), the services ``/rosarnl_node/wander`` and ``/rosarnl_node/stop``
+(std_srvs/Empty), the pose on ``/rosarnl_node/amcl_pose`` and the path state on
+``/rosarnl_node/arnl_path_state``. Routes come from :class:`RoutePlanner`; the
+robot drives them at a set speed on the injected clock.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import enum
+import logging
+import math
+import random
+from collections.abc import Sequence
+from typing import Any
+
+from cyborg.errors import PlanningError
+from cyborg.sim.maps import NamedPose, OccupancyMap, Point
+from cyborg.sim.planner import RoutePlanner
+from cyborg.transport import topics
+from cyborg.transport.base import MessageInfo, Node, ServerGoalHandle
+from cyborg.transport.messages import (
+    EmptyRequest,
+    EmptyResponse,
+    EmptyService,
+    Header,
+    MoveBaseAction,
+    MoveBaseFeedback,
+    MoveBaseGoal,
+    MoveBaseResult,
+    Pose,
+    PoseStamped,
+    PoseWithCovarianceStamped,
+    Quaternion,
+    String,
+)
+from cyborg.transport.messages import (
+    Point as PointMsg,
+)
+
+log = logging.getLogger(__name__)
+
+TICK = 0.1  # seconds between pose updates while moving
+MAP_FRAME = "map"
+
+_MoveHandle = ServerGoalHandle[MoveBaseGoal, MoveBaseResult, MoveBaseFeedback]
+
+
+class PathState(enum.Enum):
+    """ROSARNL's path states, as published on ``arnl_path_state``."""
+
+    NOT_INITIALIZED = "NOT_INITIALIZED"
+    PLANNING_PATH = "PLANNING_PATH"
+    MOVING_TO_GOAL = "MOVING_TO_GOAL"
+    REACHED_GOAL = "REACHED_GOAL"
+    FAILED_PLAN = "FAILED_PLAN"
+    ABORTED_PATHPLAN = "ABORTED_PATHPLAN"
+    WANDERING = "WANDERING"
+    STOPPED = "STOPPED"
+
+
+def yaw_to_quaternion(theta: float) -> Quaternion:
+    return Quaternion(0.0, 0.0, math.sin(theta / 2.0), math.cos(theta / 2.0))
+
+
+def quaternion_to_yaw(q: Quaternion) -> float:
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+
+
+def pose_stamped(x: float, y: float, theta: float, stamp: float = 0.0) -> PoseStamped:
+    return PoseStamped(
+        Header(stamp=stamp, frame_id=MAP_FRAME), Pose(PointMsg(x, y, 0.0), yaw_to_quaternion(theta))
+    )
+
+
+class SimulatedBase:
+    """A Pioneer LX on a map: plans, drives, wanders, reports its pose."""
+
+    def __init__(
+        self,
+        node: Node,
+        occupancy_map: OccupancyMap,
+        *,
+        rng: random.Random,
+        speed: float = 0.6,
+        robot_radius: float = 0.35,
+        start: NamedPose | Point | None = None,
+        planner: RoutePlanner | None = None,
+    ) -> None:
+        if speed <= 0:
+            raise ValueError(f"speed must be positive (m/s), got {speed}")
+        self.node = node
+        self.map = occupancy_map
+        self.planner = planner or RoutePlanner(occupancy_map, robot_radius)
+        self.rng = rng
+        self.speed = speed
+        start_pose = start if start is not None else _default_start(occupancy_map)
+        if isinstance(start_pose, NamedPose):
+            self.x, self.y, self.theta = start_pose.x, start_pose.y, start_pose.theta
+        else:
+            self.x, self.y, self.theta = start_pose[0], start_pose[1], 0.0
+        self.route: list[Point] | None = None
+        self.path_state = PathState.NOT_INITIALIZED
+        self.distance_travelled = 0.0
+        self.wandering = False
+        self._failure = ""
+        self._motion: asyncio.Task[bool] | None = None
+        self._goal: _MoveHandle | None = None
+        self._pose_pub = node.publisher(topics.AMCL_POSE, PoseWithCovarianceStamped, latch=True)
+        self._state_pub = node.publisher(topics.ARNL_PATH_STATE, String, latch=True)
+        node.action_server(topics.MOVE_BASE, MoveBaseAction, self._on_goal, self._on_cancel)
+        node.advertise_service(topics.WANDER, EmptyService, self._on_wander)
+        node.advertise_service(topics.STOP, EmptyService, self._on_stop)
+        self._publish_pose()
+        self._set_state(PathState.STOPPED)
+
+    # --- outputs ----------------------------------------------------------------------
+
+    def _publish_pose(self) -> None:
+        stamped = pose_stamped(self.x, self.y, self.theta, self.node.clock.now())
+        self._pose_pub.publish(PoseWithCovarianceStamped(stamped.header, stamped.pose))
+
+    def _set_state(self, state: PathState) -> None:
+        if state is not self.path_state:
+            self.path_state = state
+            self._state_pub.publish(String(state.value))
+
+    # --- motion -------------------------------------------------------------------------
+
+    def _halt(self) -> None:
+        if self._motion is not None and not self._motion.done():
+            self._motion.cancel()
+        self._motion = None
+        self.route = None
+        self.wandering = False
+
+    async def _drive(self, target: tuple[float, float], heading: float | None, on_pose: Any = None) -> bool:
+        """Plan and drive to ``target``; False if there is no route."""
+        self._set_state(PathState.PLANNING_PATH)
+        try:
+            route = self.planner.plan((self.x, self.y), target)
+        except PlanningError as exc:
+            self._set_state(PathState.FAILED_PLAN)
+            self._failure = str(exc)
+            return False
+        self.route = list(route.waypoints)
+        self._set_state(PathState.WANDERING if self.wandering else PathState.MOVING_TO_GOAL)
+        for waypoint in route.waypoints[1:]:
+            await self._drive_leg(waypoint, on_pose)
+        if heading is not None:
+            self.theta = heading
+            self._publish_pose()
+        self.route = None
+        return True
+
+    async def _drive_leg(self, waypoint: Point, on_pose: Any) -> None:
+        clock = self.node.clock
+        dx, dy = waypoint[0] - self.x, waypoint[1] - self.y
+        length = math.hypot(dx, dy)
+        if length < 1e-9:
+            return
+        self.theta = math.atan2(dy, dx)
+        steps = max(1, math.ceil(length / (self.speed * TICK)))
+        sx, sy = self.x, self.y
+        for step in range(1, steps + 1):
+            await clock.sleep(min(TICK, length / self.speed - (step - 1) * TICK))
+            fraction = step / steps
+            self.x, self.y = sx + dx * fraction, sy + dy * fraction
+            self.distance_travelled += length / steps
+            self._publish_pose()
+            if on_pose is not None:
+                on_pose()
+
+    # --- move_base ----------------------------------------------------------------------
+
+    def _on_goal(self, handle: _MoveHandle) -> None:
+        if self._goal is not None and not self._goal.status.is_terminal:
+            self._goal.canceled(text="replaced by a new goal")
+        self._halt()
+        handle.accept()
+        self._goal = handle
+        pose = handle.goal.target_pose.pose
+        target = (pose.position.x, pose.position.y)
+        heading = quaternion_to_yaw(pose.orientation)
+        self._failure = ""
+
+        def feedback() -> None:
+            if not handle.status.is_terminal:
+                handle.publish_feedback(
+                    MoveBaseFeedback(pose_stamped(self.x, self.y, self.theta, self.node.clock.now()))
+                )
+
+        motion = self.node.clock.loop.create_task(self._drive(target, heading, feedback), name="move_base")
+        motion.add_done_callback(lambda task: self._finish_goal(handle, task))
+        self._motion = motion
+
+    def _finish_goal(self, handle: _MoveHandle, task: asyncio.Task[bool]) -> None:
+        if handle.status.is_terminal:
+            return
+        if task.cancelled():
+            handle.canceled(text="stopped")
+            self._set_state(PathState.STOPPED)
+        elif task.exception() is not None:
+            log.error("move_base failed", exc_info=task.exception())
+            handle.abort(text=f"internal error: {task.exception()!r}")
+            self._set_state(PathState.ABORTED_PATHPLAN)
+        elif task.result():
+            self._set_state(PathState.REACHED_GOAL)
+            handle.succeed(MoveBaseResult())
+        else:
+            log.info("move_base goal aborted: %s", self._failure)
+            handle.abort(text=self._failure)
+
+    def _on_cancel(self, handle: _MoveHandle) -> None:
+        if handle is self._goal:
+            self._halt()  # the done callback acknowledges the cancel
+        if not handle.status.is_terminal and (self._goal is not handle or self._motion is None):
+            handle.canceled(text="stopped")
+
+    # --- wander / stop ------------------------------------------------------------------
+
+    def _on_wander(self, request: EmptyRequest, info: MessageInfo) -> EmptyResponse:
+        if self._goal is not None and not self._goal.status.is_terminal:
+            self._goal.canceled(text="wandering instead")
+        self._halt()
+        self.wandering = True
+        self._motion = self.node.clock.loop.create_task(self._wander(), name="wander")
+        return EmptyResponse()
+
+    async def _wander(self) -> bool:
+        while self.wandering:
+            target = self.planner.random_reachable_point(self.rng, near=(self.x, self.y))
+            if not await self._drive(target, None):
+                await self.node.clock.sleep(1.0)
+        return True
+
+    def _on_stop(self, request: EmptyRequest, info: MessageInfo) -> EmptyResponse:
+        if self._goal is not None and not self._goal.status.is_terminal:
+            self._halt()
+        else:
+            self._halt()
+            self._set_state(PathState.STOPPED)
+        return EmptyResponse()
+
+
+def _default_start(occupancy_map: OccupancyMap) -> NamedPose | Point:
+    for kind in ("RobotHome", "Dock"):
+        for pose in occupancy_map.poses:
+            if pose.kind == kind:
+                return pose
+    for name in ("information desk", "info"):
+        try:
+            return occupancy_map.pose(name)
+        except Exception:
+            continue
+    if occupancy_map.poses:
+        return occupancy_map.poses[0]
+    return occupancy_map.cell_to_world(*[n // 2 for n in occupancy_map.shape])
+
+
+def named_locations(occupancy_map: OccupancyMap) -> Sequence[NamedPose]:
+    return [pose for pose in occupancy_map.poses if pose.kind in ("GoalWithHeading", "Goal")]
