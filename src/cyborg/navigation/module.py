@@ -15,7 +15,9 @@ import math
 import random
 from dataclasses import replace
 
+from cyborg.errors import CyborgError
 from cyborg.modules.helper import Abort, BehaviourModule, GoalContext
+from cyborg.modules.speech import estimated_duration
 from cyborg.navigation.behaviour import (
     RESPONSE_FOR_TALK,
     Origin,
@@ -179,7 +181,7 @@ class NavigationModule(BehaviourModule):
         if any(chosen.feedback):
             self.send_emotion(*chosen.feedback)
         if chosen.kind is PlanKind.REFUSE:
-            self._say(ResponseType.REFUSE, chosen.target.name if chosen.target else "")
+            await ctx.sleep(self._say(ResponseType.REFUSE, chosen.target.name if chosen.target else ""))
             return
         if chosen.kind is PlanKind.NOTHING:
             raise Abort(chosen.reason)
@@ -244,18 +246,25 @@ class NavigationModule(BehaviourModule):
                 if should_stop_wandering(self.emotion) or long_enough:
                     break
         finally:
-            await self.stop.call(timeout=5.0)
+            await self._stop_base()
         self.publish_event("navigation_wandering_completed")
         await ctx.wait_forever()
 
+    async def _stop_base(self) -> None:
+        try:
+            await self.stop.call(timeout=5.0)
+        except CyborgError as exc:
+            log.warning("could not stop the base: %s", exc)
+
     # --- talking -----------------------------------------------------------------------
 
-    def _say(self, kind: ResponseType, place: str) -> bool:
+    def _say(self, kind: ResponseType, place: str) -> float:
+        """Say a sentence of ``kind``; return how long it takes to speak (0 if none fits)."""
         text = sentence(self.db.responses(kind, self.emotion), place, self.rng)
         if text is None:
-            return False
+            return 0.0
         self.say(text)
-        return True
+        return estimated_duration(text)
 
     async def talking(self, ctx: GoalContext) -> None:
         kind = talk_kind(ctx.event, self.origin)
@@ -266,23 +275,26 @@ class NavigationModule(BehaviourModule):
             TalkKind.OFFER_GUIDE: self.asked,
         }.get(kind)
         self.origin = None
+        if kind is TalkKind.OFFER_GUIDE:
+            self._answer = self.node.clock.loop.create_future()  # listen while still speaking
         if kind is not TalkKind.NOTHING:
-            self._say(RESPONSE_FOR_TALK[kind], place.name if place else "place")
+            await ctx.sleep(self._say(RESPONSE_FOR_TALK[kind], place.name if place else "place"))
         if kind is TalkKind.OFFER_GUIDE and place is not None:
             answer = await self._await_answer()
             if answer is Intent.YES:
-                self._say(ResponseType.CONFIRM, place.name)
+                await ctx.sleep(self._say(ResponseType.CONFIRM, place.name))
                 self.requested, self.guiding = place, True
                 self.publish_event("navigation_command")
                 await ctx.wait_forever()
             if answer is Intent.NO:
-                self._say(ResponseType.DECLINED, place.name)
+                await ctx.sleep(self._say(ResponseType.DECLINED, place.name))
         if ctx.previous_state == "conversation":
             self.publish_event("navigation_feedback_completed")
             await ctx.wait_forever()
 
     async def _await_answer(self) -> Intent | None:
-        self._answer = self.node.clock.loop.create_future()
+        if self._answer is None:
+            self._answer = self.node.clock.loop.create_future()
         try:
             return await asyncio.wait_for(self._answer, self.answer_timeout)
         except TimeoutError:
