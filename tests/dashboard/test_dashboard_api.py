@@ -14,7 +14,15 @@ from aiohttp import ClientSession
 
 from cyborg.controller.config import load_config
 from cyborg.interfaces.api import RobotAPI
-from cyborg.interfaces.dashboard import MAP_COLOURS, NO_BASE, png_bytes, register, route_points
+from cyborg.interfaces.dashboard import (
+    MAP_COLOURS,
+    NO_BASE,
+    png_bytes,
+    pooled_grid,
+    register,
+    remaining_route,
+    route_points,
+)
 from cyborg.sim.maps import Cell, KeepOutZone, NamedPose, OccupancyMap
 from cyborg.sim.robot import Robot, build_robot
 from cyborg.transport.clock import RealClock
@@ -38,6 +46,9 @@ class FakeBase:
     def __init__(self, occupancy: OccupancyMap, route: Any) -> None:
         self.map = occupancy
         self.route = route
+        self.x: float | None = None
+        self.y: float | None = None
+        self.theta: float | None = None
 
 
 def small_map() -> OccupancyMap:
@@ -180,8 +191,18 @@ def test_map_route_and_png_with_a_base(tmp_path: Path) -> None:
         assert tuple(colours[0, 5]) == MAP_COLOURS[Cell.UNKNOWN] and MAP_COLOURS[Cell.UNKNOWN][3] == 0
         assert tuple(colours[1, 1]) == MAP_COLOURS[Cell.FREE]
 
+        status, small = await fetch(info["image"] + "?max=16")
+        assert status == 200 and read_png(small)[0].shape == (4, 6), "already small enough: not shrunk"
+        status, problem = await fetch(info["image"] + "?max=big")
+        assert status == 400 and b"whole number" in problem
+
         status, route = await fetch("/api/route")
         assert status == 200 and route["route"] == [[0.0, 0.0], [1.0, -0.5]] and route["pose"] is None
+        assert route["remaining"] == route["route"] and route["path_state"] is None
+        base.x, base.y, base.theta = 0.5, -0.25, 0.1  # the base shows its live pose: it wins
+        route = (await fetch("/api/route"))[1]
+        assert {k: route["pose"][k] for k in ("x", "y", "theta")} == {"x": 0.5, "y": -0.25, "theta": 0.1}
+        assert route["remaining"] == [[0.5, -0.25], [1.0, -0.5]]
         base.route = None
         assert (await fetch("/api/route"))[1]["route"] is None
         assert (await fetch("/api/health"))[1]["has_base"] is True
@@ -196,6 +217,25 @@ def test_route_points_accepts_lists_and_route_objects() -> None:
     assert route_points(Route()) == [[0.0, 1.0], [2.5, 3.0]]
     assert route_points([(1, 2), (float("nan"), 0)]) == [[1.0, 2.0]]
     assert route_points(None) is None and route_points(42) is None
+
+
+def test_remaining_route_starts_at_the_nearest_point_of_the_nearest_leg() -> None:
+    route = [[0.0, 0.0], [4.0, 0.0], [4.0, 4.0]]
+    assert remaining_route(route, (1.0, 0.2)) == [[1.0, 0.0], [4.0, 0.0], [4.0, 4.0]]
+    assert remaining_route(route, (4.1, 3.0)) == [[4.0, 3.0], [4.0, 4.0]]
+    assert remaining_route(route, (9.0, 9.0)) == [[4.0, 4.0]]
+    assert remaining_route([[1.0, 1.0]], (0.0, 0.0)) == [[1.0, 1.0]]
+
+
+def test_pooled_grid_keeps_thin_walls_and_pads_with_unknown() -> None:
+    grid = np.zeros((5, 5), dtype=np.uint8)
+    grid[2, :] = Cell.OCCUPIED  # a wall one cell thick
+    grid[4, 4] = Cell.UNKNOWN
+    pooled = pooled_grid(grid, 2)
+    assert pooled.shape == (3, 3)
+    assert (pooled[1] == Cell.OCCUPIED).all() and (pooled[0] == Cell.FREE).all()
+    assert pooled[2, 2] == Cell.UNKNOWN and pooled[2, 0] == Cell.FREE
+    assert pooled_grid(grid, 1) is grid
 
 
 def test_png_bytes_refuses_values_outside_the_palette() -> None:

@@ -11,7 +11,9 @@ Register it with :func:`register` (``cyborg.interfaces.serve.EXTENSIONS`` does).
 
 from __future__ import annotations
 
+import asyncio
 import dataclasses
+import itertools
 import math
 import struct
 import zlib
@@ -67,14 +69,36 @@ def png_bytes(grid: NDArray[np.uint8], palette: Sequence[tuple[int, int, int, in
     )
 
 
-def map_png(occupancy: OccupancyMap) -> bytes:
-    """The occupancy grid as a PNG, north (largest y) up: image row 0 is the grid's last row."""
+def pooled_grid(grid: NDArray[np.uint8], factor: int) -> NDArray[np.uint8]:
+    """Shrink ``grid`` by ``factor`` in both directions, keeping thin walls: a block is OCCUPIED if
+    any of its cells is, else FREE if any is, else UNKNOWN. Edges are padded with UNKNOWN cells."""
+    if factor <= 1:
+        return grid
+    rows, cols = grid.shape
+    padded = np.full((-(-rows // factor) * factor, -(-cols // factor) * factor), Cell.UNKNOWN, dtype=np.uint8)
+    padded[:rows, :cols] = grid
+    blocks = padded.reshape(padded.shape[0] // factor, factor, padded.shape[1] // factor, factor)
+    occupied = (blocks == Cell.OCCUPIED).any(axis=(1, 3))
+    free = (blocks == Cell.FREE).any(axis=(1, 3))
+    pooled = np.full(occupied.shape, Cell.UNKNOWN, dtype=np.uint8)
+    pooled[free] = Cell.FREE
+    pooled[occupied] = Cell.OCCUPIED
+    return pooled
+
+
+def map_png(occupancy: OccupancyMap, factor: int = 1) -> bytes:
+    """The occupancy grid as a PNG, north (largest y) up: image row 0 is the grid's last row.
+
+    With ``factor`` > 1 each pixel covers factor x factor cells (see :func:`pooled_grid`); the
+    image's lower-left corner stays at the map's origin.
+    """
     order = [Cell.FREE, Cell.OCCUPIED, Cell.UNKNOWN]
     index = np.zeros(256, dtype=np.uint8)
+    index[:] = order.index(Cell.UNKNOWN)  # anything unexpected shows as unknown
     for i, cell in enumerate(order):
         index[int(cell)] = i
-    index[max(order) + 1 :] = order.index(Cell.UNKNOWN)  # anything unexpected shows as unknown
-    return png_bytes(index[occupancy.grid[::-1]], [MAP_COLOURS[cell] for cell in order])
+    grid = pooled_grid(occupancy.grid, factor)
+    return png_bytes(index[grid[::-1]], [MAP_COLOURS[cell] for cell in order])
 
 
 def _finite(value: Any) -> float | None:
@@ -110,7 +134,7 @@ class Dashboard:
         self.clock = robot.controller.node.clock
         self.state_since = self.clock.monotonic()
         self.left_at: dict[str, float] = {}  # module name -> when one of its states was last left
-        self._png: tuple[OccupancyMap, bytes] | None = None
+        self._png: dict[tuple[OccupancyMap, int], bytes] = {}  # (map, cells per pixel) -> PNG
         self._module_of = self._modules_by_action()
         robot.controller.add_state_listener(self._on_state_change)
 
@@ -246,26 +270,81 @@ class Dashboard:
         )
 
     async def map_image(self, request: web.Request) -> web.Response:
+        """The grid as a PNG; ``?max=N`` shrinks it to at most N pixels a side (walls kept)."""
         occupancy = self._map()
         if occupancy is None:
             raise web.HTTPNotFound(text=NO_BASE)
-        if self._png is None or self._png[0] is not occupancy:
-            self._png = (occupancy, map_png(occupancy))
-        return web.Response(body=self._png[1], content_type="image/png")
+        factor = 1
+        if "max" in request.query:
+            try:
+                limit = int(request.query["max"])
+            except ValueError:
+                raise web.HTTPBadRequest(
+                    text="'max' must be a whole number of pixels, e.g. ?max=800"
+                ) from None
+            if limit < 16:
+                raise web.HTTPBadRequest(text=f"'max' must be at least 16 pixels, got {limit}")
+            factor = max(1, math.ceil(max(occupancy.shape) / limit))
+        key = (occupancy, factor)
+        if key not in self._png:
+            if len(self._png) > 8:
+                self._png.clear()
+            loop = asyncio.get_running_loop()
+            self._png[key] = await loop.run_in_executor(None, map_png, occupancy, factor)
+        return web.Response(
+            body=self._png[key],
+            content_type="image/png",
+            headers={"X-Cells-Per-Pixel": str(factor), "Cache-Control": "no-cache"},
+        )
 
     async def route(self, request: web.Request) -> web.Response:
         base = self._base()
         if self._map() is None:
             return web.json_response({"error": NO_BASE, "has_base": False}, status=404)
-        pose = next((r for r in reversed(self.api.records) if r["type"] == "pose"), None)
+        pose = self._pose(base)
+        planned = route_points(getattr(base, "route", None))
+        path_state = getattr(base, "path_state", None)
         return web.json_response(
             {
                 "has_base": True,
                 "t": self._robot_time(),
-                "route": route_points(getattr(base, "route", None)),
-                "pose": {k: pose[k] for k in ("t", "x", "y", "theta")} if pose else None,
+                "pose": pose,
+                "route": planned,
+                "remaining": remaining_route(planned, (pose["x"], pose["y"]))
+                if planned and pose
+                else planned,
+                "path_state": getattr(path_state, "value", path_state),
+                "wandering": getattr(base, "wandering", None),
+                "distance_travelled": _finite(getattr(base, "distance_travelled", None)),
             }
         )
+
+    def _pose(self, base: Any) -> dict[str, float] | None:
+        """The base's live pose if it shows one, else the last pose record (those come at most 1/s)."""
+        live = [_finite(getattr(base, key, None)) for key in ("x", "y", "theta")]
+        if all(value is not None for value in live):
+            x, y, theta = (float(value) for value in live if value is not None)
+            return {"t": self._robot_time(), "x": x, "y": y, "theta": theta}
+        record = next((r for r in reversed(self.api.records) if r["type"] == "pose"), None)
+        return {k: record[k] for k in ("t", "x", "y", "theta")} if record else None
+
+
+def remaining_route(route: list[list[float]], position: tuple[float, float]) -> list[list[float]]:
+    """The part of ``route`` still ahead of ``position``: from there on along the nearest leg."""
+    if len(route) < 2:
+        return route
+    best, best_index, best_point = math.inf, 0, list(position)
+    for index, (a, b) in enumerate(itertools.pairwise(route)):
+        dx, dy = b[0] - a[0], b[1] - a[1]
+        length2 = dx * dx + dy * dy
+        u = 0.0 if length2 == 0 else ((position[0] - a[0]) * dx + (position[1] - a[1]) * dy) / length2
+        u = min(1.0, max(0.0, u))
+        point = [a[0] + u * dx, a[1] + u * dy]
+        distance = math.dist(point, position)
+        if distance < best - 1e-9:
+            best, best_index, best_point = distance, index, point
+    ahead = [[round(best_point[0], 3), round(best_point[1], 3)], *route[best_index + 1 :]]
+    return ahead[1:] if len(ahead) > 1 and ahead[0] == ahead[1] else ahead
 
 
 def register(api: RobotAPI, robot: Robot) -> None:

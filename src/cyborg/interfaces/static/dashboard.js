@@ -45,6 +45,8 @@
     map: null,
     mapImage: null,
     route: null,
+    remaining: null,
+    pathState: null,
     pose: null,
     trail: [],
     drawQueued: false,
@@ -180,8 +182,8 @@
   function highlightGraph() {
     const box = $("graph");
     const s = dash.status;
-    box.querySelectorAll(".active, .active-parent, .last").forEach((node) => {
-      node.classList.remove("active", "active-parent", "last");
+    box.querySelectorAll(".active, .active-parent, .last, .valid").forEach((node) => {
+      node.classList.remove("active", "active-parent", "last", "valid");
     });
     if (!s.state) return;
     const node = document.getElementById(`state:${s.state}`);
@@ -189,6 +191,10 @@
     for (let parent = dash.parents[s.state]; parent; parent = dash.parents[parent]) {
       const cluster = document.getElementById(`super:${parent}`);
       if (cluster) cluster.classList.add("active-parent");
+    }
+    // The transitions the active state (or a superstate around it) can take now.
+    for (let from = s.state; from; from = dash.parents[from]) {
+      box.querySelectorAll(`g.edge[id^="edge:${CSS.escape(from)}:"]`).forEach((edge) => edge.classList.add("valid"));
     }
     // The transition may belong to the state left or to a superstate around it.
     for (let from = s.previous_state; from && s.event; from = dash.parents[from]) {
@@ -311,7 +317,7 @@
 
   function drawPlot() {
     const { ctx, w, h } = fitCanvas($("pad-plot"));
-    const pad = { l: 28, r: 8, t: 8, b: 16 };
+    const pad = { l: 28, r: 8, t: 20, b: 16 };
     const history = dash.history;
     const now = Math.max(dash.t, history.length ? history[history.length - 1].t : 0);
     // The window grows with the data, from one minute up to PLOT_WINDOW.
@@ -341,6 +347,16 @@
     for (let ago = 0; ago <= window_; ago += step) {
       const label = ago === 0 ? "now" : step < 60 ? `-${ago}s` : `-${ago / 60}m`;
       ctx.fillText(label, Math.min(Math.max(x(now - ago), pad.l + 12), w - pad.r - 12), h - pad.b + 3);
+    }
+    ctx.textAlign = "left";
+    ctx.textBaseline = "middle";
+    let lx = pad.l + 6;
+    for (const [, label, colour] of SERIES) {
+      ctx.fillStyle = colour;
+      ctx.fillRect(lx, 8, 10, 3);
+      ctx.fillStyle = "#aeb5c2";
+      ctx.fillText(label, lx + 13, 10);
+      lx += 20 + ctx.measureText(label).width;
     }
     const points = history;
     if (!points.length) return;
@@ -470,36 +486,49 @@
   async function loadMap() {
     try {
       const info = await getJSON("/api/map");
-      const image = new Image();
-      image.onload = () => {
-        dash.mapImage = image;
-        scheduleDraw();
-      };
-      image.src = info.image;
       dash.map = info;
+      await loadMapImage();
       $("map-message").hidden = true;
       $("map-caption").textContent =
         `${info.source || "map"} · ${info.size_m[0].toFixed(0)} × ${info.size_m[1].toFixed(0)} m · ${info.locations.length} places`;
-      await refreshRoute();
     } catch (error) {
       $("map-message").hidden = false;
       $("map-message").firstElementChild.textContent = `The map cannot be shown: ${error.message}`;
     }
   }
 
+  // The grid image, shrunk by the robot to about the canvas's size in device pixels (walls kept).
+  async function loadMapImage() {
+    const canvas = $("map");
+    const wanted = Math.ceil(Math.max(canvas.clientWidth, canvas.clientHeight, 100) * (window.devicePixelRatio || 1));
+    if (dash.mapImage && dash.mapImage.wanted >= wanted) return;
+    const response = await fetch(`${dash.map.image}?max=${wanted}`, { cache: "no-store" });
+    if (!response.ok) throw new Error(`${dash.map.image}: HTTP ${response.status} ${await response.text()}`);
+    const perPixel = Number(response.headers.get("X-Cells-Per-Pixel") || "1");
+    const bitmap = await createImageBitmap(await response.blob());
+    dash.mapImage = { bitmap, perPixel, wanted };
+    scheduleDraw();
+  }
+
   async function refreshRoute() {
-    if (!dash.map) return;
-    try {
-      const data = await getJSON("/api/route");
-      dash.route = data.route;
-      if (data.pose && (!dash.pose || data.pose.t > dash.pose.t)) applyPose(data.pose);
-      scheduleDraw();
-    } catch (error) {
-      // The base may be restarting; the next poll tries again.
+    if (dash.map) {
+      try {
+        const data = await getJSON("/api/route");
+        dash.route = data.route;
+        dash.remaining = data.remaining;
+        dash.pathState = data.path_state;
+        if (data.pose) applyPose(data.pose);
+        updatePoseText();
+        scheduleDraw();
+      } catch (error) {
+        // The base may be restarting; the next poll tries again.
+      }
     }
+    setTimeout(refreshRoute, dash.route ? 400 : 1000); // closer look while the robot drives
   }
 
   function applyPose(pose) {
+    if (dash.pose && pose.t < dash.pose.t) return;
     dash.pose = pose;
     const last = dash.trail[dash.trail.length - 1];
     if (!last || last.x !== pose.x || last.y !== pose.y) dash.trail.push(pose);
@@ -512,7 +541,7 @@
     const p = dash.pose;
     if (!p) return;
     let text = `pose: x ${p.x.toFixed(2)} m, y ${p.y.toFixed(2)} m, heading ${((p.theta * 180) / Math.PI).toFixed(0)}°`;
-    const route = dash.route;
+    const route = dash.remaining;
     if (route && route.length) {
       let left = 0;
       let from = [p.x, p.y];
@@ -520,10 +549,11 @@
         left += Math.hypot(point[0] - from[0], point[1] - from[1]);
         from = point;
       }
-      text += ` · route ${route.length} waypoints, ${left.toFixed(1)} m to go`;
+      text += ` · ${left.toFixed(1)} m to go`;
     } else {
       text += " · no route";
     }
+    if (dash.pathState) text += ` · ${dash.pathState}`;
     $("map-pose").textContent = text;
   }
 
@@ -542,8 +572,11 @@
     const px = (x) => ox + (x - x0) * scale;
     const py = (y) => oy + (y0 + height - y) * scale;
     if (dash.mapImage) {
-      ctx.imageSmoothingEnabled = true;
-      ctx.drawImage(dash.mapImage, ox, oy, width * scale, height * scale);
+      // Each image pixel covers perPixel x perPixel cells; the image's lower-left corner is the origin.
+      const { bitmap, perPixel } = dash.mapImage;
+      const cell = m.resolution * perPixel * scale;
+      ctx.imageSmoothingEnabled = false;
+      ctx.drawImage(bitmap, ox, py(y0 + bitmap.height * m.resolution * perPixel), bitmap.width * cell, bitmap.height * cell);
     }
     for (const zone of m.keep_out) {
       ctx.beginPath();
@@ -560,6 +593,8 @@
     ctx.font = "10px system-ui, sans-serif";
     ctx.textAlign = "left";
     ctx.textBaseline = "middle";
+    const placed = []; // label boxes so far: a label goes where it covers no other
+    const overlaps = (b) => placed.some((o) => b.x < o.x + o.w && o.x < b.x + b.w && b.y < o.y + o.h && o.y < b.y + b.h);
     for (const place of m.locations) {
       const x = px(place.x);
       const y = py(place.y);
@@ -571,12 +606,20 @@
       ctx.lineTo(x - 4, y);
       ctx.closePath();
       ctx.fill();
-      ctx.fillStyle = "rgba(18, 21, 26, 0.75)";
-      const label = place.name;
-      const tw = ctx.measureText(label).width;
-      ctx.fillRect(x + 6, y - 6, tw + 4, 12);
+      placed.push({ x: x - 4, y: y - 4, w: 8, h: 8 });
+    }
+    for (const place of m.locations) {
+      const x = px(place.x);
+      const y = py(place.y);
+      const tw = ctx.measureText(place.name).width + 4;
+      const spots = [[x + 6, y - 6], [x - 6 - tw, y - 6], [x - tw / 2, y - 19], [x - tw / 2, y + 7]];
+      const boxes = spots.map(([bx, by]) => ({ x: bx, y: by, w: tw, h: 12 }));
+      const box = boxes.find((b) => !overlaps(b)) || boxes[0];
+      placed.push(box);
+      ctx.fillStyle = "rgba(18, 21, 26, 0.72)";
+      ctx.fillRect(box.x, box.y, box.w, box.h);
       ctx.fillStyle = "#d8ccff";
-      ctx.fillText(label, x + 8, y);
+      ctx.fillText(place.name, box.x + 2, box.y + 6);
     }
     if (dash.trail.length > 1) {
       ctx.strokeStyle = "rgba(110, 168, 254, 0.45)";
@@ -587,14 +630,18 @@
     }
     const pose = dash.pose;
     const route = dash.route;
-    if (route && route.length) {
-      ctx.strokeStyle = "#4cc38a";
-      ctx.lineWidth = 2;
-      ctx.setLineDash([6, 4]);
+    const line = (points) => {
       ctx.beginPath();
-      const points = pose ? [[pose.x, pose.y], ...route] : route;
       points.forEach(([x, y], i) => (i ? ctx.lineTo(px(x), py(y)) : ctx.moveTo(px(x), py(y))));
       ctx.stroke();
+    };
+    if (route && route.length) {
+      ctx.strokeStyle = "rgba(76, 195, 138, 0.35)"; // the whole planned route
+      ctx.lineWidth = 2;
+      line(route);
+      ctx.strokeStyle = "#4cc38a"; // what is still ahead
+      ctx.setLineDash([6, 4]);
+      line(dash.remaining && dash.remaining.length ? dash.remaining : route);
       ctx.setLineDash([]);
       const [gx, gy] = route[route.length - 1];
       ctx.fillStyle = "#4cc38a";
@@ -699,7 +746,10 @@
     switch (r.type) {
       case "state":
         applyStatus({ state: r.to, previous_state: r.from, event: r.event });
-        if (!dash.syncing) refreshStatus();
+        if (!dash.syncing) {
+          refreshStatus();
+          refreshHealth();
+        }
         break;
       case "emotion":
         dash.history.push({ t: r.t, p: r.pleasure, a: r.arousal, d: r.dominance });
@@ -793,7 +843,10 @@
       }
     });
     document.querySelectorAll(".log-filters input").forEach((input) => input.addEventListener("input", renderLog));
-    window.addEventListener("resize", scheduleDraw);
+    window.addEventListener("resize", () => {
+      scheduleDraw();
+      if (dash.map) loadMapImage().catch(() => {});
+    });
   }
 
   async function start() {
@@ -802,7 +855,7 @@
     connect();
     await refreshHealth();
     setInterval(refreshHealth, 1000);
-    setInterval(refreshRoute, 1000);
+    refreshRoute();
     setInterval(scheduleDraw, 1000);
   }
 
