@@ -44,6 +44,7 @@ from cyborg.transport.messages import (
     PoseStamped,
     PoseWithCovarianceStamped,
     Quaternion,
+    SystemState,
 )
 
 log = logging.getLogger(__name__)
@@ -55,7 +56,8 @@ TALKING_ACTION = "cyborg_navigation/talking"
 MOVING_FEEDBACK = (0.0, 0.03, 0.01)
 WANDERING_FEEDBACK = (0.02, 0.05, 0.02)
 ARRIVAL_PLEASURE_SCALE = 0.125  # pleasantness 0.8 -> +0.1 pleasure on arrival
-AT_PLACE_DISTANCE = 1.0
+AT_PLACE_DISTANCE = 3.0
+OWN_STATES = frozenset({"navigation_planning", "navigation_moving", "navigation_talking"})
 
 
 class NavigationModule(BehaviourModule):
@@ -68,7 +70,7 @@ class NavigationModule(BehaviourModule):
         *,
         rng: random.Random,
         scheduler_interval: float = 10.0,
-        scheduler_repeat: float = 60.0,
+        scheduler_repeat: float = 20.0,
         answer_timeout: float = 20.0,
         feedback_interval: float = 15.0,
         wander_limit: float = 600.0,
@@ -92,11 +94,14 @@ class NavigationModule(BehaviourModule):
         self.arrived_at: Location | None = None
         self.failed_target: Location | None = None
         self.last_scheduler_event = -math.inf
+        self.system_state = ""
+        self.wandering_now = False
         self._answer: asyncio.Future[Intent] | None = None
         self.move_base = node.action_client(topics.MOVE_BASE, MoveBaseAction)
         self.wander = node.service_proxy(topics.WANDER, EmptyService)
         self.stop = node.service_proxy(topics.STOP, EmptyService)
         node.subscribe(topics.AMCL_POSE, PoseWithCovarianceStamped, self._on_pose, queue_size=10)
+        node.subscribe(topics.STATE_CHANGE, SystemState, self._on_state_change)
         self.on_speech_text(self._on_text)
         self.serve(PLANNING_ACTION, self.planning)
         self.serve(MOVING_ACTION, self.moving)
@@ -104,6 +109,9 @@ class NavigationModule(BehaviourModule):
         node.clock.call_later(scheduler_interval, self._scheduler_tick)
 
     # --- inputs ------------------------------------------------------------------------
+
+    def _on_state_change(self, message: SystemState, info: MessageInfo) -> None:
+        self.system_state = message.to_system_state
 
     def _on_pose(self, message: PoseWithCovarianceStamped, info: MessageInfo) -> None:
         self.pose = (message.pose.position.x, message.pose.position.y)
@@ -156,8 +164,9 @@ class NavigationModule(BehaviourModule):
             place.tolerance, AT_PLACE_DISTANCE
         )
         heading_there = self.heading_to is not None and self.heading_to.name == place.name
+        busy = self.system_state in OWN_STATES and not self.wandering_now  # never interrupt a user's errand
         now = self.node.clock.monotonic()
-        if at_place or heading_there or now - self.last_scheduler_event < self.scheduler_repeat:
+        if at_place or heading_there or busy or now - self.last_scheduler_event < self.scheduler_repeat:
             return
         self.last_scheduler_event = now
         log.info("calendar: the robot should be at %s now", place.name)
@@ -238,6 +247,7 @@ class NavigationModule(BehaviourModule):
     async def _wander(self, ctx: GoalContext) -> None:
         await self.wander.call(timeout=5.0)
         started = self.node.clock.monotonic()
+        self.wandering_now = True
         try:
             while True:
                 await ctx.sleep(self.feedback_interval)
@@ -246,6 +256,7 @@ class NavigationModule(BehaviourModule):
                 if should_stop_wandering(self.emotion) or long_enough:
                     break
         finally:
+            self.wandering_now = False
             await self._stop_base()
         self.publish_event("navigation_wandering_completed")
         await ctx.wait_forever()

@@ -80,7 +80,7 @@ class TtsSettings(KindSettings):
 class NavigationSettings(KindSettings):
     db: str | None = Field(None, description="navigation database (default: <data dir>/navigation.db)")
     scheduler_interval: float = Field(10.0, gt=0)
-    scheduler_repeat: float = Field(60.0, gt=0)
+    scheduler_repeat: float = Field(20.0, gt=0)
     answer_timeout: float = Field(20.0, gt=0)
     feedback_interval: float = Field(15.0, gt=0)
     wander_limit: float = Field(600.0, gt=0)
