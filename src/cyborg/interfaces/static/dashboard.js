@@ -275,12 +275,14 @@
       const row = el("tr", m.active ? "active" : "");
       row.dataset.module = m.name;
       row.append(el("td", "", m.name));
-      row.append(el("td", "muted", m.states.join(", ") || "–"));
+      const states = el("td", "muted", m.states.join(", ") || "–");
+      states.title = m.states.join(", ");
+      row.append(states);
       const goal = el("td");
       if (m.goal_status) goal.append(el("span", `goal goal-${m.goal_status}`, m.goal_status.toLowerCase()));
       else goal.append(el("span", "muted", m.states.length ? "idle" : "–"));
       row.append(goal);
-      const since = m.active ? `active ${health.seconds_in_state.toFixed(0)} s` : (m.states.length ? fmtAgo(m.seconds_since_active) : "");
+      const since = m.active ? `for ${health.seconds_in_state.toFixed(0)} s` : (m.states.length ? fmtAgo(m.seconds_since_active) : "");
       row.append(el("td", "", since));
       body.append(row);
     }
@@ -406,7 +408,11 @@
     ctx.font = "10px system-ui, sans-serif";
     ctx.textAlign = "center";
     const prototypes = { neutral: [0, 0, 0], ...dash.prototypes };
-    const placed = []; // label boxes drawn so far, to keep labels from covering each other
+    const placed = []; // label boxes drawn so far (and the current point), to keep labels clear
+    if (dash.emotion) {
+      const r = radius(dash.emotion.d) + 3;
+      placed.push({ x: x(dash.emotion.p) - r, y: y(dash.emotion.a) - r, w: 2 * r, h: 2 * r });
+    }
     const overlaps = (box) => placed.some((b) => box.x < b.x + b.w && b.x < box.x + box.w && box.y < b.y + b.h && b.y < box.y + box.h);
     ctx.textBaseline = "middle";
     for (const [name, [p, a, d]] of Object.entries(prototypes)) {
@@ -652,7 +658,7 @@
     if (pose) {
       const x = px(pose.x);
       const y = py(pose.y);
-      const r = Math.max(5, 0.35 * scale);
+      const r = Math.max(6, 0.35 * scale);
       ctx.fillStyle = "#6ea8fe";
       ctx.strokeStyle = "#ffffff";
       ctx.lineWidth = 2;
