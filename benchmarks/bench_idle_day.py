@@ -65,7 +65,9 @@ def main() -> None:
     print("|---|---|")
     print(f"| virtual time simulated | {hours} h |")
     print(f"| wall time | {wall:.2f} s ({hours * 3600 / wall:,.0f}x real time) |")
-    print(f"| motivator choices | {total} ({', '.join(f'{k} {v / total:.0%}' for k, v in chosen.most_common())}) |")
+    print(
+        f"| motivator choices | {total} ({', '.join(f'{k} {v / total:.0%}' for k, v in chosen.most_common())}) |"
+    )
     print(f"| longest idle spell | {max(idle_spells):.0f} s |")
 
 
