@@ -37,38 +37,47 @@ CYBORG = [sys.executable, "-m", "cyborg.interfaces.cli"]
 NOTHING = "\u2013"  # what the page shows before it knows a value
 
 
+class Sim:
+    """One `cyborg sim` process with the packaged Cyborg; its output goes to a file (never blocks)."""
+
+    def __init__(self, data: Path, port: int = 0) -> None:
+        data.mkdir(parents=True, exist_ok=True)
+        self.output = data / "sim.log"
+        with self.output.open("w") as out:
+            self.process = subprocess.Popen(
+                [*CYBORG, "sim", "--port", str(port), "--db", str(data), "--speed", SPEED],
+                stdout=out,
+                stderr=subprocess.STDOUT,
+                env={**os.environ, "PYTHONUNBUFFERED": "1"},
+            )
+        deadline = time.monotonic() + 20
+        match = None
+        while match is None and time.monotonic() < deadline and self.process.poll() is None:
+            time.sleep(0.05)
+            match = re.search(r"(http://127\.0\.0\.1:(\d+))/", self.output.read_text())
+        if match is None:
+            self.stop()
+            pytest.fail("`cyborg sim` did not print its address; its output:\n" + self.output.read_text())
+        self.url = match.group(1)
+        self.port = int(match.group(2))
+
+    def stop(self) -> None:
+        self.process.terminate()
+        try:
+            self.process.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+            self.process.wait()
+
+
 @pytest.fixture(scope="module")
 def sim(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
-    """`cyborg sim` with the packaged Cyborg on a free port; yields its base URL."""
-    data = tmp_path_factory.mktemp("dashboard-data")
-    process = subprocess.Popen(
-        [*CYBORG, "sim", "--port", "0", "--db", str(data), "--speed", SPEED],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-        env={**os.environ, "PYTHONUNBUFFERED": "1"},
-    )
-    assert process.stdout is not None
-    url, seen = None, []
-    deadline = time.monotonic() + 20
-    while url is None and time.monotonic() < deadline:
-        line = process.stdout.readline()
-        if not line:
-            break
-        seen.append(line)
-        match = re.search(r"(http://127\.0\.0\.1:\d+)/", line)
-        url = match.group(1) if match else None
-    if url is None:
-        process.kill()
-        pytest.fail("`cyborg sim` did not print its address; its output:\n" + "".join(seen))
+    """The robot all page tests share; yields its base URL."""
+    robot = Sim(tmp_path_factory.mktemp("dashboard-data"))
     try:
-        yield url
+        yield robot.url
     finally:
-        process.terminate()
-        try:
-            process.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            process.kill()
+        robot.stop()
 
 
 @pytest.fixture(scope="module")
@@ -124,6 +133,10 @@ def go_idle(page: Page, sim: str) -> None:
     raise AssertionError(f"the robot did not get back to idle; it is in {status['state']}")
 
 
+def visible_log_types(page: Page) -> set[str]:
+    return set(page.locator("#log li").evaluate_all("rows => rows.map(r => r.dataset.type)"))
+
+
 def log_entries(page: Page, kind: str) -> list[str]:
     return page.locator(f'#log li[data-type="{kind}"] .text').all_inner_texts()
 
@@ -177,6 +190,29 @@ def test_chat_leads_to_speech_in_the_log(page: Page) -> None:
     page.wait_for_timeout(300)
     page.screenshot(path=str(SHOTS / "cyborg-dashboard-chat.png"))
 
+    # The log's filters: by type (checkboxes) and by text.
+    assert {"state", "say", "heard"} <= visible_log_types(page)
+    page.locator('.log-filters input[data-type="say"]').uncheck()
+    assert "say" not in visible_log_types(page) and "heard" in visible_log_types(page)
+    page.locator('.log-filters input[data-type="say"]').check()
+    page.fill("#log-text", "cafeteria")
+    texts = page.locator("#log li .text").all_inner_texts()
+    assert texts and all("cafeteria" in text.lower() for text in texts)
+    page.fill("#log-text", "")
+    assert "state" in visible_log_types(page)
+
+
+def test_emotion_set_and_switch(page: Page, sim: str) -> None:
+    page.select_option("#emotion-select", "happy")
+    page.click("#emotion-set")
+    expect(page.locator("#emotion-name")).to_have_text("happy")
+    expect(page.locator("#val-p")).to_have_text("+0.50")
+    page.locator("#emotion-switch").uncheck()
+    expect(page.locator("#emotion-switch-state")).to_have_text("switched off")
+    assert page.request.get(sim + "/api/health").json()["emotion_enabled"] is False
+    page.locator("#emotion-switch").check()
+    expect(page.locator("#emotion-switch-state")).to_have_text("")
+
 
 def robot_dot(page: Page) -> tuple[float, float]:
     where = page.locator("#map").get_attribute("data-robot")
@@ -204,3 +240,26 @@ def test_robot_moves_on_the_map(page: Page, sim: str) -> None:
         page.wait_for_timeout(200)
     assert abs(now[0] - start[0]) + abs(now[1] - start[1]) > 5, f"the dot stayed at {start}"
     page.screenshot(path=str(SHOTS / "cyborg-dashboard-map.png"))
+
+
+def test_page_reconnects_when_the_robot_restarts(browser: Browser, tmp_path: Path) -> None:
+    first = Sim(tmp_path / "first")
+    context = browser.new_context(viewport={"width": 1400, "height": 900})
+    try:
+        page = context.new_page()
+        page.set_default_timeout(15_000)
+        page.goto(first.url + "/")
+        expect(page.locator("#conn")).to_have_attribute("data-state", "open")
+        first.stop()
+        expect(page.locator("#conn")).to_have_attribute("data-state", "closed")
+        expect(page.locator("#conn-text")).to_contain_text("reconnecting")
+        second = Sim(tmp_path / "second", port=first.port)
+        try:
+            expect(page.locator("#conn")).to_have_attribute("data-state", "open")
+            expect(page.locator("#top-state")).not_to_have_text(NOTHING)
+            page.wait_for_function("() => document.querySelector('#graph .node.active') !== null")
+        finally:
+            second.stop()
+    finally:
+        context.close()
+        first.stop()
