@@ -6,8 +6,8 @@
   p50, p95, max and count, for routes found and for pairs refused (different floors).
 
 With scikit-image installed it also times ``skimage.graph.MCP_Geometric`` on the same
-pairs, as the reference for route length. Prints a markdown table and writes it to
-docs/bench-planner.md.
+pairs, as the reference for route length. Prints a markdown table (paste it into
+docs/benchmarks.md, section "Route planning"); with --write also saves it to docs/bench-planner.md.
 
 Run: .venv/bin/python benchmarks/bench_planner.py
 """
@@ -140,7 +140,7 @@ def load_section(repeats: int) -> tuple[list[str], OccupancyMap, list[float]]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5, help="loads per map (default 5)")
-    parser.add_argument("--no-write", action="store_true", help=f"print only, do not write {REPORT.name}")
+    parser.add_argument("--write", action="store_true", help=f"also write {REPORT.name}")
     args = parser.parse_args()
 
     load_lines, glassgarden, _ = load_section(args.repeats)
@@ -180,7 +180,7 @@ def main() -> None:
     ]
     text = "\n".join(lines)
     print(text)
-    if not args.no_write:
+    if args.write:
         REPORT.write_text(text, encoding="utf-8")
         print(f"wrote {REPORT}")
 
