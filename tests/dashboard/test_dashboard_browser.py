@@ -21,6 +21,8 @@ from pathlib import Path
 import pytest
 from playwright.sync_api import Browser, ConsoleMessage, Page, expect, sync_playwright
 
+from cyborg.interfaces.cli import packaged_config
+
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = [
     "--no-sandbox",
@@ -40,12 +42,13 @@ NOTHING = "\u2013"  # what the page shows before it knows a value
 class Sim:
     """One `cyborg sim` process with the packaged Cyborg; its output goes to a file (never blocks)."""
 
-    def __init__(self, data: Path, port: int = 0) -> None:
+    def __init__(self, data: Path, port: int = 0, config: Path | None = None) -> None:
         data.mkdir(parents=True, exist_ok=True)
         self.output = data / "sim.log"
+        chosen = ["--config", str(config)] if config else []
         with self.output.open("w") as out:
             self.process = subprocess.Popen(
-                [*CYBORG, "sim", "--port", str(port), "--db", str(data), "--speed", SPEED],
+                [*CYBORG, "sim", "--port", str(port), "--db", str(data), "--speed", SPEED, *chosen],
                 stdout=out,
                 stderr=subprocess.STDOUT,
                 env={**os.environ, "PYTHONUNBUFFERED": "1"},
@@ -80,6 +83,21 @@ def sim(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
         robot.stop()
 
 
+def open_page(browser: Browser, url: str, errors: list[str]) -> Page:
+    """A 1400x900 page on ``url`` that appends its console errors to ``errors``."""
+    tab = browser.new_context(viewport={"width": 1400, "height": 900}).new_page()
+    tab.set_default_timeout(15_000)
+
+    def on_console(message: ConsoleMessage) -> None:
+        if message.type == "error":
+            errors.append(f"console: {message.text}")
+
+    tab.on("console", on_console)
+    tab.on("pageerror", lambda error: errors.append(f"page error: {error}"))
+    tab.goto(url)
+    return tab
+
+
 @pytest.fixture(scope="module")
 def browser() -> Iterator[Browser]:
     assert shutil.which(CHROMIUM), f"{CHROMIUM} is missing; fix: scripts/install-system-deps --test"
@@ -93,21 +111,11 @@ def browser() -> Iterator[Browser]:
 def page(browser: Browser, sim: str) -> Iterator[Page]:
     """The dashboard, loaded and live; the test fails if the page logs an error."""
     errors: list[str] = []
-    context = browser.new_context(viewport={"width": 1400, "height": 900})
-    tab = context.new_page()
-    tab.set_default_timeout(15_000)
-
-    def on_console(message: ConsoleMessage) -> None:
-        if message.type == "error":
-            errors.append(f"console: {message.text}")
-
-    tab.on("console", on_console)
-    tab.on("pageerror", lambda error: errors.append(f"page error: {error}"))
-    tab.goto(sim + "/")
+    tab = open_page(browser, sim + "/", errors)
     expect(tab.locator("#conn")).to_have_attribute("data-state", "open")
     expect(tab.locator("#graph svg")).to_be_visible()
     yield tab
-    context.close()
+    tab.context.close()
     assert not errors, "the page logged errors:\n" + "\n".join(errors)
 
 
@@ -244,11 +252,8 @@ def test_robot_moves_on_the_map(page: Page, sim: str) -> None:
 
 def test_page_reconnects_when_the_robot_restarts(browser: Browser, tmp_path: Path) -> None:
     first = Sim(tmp_path / "first")
-    context = browser.new_context(viewport={"width": 1400, "height": 900})
+    page = open_page(browser, first.url + "/", [])  # errors expected: the robot goes away for a while
     try:
-        page = context.new_page()
-        page.set_default_timeout(15_000)
-        page.goto(first.url + "/")
         expect(page.locator("#conn")).to_have_attribute("data-state", "open")
         first.stop()
         expect(page.locator("#conn")).to_have_attribute("data-state", "closed")
@@ -261,5 +266,26 @@ def test_page_reconnects_when_the_robot_restarts(browser: Browser, tmp_path: Pat
         finally:
             second.stop()
     finally:
-        context.close()
+        page.context.close()
         first.stop()
+
+
+def test_without_a_base_the_map_panel_says_so(browser: Browser, tmp_path: Path) -> None:
+    yaml = packaged_config("cyborg.yaml").read_text()
+    assert "rosarnl_node: {kind: simulated_base}" in yaml
+    config = tmp_path / "no-base.yaml"
+    config.write_text(yaml.replace("rosarnl_node: {kind: simulated_base}", ""))
+    robot = Sim(tmp_path / "data", config=config)
+    errors: list[str] = []
+    page = open_page(browser, robot.url + "/", errors)
+    try:
+        expect(page.locator("#conn")).to_have_attribute("data-state", "open")
+        expect(page.locator("#map-message")).to_be_visible()
+        expect(page.locator("#map-message")).to_contain_text("This robot has no simulated base")
+        expect(page.locator("#map-message")).to_contain_text("rosarnl_node: {kind: simulated_base}")
+        expect(page.locator("#map-caption")).to_have_text("no simulated base")
+        page.screenshot(path=str(SHOTS / "cyborg-dashboard-no-base.png"))
+    finally:
+        page.context.close()
+        robot.stop()
+    assert not errors, "the page logged errors:\n" + "\n".join(errors)
