@@ -480,9 +480,9 @@
     message.firstElementChild.replaceChildren(
       "This robot has no simulated base, so there is no map to show. To add one, put ",
       el("code", "", "rosarnl_node: {kind: simulated_base}"),
-      " under modules: in the robot's YAML (and pick a map with ",
+      " under modules: in the robot's YAML; it drives on the packaged campus map, or on one given with ",
       el("code", "", "cyborg sim --map FILE"),
-      ")."
+      "."
     );
     $("map-caption").textContent = "no simulated base";
     $("map-pose").textContent = "pose: – (no simulated base)";
