@@ -114,7 +114,7 @@ class NavigationModule(BehaviourModule):
         self.system_state = message.to_system_state
 
     def _on_pose(self, message: PoseWithCovarianceStamped, info: MessageInfo) -> None:
-        self.pose = (message.pose.position.x, message.pose.position.y)
+        self.pose = (message.pose.pose.position.x, message.pose.pose.position.y)
 
     def _on_text(self, text: str, info: MessageInfo) -> None:
         found = detect(text, self.db.matcher())

@@ -34,6 +34,7 @@ from cyborg.transport.messages import (
     MoveBaseResult,
     Pose,
     PoseStamped,
+    PoseWithCovariance,
     PoseWithCovarianceStamped,
     Quaternion,
     String,
@@ -122,7 +123,7 @@ class SimulatedBase:
 
     def _publish_pose(self) -> None:
         stamped = pose_stamped(self.x, self.y, self.theta, self.node.clock.now())
-        self._pose_pub.publish(PoseWithCovarianceStamped(stamped.header, stamped.pose))
+        self._pose_pub.publish(PoseWithCovarianceStamped(stamped.header, PoseWithCovariance(stamped.pose)))
 
     def _set_state(self, state: PathState) -> None:
         if state is not self.path_state:
@@ -216,10 +217,12 @@ class SimulatedBase:
             handle.abort(text=self._failure)
 
     def _on_cancel(self, handle: _MoveHandle) -> None:
+        if handle.status.is_terminal:
+            return  # finished already: a late cancel must not stop what the base does now (wandering)
         if handle is self._goal:
-            self._halt()  # the done callback acknowledges the cancel
-        if not handle.status.is_terminal and (self._goal is not handle or self._motion is None):
-            handle.canceled(text="stopped")
+            self._halt()
+            self._set_state(PathState.STOPPED)
+        handle.canceled(text="stopped")
 
     # --- wander / stop ------------------------------------------------------------------
 

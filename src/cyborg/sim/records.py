@@ -70,7 +70,7 @@ class RecordStream:
         self.emit("heard", text=m.data)
 
     def _on_pose(self, m: PoseWithCovarianceStamped, info: MessageInfo) -> None:
-        p = m.pose
+        p = m.pose.pose
         pose = (
             round(p.position.x, 3),
             round(p.position.y, 3),

@@ -156,12 +156,19 @@ class PoseStamped(Message):
 
 
 @dataclass
+class PoseWithCovariance(Message):
+    ros_type: ClassVar[str] = "geometry_msgs/PoseWithCovariance"
+    pose: Pose = field(default_factory=Pose)
+    covariance: list[float] = field(default_factory=lambda: [0.0] * 36)
+
+
+@dataclass
 class PoseWithCovarianceStamped(Message):
     """The base's localised pose (rosarnl's ``amcl_pose``); covariance left at zero."""
 
     ros_type: ClassVar[str] = "geometry_msgs/PoseWithCovarianceStamped"
     header: Header = field(default_factory=Header)
-    pose: Pose = field(default_factory=Pose)
+    pose: PoseWithCovariance = field(default_factory=PoseWithCovariance)
 
 
 @dataclass
