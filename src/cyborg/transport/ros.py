@@ -1,0 +1,677 @@
+"""The ROS 1 transport: the same interface over rospy and actionlib.
+
+Each process is one ROS node (rospy allows no more); the components it hosts
+are logical nodes sharing it, so their messages carry the process's node name
+as sender (from the connection header's caller id), as in the thesis where the
+controller, emotion system and motivator form the one node ``cyborg_controller``.
+
+rospy calls back on its own threads; every callback is handed to the clock's
+event loop with ``call_soon_threadsafe``, so components still run one callback
+at a time. Messages are converted field by field between our dataclasses and
+the generated ROS classes (the names are the same by design).
+
+This is the only module that imports rospy.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import dataclasses
+import importlib
+import inspect
+import logging
+import threading
+import time
+from collections import deque
+from collections.abc import Awaitable, Callable
+from typing import Any, Generic
+
+import actionlib  # type: ignore[import-not-found]
+import rospy  # type: ignore[import-not-found]
+
+from cyborg.errors import ServiceTimeoutError, ServiceUnavailableError, TransportError
+from cyborg.transport.base import (
+    DEFAULT_QUEUE_SIZE,
+    ActionClient,
+    ActionServer,
+    ClientGoalHandle,
+    F,
+    G,
+    GoalStatus,
+    M,
+    MessageInfo,
+    Node,
+    Publisher,
+    R,
+    Req,
+    Resp,
+    ServerGoalHandle,
+    ServiceProxy,
+    ServiceServer,
+    Subscription,
+    Transport,
+    normalize_node_name,
+)
+from cyborg.transport.clock import Clock
+from cyborg.transport.messages import ActionType, Message, ServiceType
+
+log = logging.getLogger(__name__)
+
+
+def _ask_for_tcp_nodelay() -> None:
+    """Make every subscriber (actionlib's own included) ask for TCP_NODELAY.
+
+    Without it small messages wait for Nagle's algorithm: about 40 ms stalls per handover.
+    """
+    original = rospy.topics.Subscriber.__init__
+    if getattr(original, "_cyborg_nodelay", False):
+        return
+
+    def init(self: Any, *args: Any, tcp_nodelay: bool = True, **kwargs: Any) -> None:
+        original(self, *args, tcp_nodelay=tcp_nodelay, **kwargs)
+
+    init._cyborg_nodelay = True  # type: ignore[attr-defined]
+    rospy.topics.Subscriber.__init__ = init
+
+
+_ask_for_tcp_nodelay()
+
+SERVER_SILENCE_LIMIT = 1.0  # seconds without a status message before an action server counts as gone
+WATCHDOG_PERIOD = 0.2
+
+
+# --- message conversion ---------------------------------------------------------------
+
+
+def ros_class(ros_type: str, kind: str = "msg") -> Any:
+    """The generated ROS class for ``pkg/Name`` (``kind`` msg or srv)."""
+    package, _, name = ros_type.partition("/")
+    try:
+        return getattr(importlib.import_module(f"{package}.{kind}"), name)
+    except (ImportError, AttributeError) as exc:
+        raise TransportError(
+            f"ROS type {ros_type} is not importable ({exc}); fix: source .venv/bin/activate after "
+            "scripts/install-ros, which generates this project's messages"
+        ) from exc
+
+
+def to_ros(message: Message, cls: Any) -> Any:
+    out = cls()
+    for field in dataclasses.fields(message):
+        value = getattr(message, field.name)
+        if not hasattr(out, field.name):
+            continue
+        current = getattr(out, field.name)
+        if isinstance(value, Message):
+            setattr(out, field.name, to_ros(value, type(current)))
+        elif isinstance(current, rospy.Time):
+            setattr(out, field.name, rospy.Time.from_sec(max(0.0, float(value))))
+        else:
+            setattr(out, field.name, value)
+    return out
+
+
+def from_ros(ros_message: Any, cls: type[M]) -> M:
+    values: dict[str, Any] = {}
+    for field in dataclasses.fields(cls):
+        if not hasattr(ros_message, field.name):
+            continue
+        value = getattr(ros_message, field.name)
+        default = field.default_factory() if field.default_factory is not dataclasses.MISSING else None
+        if isinstance(default, Message):
+            values[field.name] = from_ros(value, type(default))
+        elif hasattr(value, "to_sec"):
+            values[field.name] = value.to_sec()
+        elif isinstance(value, tuple):
+            values[field.name] = list(value)
+        else:
+            values[field.name] = value
+    return cls(**values)
+
+
+def _caller(ros_message: Any) -> str:
+    header = getattr(ros_message, "_connection_header", None) or {}
+    return normalize_node_name(str(header.get("callerid", "")))
+
+
+# --- transport and node ------------------------------------------------------------------
+
+
+class RosTransport(Transport):
+    """Nodes of this process on a running ROS master (``ROS_MASTER_URI``)."""
+
+    def __init__(self, clock: Clock, *, process_name: str | None = None) -> None:
+        self.clock = clock
+        self.process_name = process_name
+        self.callback_errors = 0
+        self._nodes: dict[str, RosNode] = {}
+        self._tasks: set[asyncio.Future[Any]] = set()
+
+    def _ensure_init(self, first: str) -> None:
+        if rospy.core.is_initialized():
+            return
+        rospy.init_node(self.process_name or first, anonymous=False, disable_signals=True)
+
+    @property
+    def ros_name(self) -> str:
+        return normalize_node_name(rospy.get_name())
+
+    def node(self, name: str) -> RosNode:
+        name = normalize_node_name(name)
+        if not name:
+            raise TransportError("node name is empty: give every component a name, e.g. 'cyborg_idle'")
+        if name in self._nodes:
+            raise TransportError(f"node name {name!r} is already in use in this process")
+        self._ensure_init(name)
+        node = RosNode(self, name)
+        self._nodes[name] = node
+        return node
+
+    def shutdown(self) -> None:
+        for node in list(self._nodes.values()):
+            node.shutdown()
+        self._nodes.clear()
+
+    # callbacks from rospy threads run on the loop
+    def to_loop(self, callback: Callable[..., object], *args: Any) -> None:
+        loop = self.clock.loop
+        if not loop.is_closed():
+            loop.call_soon_threadsafe(self._run_callback, callback, *args)
+
+    def _run_callback(self, callback: Callable[..., object], *args: Any) -> None:
+        try:
+            result = callback(*args)
+            if inspect.isawaitable(result):
+                self._tasks.add(task := asyncio.ensure_future(result))
+                task.add_done_callback(self._tasks.discard)
+        except Exception:
+            self.callback_errors += 1
+            log.exception(
+                "callback %s failed; the transport carries on", getattr(callback, "__qualname__", callback)
+            )
+
+
+class RosNode(Node):
+    def __init__(self, transport: RosTransport, name: str) -> None:
+        self.transport = transport
+        self.name = name
+        self.clock = transport.clock
+        self._closers: list[Callable[[], None]] = []
+
+    def publisher(
+        self, topic: str, msg_type: type[M], *, queue_size: int = DEFAULT_QUEUE_SIZE, latch: bool = False
+    ) -> Publisher[M]:
+        pub = _RosPublisher[M](self.resolve(topic), msg_type, queue_size, latch)
+        self._closers.append(pub.unregister)
+        return pub
+
+    def subscribe(
+        self,
+        topic: str,
+        msg_type: type[M],
+        callback: Callable[[M, MessageInfo], None],
+        *,
+        queue_size: int = DEFAULT_QUEUE_SIZE,
+    ) -> Subscription[M]:
+        sub = _RosSubscription(self.transport, self.resolve(topic), msg_type, callback, queue_size)
+        self._closers.append(sub.unsubscribe)
+        return sub
+
+    def advertise_service(
+        self,
+        name: str,
+        srv_type: ServiceType[Req, Resp],
+        handler: Callable[[Req, MessageInfo], Resp | Awaitable[Resp]],
+    ) -> ServiceServer:
+        server = _RosServiceServer(self.transport, self.resolve(name), srv_type, handler)
+        self._closers.append(server.shutdown)
+        return server
+
+    def service_proxy(self, name: str, srv_type: ServiceType[Req, Resp]) -> ServiceProxy[Req, Resp]:
+        return _RosServiceProxy(self.transport, self.resolve(name), srv_type)
+
+    def action_server(
+        self,
+        name: str,
+        action_type: ActionType[G, R, F],
+        on_goal: Callable[[ServerGoalHandle[G, R, F]], None],
+        on_cancel: Callable[[ServerGoalHandle[G, R, F]], None],
+    ) -> ActionServer[G, R, F]:
+        server = _RosActionServer(self.transport, self.resolve(name), action_type, on_goal, on_cancel)
+        self._closers.append(server.shutdown)
+        return server
+
+    def action_client(self, name: str, action_type: ActionType[G, R, F]) -> ActionClient[G, R, F]:
+        client = _RosActionClient(self.transport, self.resolve(name), action_type)
+        self._closers.append(client.close)
+        return client
+
+    def get_param(self, name: str, default: Any = None) -> Any:
+        return rospy.get_param(self.resolve(name), default)
+
+    def set_param(self, name: str, value: Any) -> None:
+        rospy.set_param(self.resolve(name), value)
+
+    def shutdown(self) -> None:
+        for close in reversed(self._closers):
+            try:
+                close()
+            except Exception:
+                log.debug("closing failed", exc_info=True)
+        self._closers.clear()
+
+
+# --- topics -----------------------------------------------------------------------------
+
+
+class _RosPublisher(Publisher[M]):
+    def __init__(self, topic: str, msg_type: type[M], queue_size: int, latch: bool) -> None:
+        self.topic = topic
+        self._cls = ros_class(msg_type.ros_type)
+        self._pub = rospy.Publisher(topic, self._cls, queue_size=queue_size, latch=latch)
+
+    def publish(self, message: M) -> None:
+        self._pub.publish(to_ros(message, self._cls))
+
+    def subscriber_count(self) -> int:
+        return int(self._pub.get_num_connections())
+
+    def unregister(self) -> None:
+        self._pub.unregister()
+
+
+class _RosSubscription(Subscription[M]):
+    def __init__(
+        self,
+        transport: RosTransport,
+        topic: str,
+        msg_type: type[M],
+        callback: Callable[[M, MessageInfo], None],
+        queue_size: int,
+    ) -> None:
+        self.topic = topic
+        self._transport = transport
+        self._type = msg_type
+        self._callback = callback
+        self._queue: deque[tuple[M, MessageInfo]] = deque()
+        self._queue_size = queue_size
+        self._dropped = 0
+        self._scheduled = False
+        self._sub = rospy.Subscriber(topic, ros_class(msg_type.ros_type), self._on_ros, queue_size=None)
+
+    @property
+    def dropped(self) -> int:
+        return self._dropped
+
+    def _on_ros(self, ros_message: Any) -> None:  # rospy thread
+        info = MessageInfo(sender=_caller(ros_message), stamp=time.time())
+        message = from_ros(ros_message, self._type)
+        self._transport.to_loop(self._enqueue, message, info)
+
+    def _enqueue(self, message: M, info: MessageInfo) -> None:
+        if len(self._queue) >= self._queue_size:
+            self._queue.popleft()
+            self._dropped += 1
+        self._queue.append((message, info))
+        if not self._scheduled:
+            self._scheduled = True
+            self._transport.clock.loop.call_soon(self._drain)
+
+    def _drain(self) -> None:
+        self._scheduled = False
+        while self._queue:
+            message, info = self._queue.popleft()
+            self._transport._run_callback(self._callback, message, info)
+
+    def unsubscribe(self) -> None:
+        self._sub.unregister()
+        self._queue.clear()
+
+
+# --- services ---------------------------------------------------------------------------
+
+
+class _RosServiceServer(ServiceServer, Generic[Req, Resp]):
+    def __init__(
+        self,
+        transport: RosTransport,
+        name: str,
+        srv_type: ServiceType[Req, Resp],
+        handler: Callable[[Req, MessageInfo], Resp | Awaitable[Resp]],
+    ) -> None:
+        self.name = name
+        self._transport = transport
+        self._srv_type = srv_type
+        self._handler = handler
+        self._srv_cls = ros_class(srv_type.ros_type, "srv")
+        self._service = rospy.Service(name, self._srv_cls, self._on_request)
+
+    def _on_request(self, ros_request: Any) -> Any:  # rospy thread
+        request = from_ros(ros_request, self._srv_type.request)
+        info = MessageInfo(sender=_caller(ros_request), stamp=time.time())
+
+        async def answer() -> Resp:
+            result = self._handler(request, info)
+            if inspect.isawaitable(result):
+                result = await result
+            return result  # type: ignore[return-value]
+
+        future = asyncio.run_coroutine_threadsafe(answer(), self._transport.clock.loop)
+        response = future.result(timeout=60.0)
+        return to_ros(response, self._srv_cls._response_class)
+
+    def shutdown(self) -> None:
+        self._service.shutdown("node shutting down")
+
+
+class _RosServiceProxy(ServiceProxy[Req, Resp]):
+    def __init__(self, transport: RosTransport, name: str, srv_type: ServiceType[Req, Resp]) -> None:
+        self.name = name
+        self._transport = transport
+        self._srv_type = srv_type
+        self._srv_cls = ros_class(srv_type.ros_type, "srv")
+        self._proxy = rospy.ServiceProxy(name, self._srv_cls)
+
+    def available(self) -> bool:
+        try:
+            rospy.wait_for_service(self.name, timeout=0.05)
+        except rospy.ROSException:
+            return False
+        return True
+
+    async def wait_for_service(self, timeout: float) -> bool:
+        loop = asyncio.get_running_loop()
+        try:
+            await loop.run_in_executor(
+                None, lambda: rospy.wait_for_service(self.name, timeout=max(timeout, 0.01))
+            )
+        except rospy.ROSException:
+            return False
+        return True
+
+    async def call(self, request: Req | None = None, *, timeout: float = 5.0) -> Resp:
+        loop = asyncio.get_running_loop()
+        req = request if request is not None else self._srv_type.request()
+        if not await loop.run_in_executor(None, self.available):
+            raise ServiceUnavailableError(
+                f"service {self.name} is not offered by any node: start the component that offers it"
+            )
+        ros_request = to_ros(req, self._srv_cls._request_class)
+        try:
+            ros_response = await asyncio.wait_for(
+                loop.run_in_executor(None, self._proxy.call, ros_request), timeout
+            )
+        except TimeoutError as exc:
+            raise ServiceTimeoutError(
+                f"service {self.name} gave no answer within {timeout} s: check that its node is running "
+                "and not blocked, or raise the timeout"
+            ) from exc
+        except rospy.ServiceException as exc:
+            raise TransportError(f"service {self.name} failed: {exc}") from exc
+        return from_ros(ros_response, self._srv_type.response)
+
+
+# --- actions ----------------------------------------------------------------------------
+
+
+def _action_classes(action_type: ActionType[Any, Any, Any]) -> Any:
+    return ros_class(action_type.ros_type)
+
+
+class _RosServerGoalHandle(ServerGoalHandle[G, R, F]):
+    def __init__(self, server: _RosActionServer[G, R, F], ros_handle: Any) -> None:
+        self._server = server
+        self._handle = ros_handle
+        goal_id = ros_handle.get_goal_id()
+        self.goal_id = str(goal_id.id)
+        self.goal = from_ros(ros_handle.get_goal(), server.action_type.goal)
+        self.sender = _caller(ros_handle.get_goal()) or str(goal_id.id).split("-", 1)[0].lstrip("/")
+
+    @property
+    def status(self) -> GoalStatus:
+        return GoalStatus(int(self._handle.get_goal_status().status))
+
+    def _result(self, result: R | None) -> Any:
+        return to_ros(
+            result if result is not None else self._server.action_type.result(), self._server.result_cls
+        )
+
+    def accept(self) -> None:
+        self._guard(self._handle.set_accepted, "")
+
+    def reject(self, result: R | None = None, text: str = "") -> None:
+        self._guard(self._handle.set_rejected, self._result(result), text)
+
+    def publish_feedback(self, feedback: F) -> None:
+        if not self.status.is_terminal:
+            self._handle.publish_feedback(to_ros(feedback, self._server.feedback_cls))
+
+    def succeed(self, result: R | None = None, text: str = "") -> None:
+        self._guard(self._handle.set_succeeded, self._result(result), text)
+
+    def abort(self, result: R | None = None, text: str = "") -> None:
+        self._guard(self._handle.set_aborted, self._result(result), text)
+
+    def canceled(self, result: R | None = None, text: str = "") -> None:
+        self._guard(self._handle.set_canceled, self._result(result), text)
+
+    def _guard(self, method: Callable[..., None], *args: Any) -> None:
+        try:
+            method(*args)
+        except Exception:
+            log.warning(
+                "action %s: %s failed in status %s", self._server.name, method.__name__, self.status.name
+            )
+
+
+class _RosActionServer(ActionServer[G, R, F]):
+    def __init__(
+        self,
+        transport: RosTransport,
+        name: str,
+        action_type: ActionType[G, R, F],
+        on_goal: Callable[[ServerGoalHandle[G, R, F]], None],
+        on_cancel: Callable[[ServerGoalHandle[G, R, F]], None],
+    ) -> None:
+        self.name = name
+        self.action_type = action_type
+        self._transport = transport
+        self._on_goal = on_goal
+        self._on_cancel = on_cancel
+        self.result_cls = ros_class(action_type.result.ros_type)
+        self.feedback_cls = ros_class(action_type.feedback.ros_type)
+        self._handles: dict[str, _RosServerGoalHandle[G, R, F]] = {}
+        self._lock = threading.Lock()
+        self._server = actionlib.ActionServer(
+            name, _action_classes(action_type), self._goal_cb, self._cancel_cb, auto_start=False
+        )
+        self._server.start()
+
+    def _wrap(self, ros_handle: Any) -> _RosServerGoalHandle[G, R, F]:
+        key = str(ros_handle.get_goal_id().id)
+        with self._lock:
+            handle = self._handles.get(key)
+            if handle is None:
+                handle = self._handles[key] = _RosServerGoalHandle(self, ros_handle)
+            return handle
+
+    def _goal_cb(self, ros_handle: Any) -> None:  # rospy thread
+        self._transport.to_loop(self._on_goal, self._wrap(ros_handle))
+
+    def _cancel_cb(self, ros_handle: Any) -> None:  # rospy thread
+        self._transport.to_loop(self._on_cancel, self._wrap(ros_handle))
+
+    def shutdown(self) -> None:
+        for attribute in ("status_pub", "result_pub", "feedback_pub"):
+            publisher = getattr(self._server, attribute, None)
+            if publisher is not None:
+                publisher.unregister()
+        for attribute in ("goal_sub", "cancel_sub"):
+            subscriber = getattr(self._server, attribute, None)
+            if subscriber is not None:
+                subscriber.unregister()
+        timer = getattr(self._server, "status_timer", None)
+        if timer is not None:
+            timer.shutdown()
+
+
+class _WatchedActionClient(actionlib.ActionClient):  # type: ignore[misc]
+    """actionlib's client, remembering when the server last reported its status."""
+
+    last_status_time = 0.0
+
+    def _status_cb(self, msg: Any) -> None:
+        self.last_status_time = time.monotonic()
+        super()._status_cb(msg)
+
+
+class _RosClientGoalHandle(ClientGoalHandle[G, R, F]):
+    def __init__(self, client: _RosActionClient[G, R, F], goal: G, on_feedback: Any, on_status: Any) -> None:
+        self._client = client
+        self.goal = goal
+        self._status = GoalStatus.PENDING
+        self._result: R | None = None
+        self._text = ""
+        self._on_feedback = on_feedback
+        self._on_status = on_status
+        self._done: list[Callable[[ClientGoalHandle[G, R, F]], None]] = []
+        self._waiters: list[asyncio.Future[GoalStatus]] = []
+        self._ros: Any = None
+
+    @property
+    def status(self) -> GoalStatus:
+        return self._status
+
+    @property
+    def result(self) -> R | None:
+        return self._result
+
+    @property
+    def text(self) -> str:
+        return self._text
+
+    def cancel(self) -> None:
+        if self._ros is not None and not self._status.is_terminal:
+            self._ros.cancel()
+
+    async def wait(self) -> GoalStatus:
+        if self._status.is_terminal:
+            return self._status
+        future: asyncio.Future[GoalStatus] = self._client.transport.clock.loop.create_future()
+        self._waiters.append(future)
+        return await future
+
+    def add_done_callback(self, callback: Callable[[ClientGoalHandle[G, R, F]], None]) -> None:
+        if self._status.is_terminal:
+            self._client.transport.clock.loop.call_soon(callback, self)
+        else:
+            self._done.append(callback)
+
+    # on the loop
+    def _update(self, status: GoalStatus, result: R | None, text: str) -> None:
+        if self._status.is_terminal or status is self._status:
+            return
+        self._status = status
+        transport = self._client.transport
+        if self._on_status is not None:
+            transport._run_callback(self._on_status, status)
+        if status.is_terminal:
+            self._result, self._text = result, text
+            self._client.forget(self)
+            for waiter in self._waiters:
+                if not waiter.done():
+                    waiter.set_result(status)
+            self._waiters.clear()
+            callbacks, self._done = self._done, []
+            for callback in callbacks:
+                transport._run_callback(callback, self)
+
+    def _feedback(self, feedback: F) -> None:
+        if self._on_feedback is not None and not self._status.is_terminal:
+            self._client.transport._run_callback(self._on_feedback, feedback)
+
+
+class _RosActionClient(ActionClient[G, R, F]):
+    def __init__(self, transport: RosTransport, name: str, action_type: ActionType[G, R, F]) -> None:
+        self.name = name
+        self.transport = transport
+        self.action_type = action_type
+        self._goal_cls = ros_class(action_type.goal.ros_type)
+        self._client = _WatchedActionClient(name, _action_classes(action_type))
+        self._active: set[_RosClientGoalHandle[G, R, F]] = set()
+        self._watchdog: asyncio.TimerHandle | None = None
+
+    def server_available(self) -> bool:
+        last = self._client.last_status_msg
+        if last is None or time.monotonic() - self._client.last_status_time > SERVER_SILENCE_LIMIT:
+            return False
+        server = last._connection_header["callerid"]
+        return bool(self._client.pub_goal.impl.has_connection(server))
+
+    async def wait_for_server(self, timeout: float) -> bool:
+        deadline = time.monotonic() + timeout
+        while not self.server_available():
+            if time.monotonic() >= deadline:
+                return False
+            await asyncio.sleep(0.01)
+        return True
+
+    def send_goal(
+        self,
+        goal: G,
+        *,
+        on_feedback: Callable[[F], None] | None = None,
+        on_status: Callable[[GoalStatus], None] | None = None,
+    ) -> ClientGoalHandle[G, R, F]:
+        handle = _RosClientGoalHandle(self, goal, on_feedback, on_status)
+        transport = self.transport
+
+        def transition(ros_handle: Any) -> None:  # rospy thread
+            status = GoalStatus(int(ros_handle.get_goal_status()))
+            result = None
+            text = ""
+            if ros_handle.get_comm_state() == actionlib.CommState.DONE:
+                raw = ros_handle.get_result()
+                result = (
+                    from_ros(raw, self.action_type.result) if raw is not None else self.action_type.result()
+                )
+                text = str(ros_handle.get_goal_status_text())
+            elif status.is_terminal:
+                return  # wait for DONE to carry the result
+            transport.to_loop(handle._update, status, result, text)
+
+        def feedback(ros_handle: Any, ros_feedback: Any) -> None:  # rospy thread
+            transport.to_loop(handle._feedback, from_ros(ros_feedback, self.action_type.feedback))
+
+        if not self.server_available():
+            transport.clock.loop.call_soon(
+                handle._update, GoalStatus.LOST, None, f"no action server at {self.name}"
+            )
+            return handle
+        handle._ros = self._client.send_goal(to_ros(goal, self._goal_cls), transition, feedback)
+        self._active.add(handle)
+        self._arm_watchdog()
+        return handle
+
+    def forget(self, handle: _RosClientGoalHandle[G, R, F]) -> None:
+        self._active.discard(handle)
+
+    def _arm_watchdog(self) -> None:
+        if self._watchdog is None:
+            self._watchdog = self.transport.clock.loop.call_later(WATCHDOG_PERIOD, self._check_server)
+
+    def _check_server(self) -> None:
+        """Goals of a vanished server end LOST (actionlib alone would wait forever)."""
+        self._watchdog = None
+        if not self._active:
+            return
+        if not self.server_available():
+            for handle in list(self._active):
+                handle._update(GoalStatus.LOST, None, "action server gone")
+            return
+        self._arm_watchdog()
+
+    def close(self) -> None:
+        if self._watchdog is not None:
+            self._watchdog.cancel()
+        self._client.stop()
