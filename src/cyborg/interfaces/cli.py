@@ -235,6 +235,103 @@ def _run_script(
         click.secho(f"wrote {len(records)} records to {transcript_path}", fg="green")
 
 
+@cli.command("node")
+@click.argument("name")
+@click.option(
+    "--config",
+    "config_path",
+    type=click.Path(path_type=Path),
+    help="state machine YAML (default: the packaged Cyborg)",
+)
+@click.option(
+    "--db",
+    "--data-dir",
+    "data_dir",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="folder of the databases",
+)
+@click.option("--map", "map_path", type=click.Path(path_type=Path), help="map for the simulated base")
+@click.option("--host", default="127.0.0.1", show_default=True, help="address of the API (cyborg_api only)")
+@click.option("--port", default=8642, show_default=True, type=int, help="port of the API (cyborg_api only)")
+@click.option("--seed", default=0, show_default=True, type=int, help="seed of the node's randomness")
+def node(
+    name: str,
+    config_path: Path | None,
+    data_dir: Path | None,
+    map_path: Path | None,
+    host: str,
+    port: int,
+    seed: int,
+) -> None:
+    """Run one part of the robot as the ROS 1 node NAME (cyborg_controller, a module, a gatekeeper, cyborg_api)."""
+    from cyborg.interfaces.ros_commands import run_node
+    from cyborg.sim.runner import default_data_dir
+
+    try:
+        config = _load(config_path)
+        check_modules(config)
+        run_node(name, config, data_dir or default_data_dir(), map_path, host, port, seed)
+    except CyborgError as exc:
+        _fail(exc)
+
+
+@cli.command("launch")
+@click.option(
+    "--config",
+    "config_path",
+    type=click.Path(path_type=Path),
+    help="state machine YAML (default: the packaged Cyborg)",
+)
+@click.option(
+    "--db",
+    "--data-dir",
+    "data_dir",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="folder of the databases",
+)
+@click.option("--map", "map_path", type=click.Path(path_type=Path), help="map for the simulated base")
+@click.option("--port", default=8642, show_default=True, type=int, help="port of the API node")
+@click.option("--only", multiple=True, help="launch only these parts (repeatable)")
+@click.option(
+    "--write",
+    "write_path",
+    type=click.Path(path_type=Path),
+    help="write a roslaunch file instead of launching",
+)
+def launch_command(
+    config_path: Path | None,
+    data_dir: Path | None,
+    map_path: Path | None,
+    port: int,
+    only: tuple[str, ...],
+    write_path: Path | None,
+) -> None:
+    """Start the whole robot over ROS 1: a master if none runs, then one process per part."""
+    from cyborg.interfaces.ros_commands import all_parts, launch, roslaunch_xml
+    from cyborg.sim.runner import default_data_dir
+
+    try:
+        config = _load(config_path)
+        check_modules(config)
+        path = Path(config.source).resolve()
+        parts = list(only) or all_parts(config)
+        unknown = sorted(set(parts) - set(all_parts(config)))
+        if unknown:
+            raise CyborgError(
+                f"no part called {', '.join(unknown)}; fix: use one of {', '.join(all_parts(config))}"
+            )
+        folder = (data_dir or default_data_dir()).resolve()
+        if write_path is not None:
+            write_path.write_text(roslaunch_xml(path, parts, folder), encoding="utf-8")
+            click.echo(f"wrote {write_path}")
+            return
+        launch(path, parts, folder, map_path, port, echo=True)
+    except CyborgError as exc:
+        _fail(exc)
+
+
 def _add_tool_commands() -> None:
     from cyborg.interfaces.command_tool import COMMANDS
     from cyborg.navigation.db_cli import db_group

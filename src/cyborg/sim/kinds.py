@@ -6,9 +6,11 @@ builds the component on its own node. New kinds register in :data:`MODULE_KINDS`
 
 from __future__ import annotations
 
+import random
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from pathlib import Path
+from typing import Any, Protocol
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
@@ -21,8 +23,15 @@ from cyborg.modules.placeholder import PlaceholderModule, PlaceholderSpec
 from cyborg.modules.speech import TextToSpeech
 from cyborg.transport.base import Node
 
-if TYPE_CHECKING:
-    from cyborg.sim.robot import Robot
+
+class BuildContext(Protocol):
+    """What module factories may use besides their node: data folder, randomness, the map."""
+
+    data_dir: Path
+    rng: random.Random
+    calendar: Callable[[Any], None] | None
+
+    def occupancy_map(self) -> Any: ...
 
 
 class KindSettings(BaseModel):
@@ -95,14 +104,14 @@ class BaseSettings(KindSettings):
 @dataclass(frozen=True)
 class ModuleKind:
     settings: type[KindSettings]
-    build: Callable[[Node, Any, Robot], object]
+    build: Callable[[Node, Any, BuildContext], object]
 
 
-def _placeholder(node: Node, s: PlaceholderSettings, robot: Robot) -> object:
+def _placeholder(node: Node, s: PlaceholderSettings, robot: BuildContext) -> object:
     return PlaceholderModule(node, [PlaceholderSpec(**server.model_dump()) for server in s.servers])
 
 
-def _tts(node: Node, s: TtsSettings, robot: Robot) -> object:
+def _tts(node: Node, s: TtsSettings, robot: BuildContext) -> object:
     from pathlib import Path
 
     wav_dir = Path(s.wav_dir) if s.wav_dir else None
@@ -111,7 +120,7 @@ def _tts(node: Node, s: TtsSettings, robot: Robot) -> object:
     )
 
 
-def _navigation(node: Node, s: NavigationSettings, robot: Robot) -> object:
+def _navigation(node: Node, s: NavigationSettings, robot: BuildContext) -> object:
     from pathlib import Path
 
     from cyborg.navigation.database import CalendarEvent, NavigationDatabase
@@ -143,7 +152,7 @@ def _navigation(node: Node, s: NavigationSettings, robot: Robot) -> object:
     )
 
 
-def _simulated_base(node: Node, s: BaseSettings, robot: Robot) -> object:
+def _simulated_base(node: Node, s: BaseSettings, robot: BuildContext) -> object:
     from cyborg.sim.base import SimulatedBase
 
     occupancy = robot.occupancy_map()

@@ -27,6 +27,7 @@ from collections.abc import Awaitable, Callable
 from typing import Any, Generic
 
 import actionlib  # type: ignore[import-not-found]
+import genpy  # type: ignore[import-not-found]
 import rospy  # type: ignore[import-not-found]
 
 from cyborg.errors import ServiceTimeoutError, ServiceUnavailableError, TransportError
@@ -104,7 +105,7 @@ def to_ros(message: Message, cls: Any) -> Any:
         current = getattr(out, field.name)
         if isinstance(value, Message):
             setattr(out, field.name, to_ros(value, type(current)))
-        elif isinstance(current, rospy.Time):
+        elif isinstance(current, genpy.Time):
             setattr(out, field.name, rospy.Time.from_sec(max(0.0, float(value))))
         else:
             setattr(out, field.name, value)
