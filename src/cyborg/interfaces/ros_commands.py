@@ -71,11 +71,18 @@ def run_node(
             loop.add_signal_handler(sig, stop.set)
         api = None
         if name == API:
+            from cyborg.interfaces import dashboard
             from cyborg.interfaces.api import RobotAPI
+            from cyborg.interfaces.remote import remote_robot
 
-            api = RobotAPI(
-                transport.node(API), machine=config.machine, emotions=dict(config.model.emotion.prototypes)
+            api_node = transport.node(API)
+            api = RobotAPI(api_node, machine=config.machine, emotions=dict(config.model.emotion.prototypes))
+            has_base = any(
+                isinstance(m, dict) and m.get("kind") == "simulated_base"
+                for m in config.model.modules.values()
             )
+            mirror = remote_robot(api_node, config, context.occupancy_map() if has_base else None)
+            dashboard.register(api, mirror)  # type: ignore[arg-type]
             url = await api.start(host, port)
             click.echo(f"API: {url}", err=True)
         if part.controller is not None:
