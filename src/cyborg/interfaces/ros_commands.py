@@ -124,6 +124,11 @@ def launch(
 ) -> None:
     """Start a master if needed, then every part as its own `cyborg node` process."""
     require_ros()
+
+    def stop_on_term(signum: int, frame: object) -> None:
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, stop_on_term)  # `kill` and `timeout` stop the nodes too
     master = None
     if not master_running():
         parsed = urllib.parse.urlparse(master_uri())
