@@ -345,6 +345,8 @@ _add_tool_commands()
 
 
 def main() -> None:
+    # roslaunch appends remappings such as __name:=x and __log:=y; they are not our options.
+    sys.argv = [arg for arg in sys.argv if ":=" not in arg]
     cli()
 
 
