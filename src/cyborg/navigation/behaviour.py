@@ -131,7 +131,7 @@ class TalkKind(enum.Enum):
 
 def talk_kind(event: str, origin: Origin | None) -> TalkKind:
     """What the talking state says, from the event that led there (7.7)."""
-    if event in ("succeeded", "navigation_feedback") and origin is Origin.GUIDE:
+    if event == "succeeded" and origin is Origin.GUIDE:  # a question on the way still gets an opinion
         return TalkKind.ARRIVED
     if event in ("succeeded", "navigation_feedback"):
         return TalkKind.OPINION

@@ -1,0 +1,222 @@
+"""The navigation module's pure decisions (thesis 7.5 and 7.7): where to go and what to say.
+
+``plan()`` is checked for every origin (why the robot plans) and every emotion
+the emotion system can name; ``talk_kind()`` for every event that leads to
+the talking state.
+"""
+
+from __future__ import annotations
+
+import random
+
+import pytest
+
+from cyborg.emotion.model import NEUTRAL, TABLE_2_2
+from cyborg.navigation.behaviour import (
+    BOSSED_AROUND,
+    HAPPY,
+    Origin,
+    Plan,
+    PlanKind,
+    TalkKind,
+    origin_of,
+    plan,
+    should_stop_wandering,
+    talk_kind,
+)
+from cyborg.navigation.database import DEFAULT_LOCATIONS, Location
+
+EMOTIONS = sorted([NEUTRAL, *TABLE_2_2])
+PLACES = {place.name: place for place in DEFAULT_LOCATIONS}
+CROWDED = {name for name, place in PLACES.items() if place.crowded}
+QUIET = set(PLACES) - CROWDED
+CAFETERIA, EL6 = PLACES["cafeteria"], PLACES["el6"]
+SEEDS = range(20)
+
+
+def plan_for(
+    origin: Origin | None,
+    emotion: str,
+    *,
+    requested: Location | None = None,
+    scheduled: Location | None = None,
+    here: Location | None = None,
+    seed: int = 0,
+) -> Plan:
+    return plan(
+        origin,
+        emotion,
+        requested=requested,
+        scheduled=scheduled,
+        places=list(PLACES.values()),
+        rng=random.Random(seed),
+        here=here,
+    )
+
+
+def test_the_default_places_cover_every_case() -> None:
+    assert len(CROWDED) >= 2 and len(QUIET) >= 2
+    assert max(PLACES.values(), key=lambda p: p.pleasantness) is CAFETERIA
+
+
+# --- a user's command ("go to X") -------------------------------------------------------
+
+
+@pytest.mark.parametrize("emotion", EMOTIONS)
+def test_command_goes_to_the_place_unless_angry(emotion: str) -> None:
+    chosen = plan_for(Origin.COMMAND, emotion, requested=EL6, scheduled=CAFETERIA)
+    assert chosen.target == EL6
+    assert chosen.feedback == (0.0, 0.0, -0.2)  # bossed around: dominance down
+    if emotion == "angry":
+        assert chosen.kind is PlanKind.REFUSE
+    else:
+        assert chosen.kind is PlanKind.MOVE
+
+
+@pytest.mark.parametrize("emotion", EMOTIONS)
+def test_guiding_goes_to_the_place_it_offered_to_show(emotion: str) -> None:
+    chosen = plan_for(Origin.GUIDE, emotion, requested=EL6)
+    assert (chosen.kind, chosen.target) == (PlanKind.MOVE, EL6)
+    assert chosen.feedback == BOSSED_AROUND
+
+
+@pytest.mark.parametrize("origin", [Origin.COMMAND, Origin.GUIDE])
+def test_command_without_a_known_place_does_nothing(origin: Origin) -> None:
+    chosen = plan_for(origin, NEUTRAL, requested=None, scheduled=CAFETERIA)
+    assert chosen.kind is PlanKind.NOTHING
+    assert chosen.target is None and chosen.feedback == (0.0, 0.0, 0.0)
+
+
+# --- a calendar event ---------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("emotion", EMOTIONS)
+def test_schedule_goes_to_the_place_but_angry_goes_somewhere_quiet(emotion: str) -> None:
+    for seed in SEEDS:
+        chosen = plan_for(Origin.SCHEDULE, emotion, scheduled=CAFETERIA, seed=seed)
+        assert chosen.kind is PlanKind.MOVE
+        assert chosen.target is not None
+        if emotion == "angry":
+            assert chosen.target.name in QUIET  # ignores the event to be alone
+            assert chosen.feedback == (0.0, 0.0, 0.1)  # its own choice: dominance up
+        else:
+            assert chosen.target == CAFETERIA
+            assert chosen.feedback == (0.0, 0.0, -0.1)  # told where to be: dominance down a little
+
+
+def test_angry_schedule_never_picks_where_it_already_is() -> None:
+    for seed in SEEDS:
+        chosen = plan_for(Origin.SCHEDULE, "angry", scheduled=CAFETERIA, here=EL6, seed=seed)
+        assert chosen.target is not None and chosen.target.name in QUIET - {"el6"}
+
+
+@pytest.mark.parametrize("emotion", sorted(set(EMOTIONS) - {"angry"}))
+def test_schedule_that_is_over_does_nothing(emotion: str) -> None:
+    assert plan_for(Origin.SCHEDULE, emotion, scheduled=None).kind is PlanKind.NOTHING
+
+
+# --- the motivator (navigation_emotional) ---------------------------------------------------
+
+
+def expected_motivator_kind(emotion: str) -> str:
+    if emotion in ("happy", "loved", "dignified"):
+        return "crowded"
+    if emotion == "angry":
+        return "quiet"
+    if emotion == "sad":
+        return "pleasant"
+    return "wander"
+
+
+@pytest.mark.parametrize("emotion", EMOTIONS)
+def test_motivator_chooses_by_emotion(emotion: str) -> None:
+    expected = expected_motivator_kind(emotion)
+    targets = set()
+    for seed in SEEDS:
+        chosen = plan_for(Origin.MOTIVATOR, emotion, scheduled=EL6, seed=seed)
+        assert chosen.feedback == (0.0, 0.0, 0.1)  # its own idea: dominance up
+        if expected == "wander":
+            assert (chosen.kind, chosen.target) == (PlanKind.WANDER, None)
+            continue
+        assert chosen.kind is PlanKind.MOVE and chosen.target is not None
+        targets.add(chosen.target.name)
+    if expected == "crowded":
+        assert targets <= CROWDED and len(targets) > 1  # a random crowded place, not always the same
+    elif expected == "quiet":
+        assert targets <= QUIET and len(targets) > 1
+    elif expected == "pleasant":
+        assert targets == {"cafeteria"}
+
+
+def test_the_spec_names_wander_for_bored_curious_unconcerned_and_neutral() -> None:
+    for emotion in ("bored", "curious", "unconcerned", NEUTRAL):
+        assert plan_for(Origin.MOTIVATOR, emotion).kind is PlanKind.WANDER
+    assert {"happy", "loved", "dignified"} == HAPPY
+
+
+def test_motivator_goes_somewhere_else_than_here() -> None:
+    for seed in SEEDS:
+        happy = plan_for(Origin.MOTIVATOR, "happy", here=CAFETERIA, seed=seed)
+        assert happy.target is not None and happy.target.name in CROWDED - {"cafeteria"}
+    sad = plan_for(Origin.MOTIVATOR, "sad", here=CAFETERIA)
+    assert sad.target == PLACES["waiting area"]  # the next most pleasant place
+
+
+def test_happy_without_crowded_places_wanders() -> None:
+    quiet = [place for place in PLACES.values() if not place.crowded]
+    chosen = plan(
+        Origin.MOTIVATOR, "happy", requested=None, scheduled=None, places=quiet, rng=random.Random(0)
+    )
+    assert chosen.kind is PlanKind.WANDER
+
+
+def test_motivator_choice_is_deterministic_for_a_seed() -> None:
+    runs = [[plan_for(Origin.MOTIVATOR, "happy", seed=seed).target for seed in SEEDS] for _ in range(2)]
+    assert runs[0] == runs[1]
+
+
+def test_no_reason_to_plan_does_nothing() -> None:
+    assert plan_for(None, "happy", requested=EL6, scheduled=CAFETERIA).kind is PlanKind.NOTHING
+
+
+@pytest.mark.parametrize(
+    ("event", "guiding", "origin"),
+    [
+        ("navigation_command", False, Origin.COMMAND),
+        ("navigation_command", True, Origin.GUIDE),
+        ("navigation_scheduler", False, Origin.SCHEDULE),
+        ("navigation_emotional", False, Origin.MOTIVATOR),
+        ("succeeded", False, None),
+        ("start", True, None),
+    ],
+)
+def test_origin_of_event(event: str, guiding: bool, origin: Origin | None) -> None:
+    assert origin_of(event, guiding) is origin
+
+
+@pytest.mark.parametrize("emotion", EMOTIONS)
+def test_wandering_stops_only_in_a_positive_mood(emotion: str) -> None:
+    assert should_stop_wandering(emotion) is (emotion in ("happy", "loved", "dignified"))
+
+
+# --- what the talking state says ----------------------------------------------------------
+
+ORIGINS: list[Origin | None] = [*Origin, None]
+
+
+@pytest.mark.parametrize("origin", ORIGINS)
+@pytest.mark.parametrize(
+    ("event", "kind"),
+    [
+        ("succeeded", None),  # depends on the origin
+        ("navigation_feedback", TalkKind.OPINION),
+        ("aborted", TalkKind.STUCK),
+        ("navigation_information", TalkKind.OFFER_GUIDE),
+        ("navigation_command", TalkKind.NOTHING),
+        ("start", TalkKind.NOTHING),
+    ],
+)
+def test_talk_kind(event: str, kind: TalkKind | None, origin: Origin | None) -> None:
+    if kind is None:  # arriving: names the place when guiding, else gives an opinion
+        kind = TalkKind.ARRIVED if origin is Origin.GUIDE else TalkKind.OPINION
+    assert talk_kind(event, origin) is kind

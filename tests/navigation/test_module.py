@@ -1,0 +1,763 @@
+"""The navigation module on the default robot: controller, emotion system, simulated base, speech.
+
+The robot is built from the packaged ``cyborg.yaml`` with two changes so that
+the tests alone decide what happens: the motivator has no events (it never
+starts anything on its own) and the idle state's boredom is switched off (the
+emotion stays where a test puts it). It starts at home, next to the
+information desk. Everything runs in virtual time; a trip across the campus
+takes a fraction of a real second.
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+import math
+import random
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from datetime import datetime, timedelta
+from pathlib import Path
+from zoneinfo import ZoneInfo
+
+import pytest
+import yaml
+
+from cyborg.controller.config import LoadedConfig, parse_config
+from cyborg.emotion.model import NEUTRAL, TABLE_2_2
+from cyborg.interfaces.cli import packaged_config
+from cyborg.modules.speech import SPOKEN_TOPIC
+from cyborg.navigation.database import DEFAULT_RESPONSES, CalendarEvent, Location, ResponseType
+from cyborg.navigation.module import NavigationModule
+from cyborg.sim.base import PathState, SimulatedBase
+from cyborg.sim.kinds import BaseSettings, BuildContext, ModuleKind
+from cyborg.sim.maps import Cell, Point, default_map_path, load_map
+from cyborg.sim.planner import RoutePlanner
+from cyborg.sim.robot import build_robot
+from cyborg.transport import topics
+from cyborg.transport.base import MessageInfo, Node
+from cyborg.transport.clock import VirtualClock
+from cyborg.transport.embedded import EmbeddedTransport
+from cyborg.transport.messages import (
+    EmotionalFeedback,
+    EmotionalState,
+    PoseWithCovarianceStamped,
+    String,
+    SystemState,
+)
+
+CONFIG = packaged_config("cyborg.yaml")
+EMOTIONS = sorted([NEUTRAL, *TABLE_2_2])
+OSLO = ZoneInfo("Europe/Oslo")
+ARRIVED = 0.1  # metres
+OFFER = "I think I know where that is, would you like me to show you?"
+NAV = "cyborg_navigation"
+CAMPUS = load_map(default_map_path())
+CROWDED = {"information desk", "cafeteria", "entrance", "waiting area"}
+QUIET = {"entrance 2", "el5", "el6", "elevator"}
+
+
+@functools.cache
+def small_config() -> LoadedConfig:
+    raw = yaml.safe_load(CONFIG.read_text())
+    raw["motivator"]["events"] = []  # nothing happens on the robot's own initiative
+    raw["modules"]["cyborg_idle"]["boredom"] = [0.0, 0.0, 0.0]  # the emotion stays where it is put
+    return parse_config(yaml.safe_dump(raw), source=str(CONFIG))
+
+
+@functools.cache
+def campus_planner() -> RoutePlanner:
+    """Built once for all tests: inflating the map is the only slow part of building a robot."""
+    return RoutePlanner(CAMPUS, 0.35)
+
+
+def simulated_base(node: Node, settings: BaseSettings, robot: BuildContext) -> SimulatedBase:
+    """The ``simulated_base`` kind of cyborg.yaml, sharing one planner."""
+    assert settings.robot_radius == campus_planner().robot_radius
+    return SimulatedBase(
+        node,
+        robot.occupancy_map(),
+        rng=robot.rng,
+        speed=settings.speed,
+        robot_radius=settings.robot_radius,
+        planner=campus_planner(),
+    )
+
+
+@dataclass(frozen=True)
+class Said:
+    t: float
+    text: str
+    emotion: str  # the emotion the robot had when it said it
+
+
+class Cyborg:
+    """The default robot plus a user: hears, speaks, and records what the robot does."""
+
+    def __init__(self, clock: VirtualClock, data_dir: Path, *, seed: int = 1) -> None:
+        self.clock = clock
+        self.transport = EmbeddedTransport(clock)
+        self.robot = build_robot(
+            small_config(),
+            self.transport,
+            data_dir=data_dir,
+            rng=random.Random(seed),
+            kinds={"simulated_base": ModuleKind(BaseSettings, simulated_base)},
+        )
+        nav = self.robot.components[NAV]
+        base = self.robot.components["rosarnl_node"]
+        assert isinstance(nav, NavigationModule) and isinstance(base, SimulatedBase)
+        self.nav, self.base = nav, base
+        self.emotion = NEUTRAL
+        self.states: list[tuple[float, str, str, str]] = []  # (t, from, event, to)
+        self.said: list[Said] = []
+        self.events: list[tuple[float, str]] = []  # events the navigation module sent
+        self.feedback: list[tuple[float, tuple[float, float, float]]] = []  # ... and its emotional feedback
+        self.poses: list[tuple[float, float, float]] = []
+        node = self.transport.node("test_user")
+        self._stt = node.publisher(topics.TEXT_FROM_SPEECH, String)
+        self._register = node.publisher(topics.REGISTER_EVENT, String)
+        self._set_emotion = node.publisher(topics.SET_EMOTIONAL_STATE, String)
+        node.subscribe(topics.STATE_CHANGE, SystemState, self._on_state, queue_size=1000)
+        node.subscribe(topics.EMOTIONAL_STATE, EmotionalState, self._on_emotion, queue_size=1000)
+        node.subscribe(SPOKEN_TOPIC, String, self._on_spoken, queue_size=1000)
+        node.subscribe(topics.REGISTER_EVENT, String, self._on_event, queue_size=1000)
+        node.subscribe(topics.EMOTIONAL_FEEDBACK, EmotionalFeedback, self._on_feedback, queue_size=1000)
+        node.subscribe(topics.AMCL_POSE, PoseWithCovarianceStamped, self._on_pose, queue_size=10_000)
+        self.robot.start()
+
+    # --- records ----------------------------------------------------------------------------
+
+    def _on_state(self, m: SystemState, info: MessageInfo) -> None:
+        self.states.append((self.clock.monotonic(), m.from_system_state, m.event, m.to_system_state))
+
+    def _on_emotion(self, m: EmotionalState, info: MessageInfo) -> None:
+        self.emotion = m.to_emotional_state
+
+    def _on_spoken(self, m: String, info: MessageInfo) -> None:
+        self.said.append(Said(self.clock.monotonic(), m.data, self.emotion))
+
+    def _on_event(self, m: String, info: MessageInfo) -> None:
+        if info.sender == NAV:
+            self.events.append((self.clock.monotonic(), m.data))
+
+    def _on_feedback(self, m: EmotionalFeedback, info: MessageInfo) -> None:
+        if info.sender == NAV:
+            delta = (m.delta_pleasure, m.delta_arousal, m.delta_dominance)
+            self.feedback.append((self.clock.monotonic(), delta))
+
+    def _on_pose(self, m: PoseWithCovarianceStamped, info: MessageInfo) -> None:
+        position = m.pose.pose.position
+        self.poses.append((self.clock.monotonic(), position.x, position.y))
+
+    # --- the user ---------------------------------------------------------------------------
+
+    def hear(self, text: str) -> None:
+        self._stt.publish(String(text))
+
+    def send_event(self, event: str) -> None:
+        self._register.publish(String(event))
+
+    def set_emotion(self, name: str) -> None:
+        """Through the emotion system's topic, as an operator would."""
+        self._set_emotion.publish(String(name))
+
+    # --- questions --------------------------------------------------------------------------
+
+    @property
+    def state(self) -> str | None:
+        return self.robot.controller.active_state
+
+    @property
+    def position(self) -> Point:
+        return (self.base.x, self.base.y)
+
+    def at(self, place: str) -> bool:
+        return math.dist(self.position, CAMPUS.pose(place).position) < ARRIVED
+
+    def sentences(self, since: float = 0.0) -> list[str]:
+        return [s.text for s in self.said if s.t >= since]
+
+    def sent(self, event: str, since: float = 0.0, until: float = math.inf) -> list[float]:
+        return [t for t, e in self.events if e == event and since <= t <= until]
+
+    def transitions(self, since: float = 0.0) -> list[tuple[str, str, str]]:
+        return [(a, e, b) for t, a, e, b in self.states if t >= since]
+
+    def moved_since(self, t: float) -> float:
+        """How far the robot drove after time ``t`` (m)."""
+        assert self.poses, "no pose from the base at all (it latches one at start-up)"
+        points = [(x, y) for when, x, y in self.poses if when >= t]
+        return sum(math.dist(a, b) for a, b in itertools.pairwise(points))
+
+    async def until(self, condition: Callable[[], bool], timeout: float, what: str) -> None:
+        deadline = self.clock.monotonic() + timeout
+        while not condition():
+            if self.clock.monotonic() >= deadline:
+                raise AssertionError(
+                    f"waited {timeout} s for {what}; states {self.transitions()}, said {self.sentences()}"
+                )
+            await self.clock.sleep(0.1)
+
+    async def settle(self, emotion: str = NEUTRAL) -> None:
+        """Let the robot start (idle), then set the emotion and wait until it is in effect."""
+        await self.until(lambda: self.state == "idle", 5.0, "idle")
+        self.set_emotion(emotion)
+        await self.until(lambda: self.emotion == emotion and self.nav.emotion == emotion, 2.0, emotion)
+
+    async def trip_done(self, timeout: float = 300.0) -> None:
+        """Wait for the next navigation plan, then until the robot is back in idle."""
+        since = self.clock.monotonic()
+
+        def planned() -> bool:
+            return any(b == "navigation_planning" for _, _, b in self.transitions(since))
+
+        await self.until(planned, 15.0, "a plan")
+        await self.until(lambda: self.state == "idle", timeout, "the trip to end")
+
+
+@pytest.fixture
+def cyborg(clock: VirtualClock, tmp_path: Path) -> Iterator[Cyborg]:
+    robot = Cyborg(clock, tmp_path)
+    yield robot
+    robot.transport.shutdown()
+
+
+def responses(kind: ResponseType, emotion: str, place: str) -> set[str]:
+    """What the default database lets the robot say: sentences for the emotion, else for any."""
+    of_kind = [r for r in DEFAULT_RESPONSES if r.type is kind]
+    fitting = [r for r in of_kind if r.emotion == emotion] or [r for r in of_kind if r.emotion is None]
+    return {r.say(place) for r in fitting}
+
+
+def opinions(emotion: str, place: str) -> set[str]:
+    return responses(ResponseType.OPINION, emotion, place)
+
+
+def wall_near(point: Point) -> Point:
+    rows, cols = (CAMPUS.grid == Cell.OCCUPIED).nonzero()
+    centres = [CAMPUS.cell_to_world(int(r), int(c)) for r, c in zip(rows, cols, strict=True)]
+    return min(centres, key=lambda centre: math.dist(centre, point))
+
+
+# --- "go to X" ----------------------------------------------------------------------------------
+
+DRIFTING = {"bored", "dignified"}
+"""Emotions the two-minute trip itself changes: moving raises arousal, being bossed around
+lowers dominance. The opinion then fits the emotion the robot has when it arrives."""
+
+
+@pytest.mark.parametrize("emotion", EMOTIONS)
+def test_go_to_the_cafeteria_drives_there_and_gives_an_opinion(
+    clock: VirtualClock, cyborg: Cyborg, emotion: str
+) -> None:
+    async def main() -> None:
+        await cyborg.settle(emotion)
+        cyborg.hear("go to the cafeteria")
+        await cyborg.trip_done()
+        await clock.sleep(10.0)
+
+    clock.run(main())
+    if emotion == "angry":
+        assert cyborg.sentences() == ["I will not go to the cafeteria, leave me alone."]
+        assert cyborg.moved_since(0.0) == 0.0 and cyborg.base.distance_travelled == 0.0
+        assert cyborg.transitions()[1:] == [
+            ("idle", "navigation_command", "navigation_planning"),
+            ("navigation_planning", "succeeded", "idle"),
+        ]
+        return
+    assert cyborg.at("cafeteria")
+    assert cyborg.transitions()[1:] == [
+        ("idle", "navigation_command", "navigation_planning"),
+        ("navigation_planning", "navigation_start_moving", "navigation_moving"),
+        ("navigation_moving", "succeeded", "navigation_talking"),
+        ("navigation_talking", "succeeded", "idle"),
+    ]
+    [opinion] = cyborg.said
+    assert opinion.text in opinions(opinion.emotion, "cafeteria")
+    assert opinion.emotion == emotion or emotion in DRIFTING
+    arrival = next(t for t, _, e, b in cyborg.states if b == "navigation_talking")
+    assert opinion.t == pytest.approx(arrival, abs=0.5)  # said on arrival
+
+
+def test_a_command_while_driving_changes_the_destination(clock: VirtualClock, cyborg: Cyborg) -> None:
+    async def main() -> None:
+        await cyborg.settle()
+        cyborg.hear("go to the cafeteria")
+        await cyborg.until(lambda: cyborg.state == "navigation_moving", 5.0, "moving")
+        await clock.sleep(20.0)
+        cyborg.hear("go to the elevator")
+        await cyborg.trip_done()
+
+    clock.run(main())
+    assert cyborg.at("elevator")
+    assert ("navigation_moving", "navigation_command", "navigation_planning") in cyborg.transitions()
+    assert cyborg.sentences() == ["I am happy about elevator"]
+
+
+# --- "where is X?" -------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("emotion", [NEUTRAL, "happy", "curious"])
+def test_where_is_el6_yes_guides_there(clock: VirtualClock, cyborg: Cyborg, emotion: str) -> None:
+    async def main() -> None:
+        await cyborg.settle(emotion)
+        cyborg.hear("where is el6")
+        await cyborg.until(lambda: OFFER in cyborg.sentences(), 5.0, "the offer")
+        assert cyborg.state == "navigation_talking" and cyborg.moved_since(0.0) == 0.0
+        cyborg.hear("yes")
+        await cyborg.trip_done()
+
+    clock.run(main())
+    assert cyborg.at("el6")
+    assert cyborg.sentences() == [OFFER, "At once.", "Human, this is el6"]
+    assert cyborg.transitions()[1:] == [
+        ("idle", "navigation_information", "navigation_talking"),
+        ("navigation_talking", "navigation_command", "navigation_planning"),
+        ("navigation_planning", "navigation_start_moving", "navigation_moving"),
+        ("navigation_moving", "succeeded", "navigation_talking"),
+        ("navigation_talking", "succeeded", "idle"),
+    ]
+    confirmed = cyborg.said[1].t
+    start_moving = next(t for t, _, _, b in cyborg.states if b == "navigation_moving")
+    assert start_moving >= confirmed  # it confirms, then drives
+
+
+def test_where_is_el6_no_declines_and_stays(clock: VirtualClock, cyborg: Cyborg) -> None:
+    async def main() -> None:
+        await cyborg.settle()
+        cyborg.hear("where is el6")
+        await cyborg.until(lambda: OFFER in cyborg.sentences(), 5.0, "the offer")
+        cyborg.hear("no")
+        await cyborg.until(lambda: cyborg.state == "idle", 30.0, "idle")
+        await clock.sleep(60.0)
+
+    clock.run(main())
+    assert cyborg.sentences() == [OFFER, "All right, maybe another time."]
+    assert cyborg.moved_since(0.0) == 0.0
+    assert cyborg.transitions()[1:] == [
+        ("idle", "navigation_information", "navigation_talking"),
+        ("navigation_talking", "succeeded", "idle"),
+    ]
+
+
+def test_where_is_without_an_answer_gives_up_and_stays(clock: VirtualClock, cyborg: Cyborg) -> None:
+    async def main() -> None:
+        await cyborg.settle()
+        cyborg.hear("where is el6")
+        await cyborg.until(lambda: OFFER in cyborg.sentences(), 5.0, "the offer")
+        await cyborg.until(lambda: cyborg.state == "idle", 30.0, "idle")  # answer_timeout is 20 s
+        cyborg.hear("yes")  # too late: nobody asked
+        await clock.sleep(30.0)
+
+    clock.run(main())
+    assert cyborg.sentences() == [OFFER]
+    assert cyborg.moved_since(0.0) == 0.0 and cyborg.state == "idle"
+
+
+def test_a_question_on_the_way_gets_an_opinion_not_an_arrival(clock: VirtualClock, cyborg: Cyborg) -> None:
+    """Guided towards el6, asked about the cafeteria: it talks about the cafeteria (7.7)."""
+
+    async def main() -> None:
+        await cyborg.settle()
+        cyborg.hear("where is el6")
+        await cyborg.until(lambda: OFFER in cyborg.sentences(), 5.0, "the offer")
+        cyborg.hear("yes")
+        await cyborg.until(lambda: cyborg.state == "navigation_moving", 10.0, "moving")
+        await clock.sleep(10.0)
+        cyborg.hear("what do you think of the cafeteria")
+        await cyborg.until(lambda: cyborg.state == "navigation_talking", 5.0, "talking")
+        marks["talking"] = clock.monotonic()
+        await cyborg.until(lambda: cyborg.state == "idle", 30.0, "idle")
+        await clock.sleep(30.0)
+
+    marks: dict[str, float] = {}
+    clock.run(main())
+    assert cyborg.sentences() == [OFFER, "At once.", "I am happy about cafeteria"]
+    assert ("navigation_moving", "navigation_feedback", "navigation_talking") in cyborg.transitions()
+    assert cyborg.moved_since(marks["talking"] + 0.5) == 0.0  # it stopped to answer
+    assert cyborg.base.path_state is PathState.STOPPED
+    assert not cyborg.at("el6")
+
+
+def test_after_a_guided_tour_a_command_is_a_command_again(clock: VirtualClock, cyborg: Cyborg) -> None:
+    """Guided to el6, then told to go to the entrance: an opinion on arrival, not a tour guide's line."""
+
+    async def main() -> None:
+        await cyborg.settle()
+        cyborg.hear("where is el6")
+        await cyborg.until(lambda: OFFER in cyborg.sentences(), 5.0, "the offer")
+        cyborg.hear("yes")
+        await cyborg.until(lambda: "Human, this is el6" in cyborg.sentences(), 300.0, "el6")
+        await cyborg.until(lambda: cyborg.state == "idle", 10.0, "idle")
+        cyborg.set_emotion(NEUTRAL)
+        cyborg.hear("go to the elevator")
+        await cyborg.trip_done()
+
+    clock.run(main())
+    assert cyborg.at("elevator")
+    last = cyborg.said[-1]
+    assert last.text in opinions(last.emotion, "elevator")
+
+
+# --- "what do you think of X?" ----------------------------------------------------------------
+
+
+@pytest.mark.parametrize("emotion", EMOTIONS)
+def test_what_do_you_think_of_the_cafeteria(clock: VirtualClock, cyborg: Cyborg, emotion: str) -> None:
+    async def main() -> None:
+        await cyborg.settle(emotion)
+        cyborg.hear("what do you think of the cafeteria")
+        await cyborg.until(lambda: bool(cyborg.said), 5.0, "an answer")
+        await cyborg.until(lambda: cyborg.state == "idle", 10.0, "idle")
+
+    clock.run(main())
+    [opinion] = cyborg.said
+    assert opinion.emotion == emotion
+    assert opinion.text in opinions(emotion, "cafeteria")
+    assert cyborg.moved_since(0.0) == 0.0
+    assert cyborg.transitions()[1:] == [
+        ("idle", "navigation_feedback", "navigation_talking"),
+        ("navigation_talking", "succeeded", "idle"),
+    ]
+
+
+def test_opinions_differ_by_emotion(clock: VirtualClock, tmp_path: Path) -> None:
+    """Happy and angry robots do not say the same thing about the same place."""
+    heard: dict[str, set[str]] = {}
+    for emotion in ("happy", "angry"):
+        for seed in range(3):
+            local = VirtualClock()
+            try:
+                robot = Cyborg(local, tmp_path / f"{emotion}{seed}", seed=seed)
+
+                async def ask(robot: Cyborg = robot, emotion: str = emotion) -> None:
+                    await robot.settle(emotion)
+                    robot.hear("what do you think of the cafeteria")
+                    await robot.until(lambda: bool(robot.said), 5.0, "an answer")
+
+                local.run(ask())
+                heard.setdefault(emotion, set()).add(robot.said[0].text)
+            finally:
+                local.close()
+    assert heard["happy"] and heard["angry"] and not heard["happy"] & heard["angry"]
+
+
+# --- an unreachable place ---------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("emotion", "sentence"),
+    [
+        (NEUTRAL, "I am stuck and cannot get to the boiler room."),
+        ("sad", "I tried, but I could not reach the boiler room."),
+    ],
+)
+def test_an_unreachable_place_aborts_and_says_it_is_stuck(
+    clock: VirtualClock, cyborg: Cyborg, emotion: str, sentence: str
+) -> None:
+    x, y = wall_near(CAMPUS.pose("elevator").position)
+    cyborg.nav.db.add_location(Location("boiler room", x=x, y=y))
+    start = cyborg.position
+
+    async def main() -> None:
+        await cyborg.settle(emotion)
+        cyborg.hear("go to the boiler room")
+        await cyborg.trip_done()
+        await clock.sleep(10.0)
+
+    clock.run(main())
+    assert cyborg.transitions()[1:] == [
+        ("idle", "navigation_command", "navigation_planning"),
+        ("navigation_planning", "navigation_start_moving", "navigation_moving"),
+        ("navigation_moving", "aborted", "navigation_talking"),
+        ("navigation_talking", "succeeded", "idle"),
+    ]
+    assert cyborg.sentences() == [sentence]
+    assert cyborg.position == start
+    assert cyborg.base.path_state is PathState.FAILED_PLAN
+
+
+# --- the motivator's navigation_emotional ---------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("emotion", "places"),
+    [("happy", CROWDED), ("loved", CROWDED), ("angry", QUIET), ("sad", {"cafeteria"})],
+)
+def test_on_its_own_it_goes_where_the_emotion_says(
+    clock: VirtualClock, cyborg: Cyborg, emotion: str, places: set[str]
+) -> None:
+    async def main() -> None:
+        await cyborg.settle(emotion)
+        cyborg.send_event("navigation_emotional")  # as the motivator would
+        await cyborg.trip_done()
+
+    clock.run(main())
+    [there] = [name for name in CROWDED | QUIET if cyborg.at(name)]
+    assert there in places and there != "information desk"  # it starts there: somewhere else
+    assert ("navigation_moving", "succeeded", "navigation_talking") in cyborg.transitions()
+
+
+def test_a_sad_robot_at_the_most_pleasant_place_goes_to_the_next(clock: VirtualClock, cyborg: Cyborg) -> None:
+    async def main() -> None:
+        await cyborg.settle()
+        cyborg.hear("go to the cafeteria")
+        await cyborg.trip_done()
+        await cyborg.settle("sad")
+        cyborg.send_event("navigation_emotional")
+        await cyborg.until(lambda: cyborg.state == "navigation_moving", 5.0, "moving")
+        await cyborg.until(lambda: cyborg.state == "idle", 300.0, "idle")
+
+    clock.run(main())
+    assert cyborg.at("waiting area")  # the cafeteria is nicer, but it is already there
+
+
+def test_wandering_ends_when_happy_and_the_base_stops(clock: VirtualClock, cyborg: Cyborg) -> None:
+    marks: dict[str, float] = {}
+
+    async def main() -> None:
+        await cyborg.settle(NEUTRAL)
+        cyborg.send_event("navigation_emotional")
+        await cyborg.until(lambda: cyborg.base.wandering, 10.0, "wandering")
+        marks["wandering"] = clock.monotonic()
+        await clock.sleep(60.0)
+        marks["happy"] = clock.monotonic()
+        cyborg.set_emotion("happy")
+        await cyborg.until(lambda: cyborg.state == "idle", 20.0, "the end of wandering")
+        marks["idle"] = clock.monotonic()
+        await clock.sleep(30.0)
+
+    clock.run(main())
+    assert cyborg.moved_since(marks["wandering"]) > 20.0  # a minute of wandering
+    assert cyborg.transitions()[1:] == [
+        ("idle", "navigation_emotional", "navigation_planning"),
+        ("navigation_planning", "navigation_start_wandering", "navigation_moving"),
+        ("navigation_moving", "navigation_wandering_completed", "idle"),
+    ]
+    assert cyborg.sent("navigation_wandering_completed") == [pytest.approx(marks["idle"], abs=0.5)]
+    assert marks["idle"] - marks["happy"] <= 15.5  # at the next check, every 15 s
+    assert cyborg.moved_since(marks["idle"]) == 0.0  # the base stopped
+    assert not cyborg.base.wandering and cyborg.base.path_state is PathState.STOPPED
+
+
+def test_wandering_goes_on_while_not_happy(clock: VirtualClock, cyborg: Cyborg) -> None:
+    async def main() -> None:
+        await cyborg.settle("curious")
+        cyborg.send_event("navigation_emotional")
+        await cyborg.until(lambda: cyborg.base.wandering, 10.0, "wandering")
+        await clock.sleep(60.0)
+
+    clock.run(main())
+    assert cyborg.state == "navigation_moving" and cyborg.base.wandering
+    assert cyborg.moved_since(50.0) > 5.0
+    assert cyborg.sent("navigation_wandering_completed") == []
+
+
+# --- emotional feedback -----------------------------------------------------------------------------
+
+
+def test_feedback_directions_of_a_trip(clock: VirtualClock, cyborg: Cyborg) -> None:
+    pads: dict[str, tuple[float, float, float]] = {}
+
+    async def main() -> None:
+        await cyborg.settle(NEUTRAL)
+        cyborg.hear("go to the cafeteria")
+        await cyborg.until(lambda: cyborg.state == "navigation_moving", 5.0, "moving")
+        pads["bossed"] = cyborg.robot.emotion.pad.as_tuple()
+        await cyborg.until(lambda: cyborg.base.distance_travelled > 60.0, 200.0, "most of the way")
+        pads["driven"] = cyborg.robot.emotion.pad.as_tuple()
+        await cyborg.until(lambda: cyborg.state == "navigation_talking", 60.0, "arrival")
+        await clock.sleep(0.5)
+        pads["arrived"] = cyborg.robot.emotion.pad.as_tuple()
+
+    clock.run(main())
+    deltas = [delta for _, delta in cyborg.feedback]
+    assert deltas[0] == (0.0, 0.0, -0.2)  # bossed around: dominance down
+    moving = deltas[1:-1]
+    assert len(moving) >= 6 and all(a > 0 for _, a, _ in moving)  # moving: arousal up
+    assert deltas[-1][0] == pytest.approx(0.8 * 0.125) and deltas[-1][1:] == (0.0, 0.0)  # pleasant arrival
+    assert pads["bossed"][2] < -0.15
+    assert pads["driven"][1] > pads["bossed"][1] + 0.1
+    assert pads["arrived"][0] > pads["driven"][0] + 0.05
+
+
+def test_an_unpleasant_arrival_lowers_pleasure(clock: VirtualClock, cyborg: Cyborg) -> None:
+    async def main() -> None:
+        await cyborg.settle(NEUTRAL)
+        cyborg.hear("go to the elevator")
+        await cyborg.trip_done()
+
+    clock.run(main())
+    assert cyborg.at("elevator")
+    assert cyborg.feedback[-1][1][0] == pytest.approx(-0.3 * 0.125)
+
+
+def test_own_choice_raises_dominance(clock: VirtualClock, cyborg: Cyborg) -> None:
+    async def main() -> None:
+        await cyborg.settle("sad")
+        cyborg.send_event("navigation_emotional")
+        await cyborg.until(lambda: cyborg.state == "navigation_moving", 5.0, "moving")
+
+    clock.run(main())
+    assert cyborg.feedback[0][1] == (0.0, 0.0, 0.1)
+
+
+# --- the calendar ---------------------------------------------------------------------------------
+
+
+def schedule(cyborg: Cyborg, place: str, *, start: float, end: float) -> None:
+    """Be at ``place`` from ``start`` to ``end`` seconds from now."""
+    now = cyborg.clock.datetime()
+    cyborg.nav.db.add_event(
+        CalendarEvent(place, now + timedelta(seconds=start), now + timedelta(seconds=end))
+    )
+
+
+def test_scheduler_sends_the_robot_to_the_place_once(clock: VirtualClock, cyborg: Cyborg) -> None:
+    schedule(cyborg, "cafeteria", start=-1800, end=3600)
+
+    async def main() -> None:
+        await cyborg.trip_done()
+        await clock.sleep(300.0)
+
+    clock.run(main())
+    assert cyborg.at("cafeteria")
+    [fired] = cyborg.sent("navigation_scheduler")  # not while heading there, nor once there
+    assert fired <= cyborg.nav.scheduler_interval + 0.1
+    assert cyborg.transitions()[1:5] == [
+        ("idle", "navigation_scheduler", "navigation_planning"),
+        ("navigation_planning", "navigation_start_moving", "navigation_moving"),
+        ("navigation_moving", "succeeded", "navigation_talking"),
+        ("navigation_talking", "succeeded", "idle"),
+    ]
+    assert cyborg.sentences() == ["I am happy about cafeteria"]
+
+
+def test_scheduler_waits_for_an_event_to_start(clock: VirtualClock, cyborg: Cyborg) -> None:
+    schedule(cyborg, "cafeteria", start=120, end=3600)
+
+    async def main() -> None:
+        await clock.sleep(115.0)
+        assert cyborg.sent("navigation_scheduler") == [] and cyborg.state == "idle"
+        await cyborg.trip_done()
+
+    clock.run(main())
+    [fired] = cyborg.sent("navigation_scheduler")
+    assert 119.9 <= fired <= 130.1
+    assert cyborg.at("cafeteria")
+
+
+def test_scheduler_repeats_at_most_every_scheduler_repeat(clock: VirtualClock, cyborg: Cyborg) -> None:
+    """In a conversation the controller does not act on it: the scheduler reminds, but rate-limited."""
+    schedule(cyborg, "cafeteria", start=-60, end=3600)
+
+    async def main() -> None:
+        await cyborg.until(lambda: cyborg.state == "idle", 5.0, "idle")
+        cyborg.hear("hello")
+        await cyborg.until(lambda: cyborg.state == "conversation", 5.0, "a conversation")
+        await clock.sleep(120.0)
+
+    clock.run(main())
+    fired = cyborg.sent("navigation_scheduler")
+    assert cyborg.state == "conversation" and cyborg.moved_since(0.0) == 0.0
+    gaps = [b - a for a, b in itertools.pairwise(fired)]
+    assert len(fired) >= 4 and min(gaps) >= cyborg.nav.scheduler_repeat - 0.01
+
+
+def test_scheduler_does_not_interrupt_a_users_errand_and_returns_after(
+    clock: VirtualClock, cyborg: Cyborg
+) -> None:
+    schedule(cyborg, "cafeteria", start=-1800, end=3600)
+    marks: dict[str, float] = {}
+
+    async def main() -> None:
+        await cyborg.trip_done()  # to the cafeteria on schedule
+        assert cyborg.at("cafeteria")
+        marks["errand"] = clock.monotonic()
+        cyborg.hear("go to el6")
+        await cyborg.until(lambda: cyborg.at("el6"), 200.0, "el6")
+        await cyborg.until(lambda: cyborg.state == "idle", 20.0, "idle at el6")
+        marks["el6"] = clock.monotonic()
+        await cyborg.until(lambda: cyborg.at("cafeteria"), 300.0, "back at the cafeteria")
+        await cyborg.until(lambda: cyborg.state == "idle", 20.0, "idle")
+
+    clock.run(main())
+    assert cyborg.sent("navigation_scheduler", marks["errand"], marks["el6"]) == []  # never during the errand
+    [back] = cyborg.sent("navigation_scheduler", marks["el6"])
+    assert back - marks["el6"] <= cyborg.nav.scheduler_repeat + cyborg.nav.scheduler_interval
+    assert "Human, this is el6" not in cyborg.sentences()  # an errand, not a guided tour
+    last = cyborg.said[-1]
+    assert last.text in opinions(last.emotion, "cafeteria")
+
+
+def test_scheduler_does_not_call_back_after_the_event(clock: VirtualClock, cyborg: Cyborg) -> None:
+    schedule(cyborg, "cafeteria", start=-1800, end=200)
+
+    async def main() -> None:
+        await cyborg.trip_done()
+        cyborg.hear("go to the entrance")
+        await cyborg.trip_done()
+        await clock.sleep(300.0)
+
+    clock.run(main())
+    assert cyborg.at("entrance")
+    assert len(cyborg.sent("navigation_scheduler")) == 1
+
+
+def test_scheduler_interrupts_wandering(clock: VirtualClock, cyborg: Cyborg) -> None:
+    async def main() -> None:
+        await cyborg.settle("bored")
+        cyborg.send_event("navigation_emotional")
+        await cyborg.until(lambda: cyborg.base.wandering, 10.0, "wandering")
+        await clock.sleep(30.0)
+        schedule(cyborg, "waiting area", start=-60, end=3600)
+        await cyborg.until(lambda: cyborg.at("waiting area"), 300.0, "the waiting area")
+        await clock.sleep(30.0)
+
+    clock.run(main())
+    assert ("navigation_moving", "navigation_scheduler", "navigation_planning") in cyborg.transitions()
+    assert not cyborg.base.wandering and cyborg.at("waiting area")
+
+
+def test_angry_ignores_the_schedule_for_a_quiet_place(clock: VirtualClock, cyborg: Cyborg) -> None:
+    async def main() -> None:
+        await cyborg.settle("angry")
+        schedule(cyborg, "cafeteria", start=-60, end=3600)
+        await cyborg.until(lambda: cyborg.state == "navigation_moving", 20.0, "moving")
+        await cyborg.until(lambda: cyborg.state == "navigation_talking", 300.0, "arrival")
+
+    clock.run(main())
+    assert not cyborg.at("cafeteria")
+    assert [name for name in QUIET if cyborg.at(name)]
+
+
+@pytest.mark.parametrize(("local_time", "first_call"), [((15, 10), 0.0), ((14, 50), 600.0)])
+def test_weekly_event_keeps_its_local_time_across_daylight_saving(
+    tmp_path: Path, local_time: tuple[int, int], first_call: float
+) -> None:
+    """Weekly at 15:00-16:00 Oslo time from Monday 19 October 2026 (summer time, UTC+2).
+
+    Summer time ends on 25 October, so on Monday 26 October the event runs
+    15:00-16:00 local = 14:00-15:00 UTC. Starting at 15:10 the robot is called at
+    once; starting at 14:50 it is not, until 15:00 (600 s later).
+    """
+    clock = VirtualClock(start=datetime(2026, 10, 26, *local_time, tzinfo=OSLO))
+    try:
+        cyborg = Cyborg(clock, tmp_path)
+        cyborg.nav.db.add_event(
+            CalendarEvent(
+                "cafeteria",
+                datetime(2026, 10, 19, 15, 0, tzinfo=OSLO),
+                datetime(2026, 10, 19, 16, 0, tzinfo=OSLO),
+                recurrence="FREQ=WEEKLY",
+            )
+        )
+        clock.run(clock.sleep(first_call + 200.0))
+        fired = cyborg.sent("navigation_scheduler")
+        assert fired, "the scheduler never called"
+        assert first_call <= fired[0] <= first_call + cyborg.nav.scheduler_interval + 0.1
+        assert all(t >= fired[0] for t, _, _ in cyborg.poses[1:])  # it did not move before the call
+        assert cyborg.at("cafeteria")
+    finally:
+        clock.close()
