@@ -732,6 +732,17 @@ def test_angry_ignores_the_schedule_for_a_quiet_place(clock: VirtualClock, cybor
     assert [name for name in QUIET if cyborg.at(name)]
 
 
+def test_an_angry_robot_does_not_pace_between_quiet_places(clock: VirtualClock, cyborg: Cyborg) -> None:
+    async def main() -> None:
+        await cyborg.settle("angry")
+        schedule(cyborg, "cafeteria", start=-60, end=3600)
+        await cyborg.until(lambda: cyborg.state == "navigation_talking", 300.0, "arrival")
+        await clock.sleep(600.0)
+
+    clock.run(main())
+    assert len(cyborg.sent("navigation_scheduler")) == 1, "one walk-off while angry, not one every few minutes"
+
+
 @pytest.mark.parametrize(("local_time", "first_call"), [((15, 10), 0.0), ((14, 50), 600.0)])
 def test_weekly_event_keeps_its_local_time_across_daylight_saving(
     tmp_path: Path, local_time: tuple[int, int], first_call: float

@@ -19,6 +19,7 @@ from cyborg.errors import CyborgError
 from cyborg.modules.helper import Abort, BehaviourModule, GoalContext
 from cyborg.modules.speech import estimated_duration
 from cyborg.navigation.behaviour import (
+    ANGRY,
     RESPONSE_FOR_TALK,
     Origin,
     Plan,
@@ -95,6 +96,7 @@ class NavigationModule(BehaviourModule):
         self.failed_target: Location | None = None
         self.last_scheduler_event = -math.inf
         self.system_state = ""
+        self.sulking = False
         self.wandering_now = False
         self._answer: asyncio.Future[Intent] | None = None
         self.move_base = node.action_client(topics.MOVE_BASE, MoveBaseAction)
@@ -160,6 +162,9 @@ class NavigationModule(BehaviourModule):
         if place is None:
             return
         self.scheduled = place
+        if self.sulking and self.emotion == ANGRY:
+            return  # it already walked off to be alone; asking again would only make it pace
+        self.sulking = False
         at_place = self.pose is not None and math.dist(self.pose, (place.x, place.y)) <= max(
             place.tolerance, AT_PLACE_DISTANCE
         )
@@ -187,6 +192,7 @@ class NavigationModule(BehaviourModule):
         )
         log.info("planning (%s, %s): %s", ctx.event, self.emotion, chosen.reason)
         self.origin, self.current_plan = origin, chosen
+        self.sulking = origin is Origin.SCHEDULE and self.emotion == ANGRY
         if any(chosen.feedback):
             self.send_emotion(*chosen.feedback)
         if chosen.kind is PlanKind.REFUSE:
