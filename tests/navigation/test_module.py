@@ -735,6 +735,7 @@ def test_angry_ignores_the_schedule_for_a_quiet_place(clock: VirtualClock, cybor
 def test_an_angry_robot_does_not_pace_between_quiet_places(clock: VirtualClock, cyborg: Cyborg) -> None:
     async def main() -> None:
         await cyborg.settle("angry")
+        cyborg.robot.emotion.enabled = False  # it stays angry: feedback is ignored
         schedule(cyborg, "cafeteria", start=-60, end=3600)
         await cyborg.until(lambda: cyborg.state == "navigation_talking", 300.0, "arrival")
         await clock.sleep(600.0)
