@@ -741,7 +741,9 @@ def test_an_angry_robot_does_not_pace_between_quiet_places(clock: VirtualClock, 
         await clock.sleep(600.0)
 
     clock.run(main())
-    assert len(cyborg.sent("navigation_scheduler")) == 1, "one walk-off while angry, not one every few minutes"
+    assert len(cyborg.sent("navigation_scheduler")) == 1, (
+        "one walk-off while angry, not one every few minutes"
+    )
 
 
 @pytest.mark.parametrize(("local_time", "first_call"), [((15, 10), 0.0), ((14, 50), 600.0)])
