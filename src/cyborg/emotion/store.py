@@ -16,18 +16,15 @@ from __future__ import annotations
 import logging
 import math
 import sqlite3
-import time
-from collections.abc import Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from types import TracebackType
 
 from pydantic import ValidationError
 
 from cyborg.emotion.model import DIMENSIONS, PAD, clamp
-from cyborg.errors import DatabaseError
 from cyborg.motivator.logic import MotivationalEvent
+from cyborg.storage import SQLiteFile, Unusable, transaction
 
 log = logging.getLogger(__name__)
 
@@ -62,10 +59,6 @@ _COLUMNS: dict[str, list[str]] = {
 }
 
 
-class _Unusable(Exception):
-    """The file exists but cannot be used as this store (reason in args[0])."""
-
-
 @dataclass(frozen=True)
 class StoredEmotion:
     """The persisted PAD point, the wall time of its last update and the on/off switch."""
@@ -75,159 +68,36 @@ class StoredEmotion:
     enabled: bool
 
 
-class ControllerStore:
+class ControllerStore(SQLiteFile):
     """The SQLite file behind the emotion system and the motivator."""
 
+    what = "controller store"
+
     def __init__(self, path: str | Path, seed_events: Sequence[MotivationalEvent] = ()) -> None:
-        self.path = Path(path)
         self._seed = list(seed_events)
-        self._conn = self._open_or_recover()
+        super().__init__(path)
 
-    # --- opening ---------------------------------------------------------------------
-
-    def _open_or_recover(self) -> sqlite3.Connection:
-        if self.path.is_dir():
-            raise DatabaseError(f"{self.path} is a folder: give the store a file name, e.g. cyborg.db")
-        try:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise DatabaseError(
-                f"cannot create the folder for {self.path}: {exc}; pick a writable path"
-            ) from exc
-        wal = self.path.with_name(self.path.name + "-wal")
-        if self.path.exists() and (self.path.stat().st_size > 0 or wal.exists()):
-            try:
-                return self._open_existing()
-            except _Unusable as exc:
-                self._move_aside(str(exc.args[0]))
-        return self._create()
-
-    def _connect(self) -> sqlite3.Connection:
-        """Connect and set the pragmas; raises _Unusable if the file is not a database."""
-        try:
-            conn = sqlite3.connect(self.path, isolation_level=None)
-        except sqlite3.Error as exc:
-            raise DatabaseError(f"cannot open {self.path}: {exc}; check permissions") from exc
-        try:
-            conn.execute("PRAGMA journal_mode=WAL")
-            conn.execute("PRAGMA synchronous=FULL")
-        except sqlite3.OperationalError as exc:
-            conn.close()
-            raise DatabaseError(
-                f"cannot use {self.path}: {exc}; check permissions and that no other program holds it locked"
-            ) from exc
-        except sqlite3.DatabaseError as exc:
-            conn.close()
-            raise _Unusable(f"not an SQLite database ({exc})") from exc
-        return conn
-
-    def _open_existing(self) -> sqlite3.Connection:
-        conn = self._connect()
-        try:
-            self._check(conn)
-        except sqlite3.DatabaseError as exc:
-            conn.close()
-            raise _Unusable(str(exc)) from exc
-        except _Unusable:
-            conn.close()
-            raise
-        return conn
-
-    @staticmethod
-    def _check(conn: sqlite3.Connection) -> None:
-        check = conn.execute("PRAGMA integrity_check").fetchall()
-        if check != [("ok",)]:
-            raise _Unusable(f"integrity_check failed: {check[:3]}")
+    def _prepare(self, conn: sqlite3.Connection) -> None:
+        tables = {row[0] for row in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
+        if not tables:
+            self._create(conn)
+            return
+        self.check_integrity(conn)
         for table, columns in _COLUMNS.items():
             found = [row[1] for row in conn.execute(f"PRAGMA table_info({table})")]
             if found != columns:
-                raise _Unusable(f"table {table} has columns {found}, expected {columns}")
+                raise Unusable(f"table {table} has columns {found}, expected {columns}")
         if conn.execute("SELECT COUNT(*) FROM emotion").fetchone()[0] != 1:
-            raise _Unusable("the emotion row is missing")
+            raise Unusable("the emotion row is missing")
 
-    def _move_aside(self, reason: str) -> None:
-        stamp = time.strftime("%Y%m%dT%H%M%S")
-        target = self.path.with_name(f"{self.path.name}.corrupt-{stamp}")
-        n = 1
-        while target.exists():
-            target = self.path.with_name(f"{self.path.name}.corrupt-{stamp}-{n}")
-            n += 1
-        try:
-            self.path.rename(target)
-            for suffix in ("-wal", "-shm"):
-                side = self.path.with_name(self.path.name + suffix)
-                if side.exists():
-                    side.rename(target.with_name(target.name + suffix))
-        except OSError as exc:
-            raise DatabaseError(
-                f"{self.path} is unusable ({reason}) and could not be moved aside: {exc}; "
-                "delete or move the file by hand"
-            ) from exc
-        log.warning(
-            "controller store %s is unusable (%s); moved it to %s and started afresh",
-            self.path,
-            reason,
-            target,
-        )
-
-    def _create(self) -> sqlite3.Connection:
-        try:
-            conn = self._connect()
-        except _Unusable as exc:
-            raise DatabaseError(f"cannot create {self.path}: {exc.args[0]}") from exc
-        with self._transaction(conn):
+    def _create(self, conn: sqlite3.Connection) -> None:
+        with transaction(conn):
             for sql in _TABLES.values():
                 conn.execute(sql)
             conn.execute("INSERT INTO meta VALUES ('schema_version', ?)", (SCHEMA_VERSION,))
             conn.execute("INSERT INTO emotion VALUES (1, 0.0, 0.0, 0.0, NULL, 1)")
             for event in self._seed:
                 self._upsert_event(conn, event)
-        return conn
-
-    # --- plumbing --------------------------------------------------------------------
-
-    @staticmethod
-    @contextmanager
-    def _transaction(conn: sqlite3.Connection) -> Iterator[None]:
-        conn.execute("BEGIN IMMEDIATE")
-        try:
-            yield
-        except BaseException:
-            conn.execute("ROLLBACK")
-            raise
-        conn.execute("COMMIT")
-
-    @contextmanager
-    def _writing(self, what: str) -> Iterator[sqlite3.Connection]:
-        try:
-            with self._transaction(self._conn):
-                yield self._conn
-        except sqlite3.Error as exc:
-            raise DatabaseError(
-                f"could not {what} in {self.path}: {exc}; check the disk and file permissions"
-            ) from exc
-
-    def _read(self, sql: str, params: tuple[object, ...] = ()) -> list[tuple[object, ...]]:
-        try:
-            return self._conn.execute(sql, params).fetchall()
-        except sqlite3.Error as exc:
-            raise DatabaseError(
-                f"could not read {self.path}: {exc}; restart the controller to recover the file"
-            ) from exc
-
-    def close(self) -> None:
-        self._conn.close()
-
-    def __enter__(self) -> ControllerStore:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
 
     # --- emotion ---------------------------------------------------------------------
 

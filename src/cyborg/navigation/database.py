@@ -25,17 +25,15 @@ import logging
 import math
 import re
 import sqlite3
-from collections.abc import Iterable, Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 from datetime import UTC, datetime, timedelta, timezone, tzinfo
-from pathlib import Path
-from types import TracebackType
 from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
 from cyborg.errors import DatabaseError
 from cyborg.navigation.calendar import normalise_recurrence, occurrences_between
 from cyborg.navigation.keywords import LocationMatcher, normalise
+from cyborg.storage import SQLiteFile, Unusable, transaction
 
 log = logging.getLogger(__name__)
 
@@ -200,60 +198,11 @@ DEFAULT_RESPONSES: tuple[Response, ...] = (
 )
 
 
-class _Unusable(Exception):
-    """The file exists but is not this database (reason in args[0])."""
-
-
-class NavigationDatabase:
+class NavigationDatabase(SQLiteFile):
     """The SQLite file of the navigation module; every method commits before returning."""
 
-    def __init__(self, path: str | Path) -> None:
-        self.path = Path(path)
-        self._conn = self._open_or_recover()
-
-    # --- opening -----------------------------------------------------------------------------
-
-    def _open_or_recover(self) -> sqlite3.Connection:
-        if self.path.is_dir():
-            raise DatabaseError(f"{self.path} is a folder; give a file name such as navigation.db")
-        try:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise DatabaseError(
-                f"cannot create the folder of {self.path}: {exc}; pick a writable path"
-            ) from exc
-        try:
-            conn = self._connect()
-            try:
-                self._prepare(conn)
-            except BaseException:
-                conn.close()
-                raise
-            return conn
-        except _Unusable as exc:
-            self._move_aside(str(exc.args[0]))
-        conn = self._connect()
-        self._prepare(conn)
-        return conn
-
-    def _connect(self) -> sqlite3.Connection:
-        try:
-            conn = sqlite3.connect(self.path, isolation_level=None)
-        except sqlite3.Error as exc:
-            raise DatabaseError(f"cannot open {self.path}: {exc}; check the file's permissions") from exc
-        try:
-            conn.execute("PRAGMA journal_mode=WAL")
-            conn.execute("PRAGMA synchronous=FULL")
-            conn.execute("PRAGMA foreign_keys=ON")
-        except sqlite3.OperationalError as exc:
-            conn.close()
-            raise DatabaseError(
-                f"cannot use {self.path}: {exc}; check permissions and that no other program locks it"
-            ) from exc
-        except sqlite3.DatabaseError as exc:
-            conn.close()
-            raise _Unusable(f"not an SQLite database ({exc})") from exc
-        return conn
+    what = "navigation database"
+    foreign_keys = True
 
     def _prepare(self, conn: sqlite3.Connection) -> None:
         """Check the file, migrate it to SCHEMA_VERSION and seed a new one."""
@@ -262,19 +211,19 @@ class NavigationDatabase:
             version = int(conn.execute("PRAGMA user_version").fetchone()[0])
             tables = {row[0] for row in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
         except sqlite3.DatabaseError as exc:
-            raise _Unusable(str(exc)) from exc
+            raise Unusable(str(exc)) from exc
         if check != [("ok",)]:
-            raise _Unusable(f"integrity_check failed: {check[:3]}")
+            raise Unusable(f"integrity_check failed: {check[:3]}")
         if version > SCHEMA_VERSION:
             raise DatabaseError(
                 f"{self.path} has schema version {version}, newer than this program's {SCHEMA_VERSION}; "
                 "update cyborg, or point --db at another file"
             )
         if version == 0 and tables:
-            raise _Unusable(f"it holds other tables ({', '.join(sorted(tables))}) and no schema version")
+            raise Unusable(f"it holds other tables ({', '.join(sorted(tables))}) and no schema version")
         for step in range(version, SCHEMA_VERSION):
             try:
-                with self._transaction(conn):
+                with transaction(conn):
                     for sql in _MIGRATIONS[step]:
                         conn.execute(sql)
                     if step == 0:
@@ -293,31 +242,7 @@ class NavigationDatabase:
         for table, columns in _COLUMNS.items():
             found = {row[1] for row in conn.execute(f"PRAGMA table_info({table})")}
             if not columns <= found:
-                raise _Unusable(f"table {table} lacks columns {sorted(columns - found)}")
-
-    def _move_aside(self, reason: str) -> None:
-        stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%SZ")
-        target = self.path.with_name(f"{self.path.name}.corrupt-{stamp}")
-        n = 1
-        while target.exists():
-            target = self.path.with_name(f"{self.path.name}.corrupt-{stamp}-{n}")
-            n += 1
-        try:
-            self.path.rename(target)
-            for suffix in ("-wal", "-shm"):
-                side = self.path.with_name(self.path.name + suffix)
-                if side.exists():
-                    side.rename(target.with_name(target.name + suffix))
-        except OSError as exc:
-            raise DatabaseError(
-                f"{self.path} is unusable ({reason}) and could not be moved aside: {exc}; move it by hand"
-            ) from exc
-        log.warning(
-            "navigation database %s is unusable (%s); moved it to %s and started afresh",
-            self.path,
-            reason,
-            target,
-        )
+                raise Unusable(f"table {table} lacks columns {sorted(columns - found)}")
 
     def _seed(self, conn: sqlite3.Connection) -> None:
         for location in DEFAULT_LOCATIONS:
@@ -327,48 +252,6 @@ class NavigationDatabase:
                 "INSERT INTO responses (sentence, type, emotion) VALUES (?, ?, ?)",
                 (response.sentence, response.type.value, response.emotion),
             )
-
-    # --- plumbing ----------------------------------------------------------------------------
-
-    @staticmethod
-    @contextmanager
-    def _transaction(conn: sqlite3.Connection) -> Iterator[None]:
-        conn.execute("BEGIN IMMEDIATE")
-        try:
-            yield
-        except BaseException:
-            conn.execute("ROLLBACK")
-            raise
-        conn.execute("COMMIT")
-
-    @contextmanager
-    def _writing(self, what: str) -> Iterator[sqlite3.Connection]:
-        try:
-            with self._transaction(self._conn):
-                yield self._conn
-        except sqlite3.Error as exc:
-            raise DatabaseError(
-                f"could not {what} in {self.path}: {exc}; check the disk and permissions"
-            ) from exc
-
-    def _read(self, sql: str, params: Sequence[object] = ()) -> list[tuple[object, ...]]:
-        try:
-            return self._conn.execute(sql, tuple(params)).fetchall()
-        except sqlite3.Error as exc:
-            raise DatabaseError(
-                f"could not read {self.path}: {exc}; reopen the database to recover it"
-            ) from exc
-
-    def close(self) -> None:
-        self._conn.close()
-
-    def __enter__(self) -> NavigationDatabase:
-        return self
-
-    def __exit__(
-        self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
-    ) -> None:
-        self.close()
 
     # --- locations ---------------------------------------------------------------------------
 

@@ -1,0 +1,163 @@
+"""SQLite files that never lose a committed write and survive being corrupted.
+
+Shared by the controller's store and the navigation database: WAL journal with
+``synchronous=FULL`` (a committed write survives a power cut), one
+``BEGIN IMMEDIATE`` transaction per write, and recovery: a file that is not a
+usable database is moved aside to ``<name>.corrupt-<time>`` with a logged
+warning and started afresh, so the robot never crashes on it.
+"""
+
+from __future__ import annotations
+
+import logging
+import sqlite3
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from datetime import UTC, datetime
+from pathlib import Path
+from types import TracebackType
+from typing import Self
+
+from cyborg.errors import DatabaseError
+
+log = logging.getLogger(__name__)
+
+
+class Unusable(Exception):
+    """The file exists but cannot be used as this database (reason in args[0])."""
+
+
+@contextmanager
+def transaction(conn: sqlite3.Connection) -> Iterator[None]:
+    conn.execute("BEGIN IMMEDIATE")
+    try:
+        yield
+    except BaseException:
+        conn.execute("ROLLBACK")
+        raise
+    conn.execute("COMMIT")
+
+
+class SQLiteFile:
+    """Base class: opens ``path`` (recovering a broken file), then lets ``_prepare`` check or create it."""
+
+    what = "database"  # how log lines and errors name the file, e.g. "navigation database"
+    foreign_keys = False
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self._conn = self._open_or_recover()
+
+    def _prepare(self, conn: sqlite3.Connection) -> None:
+        """Check, migrate or create the schema; raise :class:`Unusable` for a foreign or broken file."""
+        raise NotImplementedError
+
+    # --- opening ----------------------------------------------------------------------------
+
+    def _open_or_recover(self) -> sqlite3.Connection:
+        if self.path.is_dir():
+            raise DatabaseError(f"{self.path} is a folder; give a file name such as cyborg.db")
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise DatabaseError(
+                f"cannot create the folder of {self.path}: {exc}; pick a writable path"
+            ) from exc
+        try:
+            return self._open()
+        except Unusable as exc:
+            self._move_aside(str(exc.args[0]))
+        try:
+            return self._open()
+        except Unusable as exc:
+            raise DatabaseError(f"cannot create {self.path}: {exc.args[0]}") from exc
+
+    def _open(self) -> sqlite3.Connection:
+        conn = self._connect()
+        try:
+            self._prepare(conn)
+        except sqlite3.DatabaseError as exc:
+            conn.close()
+            raise Unusable(str(exc)) from exc
+        except BaseException:
+            conn.close()
+            raise
+        return conn
+
+    def _connect(self) -> sqlite3.Connection:
+        try:
+            conn = sqlite3.connect(self.path, isolation_level=None)
+        except sqlite3.Error as exc:
+            raise DatabaseError(f"cannot open {self.path}: {exc}; check the file's permissions") from exc
+        try:
+            conn.execute("PRAGMA journal_mode=WAL")
+            conn.execute("PRAGMA synchronous=FULL")
+            if self.foreign_keys:
+                conn.execute("PRAGMA foreign_keys=ON")
+        except sqlite3.OperationalError as exc:
+            conn.close()
+            raise DatabaseError(
+                f"cannot use {self.path}: {exc}; check permissions and that no other program locks it"
+            ) from exc
+        except sqlite3.DatabaseError as exc:
+            conn.close()
+            raise Unusable(f"not an SQLite database ({exc})") from exc
+        return conn
+
+    @staticmethod
+    def check_integrity(conn: sqlite3.Connection) -> None:
+        check = conn.execute("PRAGMA integrity_check").fetchall()
+        if check != [("ok",)]:
+            raise Unusable(f"integrity_check failed: {check[:3]}")
+
+    def _move_aside(self, reason: str) -> None:
+        stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%SZ")
+        target = self.path.with_name(f"{self.path.name}.corrupt-{stamp}")
+        n = 1
+        while target.exists():
+            target = self.path.with_name(f"{self.path.name}.corrupt-{stamp}-{n}")
+            n += 1
+        try:
+            self.path.rename(target)
+            for suffix in ("-wal", "-shm"):
+                side = self.path.with_name(self.path.name + suffix)
+                if side.exists():
+                    side.rename(target.with_name(target.name + suffix))
+        except OSError as exc:
+            raise DatabaseError(
+                f"{self.path} is unusable ({reason}) and could not be moved aside: {exc}; move it by hand"
+            ) from exc
+        log.warning(
+            "%s %s is unusable (%s); moved it to %s and started afresh", self.what, self.path, reason, target
+        )
+
+    # --- reading and writing -------------------------------------------------------------------
+
+    @contextmanager
+    def _writing(self, what: str) -> Iterator[sqlite3.Connection]:
+        try:
+            with transaction(self._conn):
+                yield self._conn
+        except sqlite3.Error as exc:
+            raise DatabaseError(
+                f"could not {what} in {self.path}: {exc}; check the disk and permissions"
+            ) from exc
+
+    def _read(self, sql: str, params: Sequence[object] = ()) -> list[tuple[object, ...]]:
+        try:
+            return self._conn.execute(sql, tuple(params)).fetchall()
+        except sqlite3.Error as exc:
+            raise DatabaseError(
+                f"could not read {self.path}: {exc}; reopen the database to recover it"
+            ) from exc
+
+    def close(self) -> None:
+        self._conn.close()
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self, kind: type[BaseException] | None, value: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        self.close()
