@@ -28,9 +28,10 @@ import sqlite3
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 from datetime import UTC, datetime, timedelta, timezone, tzinfo
+from typing import Any
 from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
-from cyborg.errors import DatabaseError
+from cyborg.errors import CyborgError, DatabaseError
 from cyborg.navigation.calendar import normalise_recurrence, occurrences_between
 from cyborg.navigation.keywords import LocationMatcher, normalise
 from cyborg.storage import SQLiteFile, Unusable, transaction
@@ -254,6 +255,21 @@ class NavigationDatabase(SQLiteFile):
             )
 
     # --- locations ---------------------------------------------------------------------------
+
+    def import_pose(self, pose: Any, map_name: str) -> str:
+        """Add or update one location from a map pose; a line saying what happened."""
+        x, y, heading = float(pose.x), float(pose.y), float(pose.theta)
+        if not all(math.isfinite(v) for v in (x, y, heading)):
+            return f"skipped {pose.name!r}: its pose ({x}, {y}, {heading}) is not finite"
+        known = self.find_location(pose.name)
+        try:
+            if known is None:
+                self.add_location(Location(pose.name, map=map_name, x=x, y=y, heading=heading))
+                return f"added {pose.name!r} at ({x:.2f}, {y:.2f})"
+            self.update_location(known.name, replace(known, map=map_name, x=x, y=y, heading=heading))
+            return f"updated {known.name!r} to ({x:.2f}, {y:.2f})"
+        except CyborgError as exc:
+            return f"skipped {pose.name!r}: {exc}"
 
     def list_locations(self) -> list[Location]:
         rows = self._read("SELECT * FROM locations ORDER BY name COLLATE NOCASE")

@@ -10,11 +10,9 @@ it and exits with code 2, writing nothing.
 
 from __future__ import annotations
 
-import math
 import os
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
-from dataclasses import replace
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -345,20 +343,4 @@ def import_map(ctx: click.Context, map_file: Path, map_name: str | None) -> None
     name = map_name or map_file.stem
     with _open(ctx) as db:
         for pose in poses:
-            click.echo(_import_pose(db, pose, name))
-
-
-def _import_pose(db: NavigationDatabase, pose: Any, map_name: str) -> str:
-    """Add or update one location from a map pose; a line saying what happened."""
-    x, y, heading = float(pose.x), float(pose.y), float(pose.theta)
-    if not all(math.isfinite(v) for v in (x, y, heading)):
-        return f"skipped {pose.name!r}: its pose ({x}, {y}, {heading}) is not finite"
-    known = db.find_location(pose.name)
-    try:
-        if known is None:
-            db.add_location(Location(pose.name, map=map_name, x=x, y=y, heading=heading))
-            return f"added {pose.name!r} at ({x:.2f}, {y:.2f})"
-        db.update_location(known.name, replace(known, map=map_name, x=x, y=y, heading=heading))
-        return f"updated {known.name!r} to ({x:.2f}, {y:.2f})"
-    except CyborgError as exc:
-        return f"skipped {pose.name!r}: {exc}"
+            click.echo(db.import_pose(pose, name))

@@ -13,7 +13,6 @@ import asyncio
 import logging
 import math
 import random
-from dataclasses import replace
 
 from cyborg.errors import CyborgError
 from cyborg.modules.helper import Abort, BehaviourModule, GoalContext
@@ -318,17 +317,3 @@ class NavigationModule(BehaviourModule):
             return None
         finally:
             self._answer = None
-
-
-def import_map_locations(db: NavigationDatabase, poses: list[object], map_name: str) -> int:
-    """Give known places the map's coordinates (by name or alias) and add the map's other goals."""
-    count = 0
-    for pose in poses:
-        name, x, y, theta = (getattr(pose, a) for a in ("name", "x", "y", "theta"))
-        known = db.find_location(name)
-        if known is None:
-            db.add_location(Location(name, map=map_name, x=x, y=y, heading=theta))
-        else:
-            db.update_location(known.name, replace(known, map=map_name, x=x, y=y, heading=theta))
-        count += 1
-    return count

@@ -124,12 +124,13 @@ def _navigation(node: Node, s: NavigationSettings, robot: BuildContext) -> objec
     from pathlib import Path
 
     from cyborg.navigation.database import CalendarEvent, NavigationDatabase
-    from cyborg.navigation.module import NavigationModule, import_map_locations
+    from cyborg.navigation.module import NavigationModule
 
     db = NavigationDatabase(Path(s.db) if s.db else robot.data_dir / "navigation.db")
     occupancy = robot.occupancy_map()
     goals = [p for p in occupancy.poses if p.kind in ("Goal", "GoalWithHeading")]
-    import_map_locations(db, goals, Path(occupancy.source).stem if occupancy.source else "map")
+    for goal in goals:
+        db.import_pose(goal, Path(occupancy.source).stem if occupancy.source else "map")
 
     def add_calendar_entry(entry: Any) -> None:
         from datetime import UTC
