@@ -16,6 +16,7 @@ This is the only module that imports rospy.
 from __future__ import annotations
 
 import asyncio
+import copy
 import dataclasses
 import importlib
 import inspect
@@ -28,6 +29,7 @@ from typing import Any, Generic
 
 import actionlib  # type: ignore[import-not-found]
 import genpy  # type: ignore[import-not-found]
+import rosgraph  # type: ignore[import-not-found]
 import rospy  # type: ignore[import-not-found]
 
 from cyborg.errors import ServiceTimeoutError, ServiceUnavailableError, TransportError
@@ -77,6 +79,7 @@ def _ask_for_tcp_nodelay() -> None:
 
 _ask_for_tcp_nodelay()
 
+_UNKNOWN = object()
 SERVER_SILENCE_LIMIT = 1.0  # seconds without a status message before an action server counts as gone
 WATCHDOG_PERIOD = 0.2
 
@@ -130,6 +133,37 @@ def from_ros(ros_message: Any, cls: type[M]) -> M:
     return cls(**values)
 
 
+def _check_topic_type(topic: str, msg_type: type[Message]) -> None:
+    """Refuse a second message type on a topic, as the embedded transport does.
+
+    rospy itself accepts it silently (in this process the second type is simply ignored;
+    across processes the connections fail on the md5 sum). Checked against this
+    process's publishers and subscribers and against the master's current publishers.
+    """
+    from rospy.impl.registration import Registration, get_topic_manager  # type: ignore[import-not-found]
+
+    wanted = msg_type.ros_type
+    manager = get_topic_manager()
+    known = None
+    for kind in (Registration.PUB, Registration.SUB):
+        impl = manager.get_impl(kind, topic) if manager is not None else None
+        if impl is not None and impl.type:
+            known = impl.type
+            break
+    if known is None:
+        try:
+            published = rosgraph.Master(rospy.get_name()).getPublishedTopics("")
+        except Exception:  # the master is asked only to give a clearer error
+            log.debug("could not ask the master for the type of %s", topic, exc_info=True)
+            published = []
+        known = next((t for name, t in published if name == topic), None)
+    if known not in (None, "*", wanted):
+        raise TransportError(
+            f"topic {topic} carries {known}, not {wanted}: "
+            "use the same message type on every publisher and subscriber of a topic"
+        )
+
+
 def _caller(ros_message: Any) -> str:
     header = getattr(ros_message, "_connection_header", None) or {}
     return normalize_node_name(str(header.get("callerid", "")))
@@ -147,6 +181,10 @@ class RosTransport(Transport):
         self.callback_errors = 0
         self._nodes: dict[str, RosNode] = {}
         self._tasks: set[asyncio.Future[Any]] = set()
+        self._watched_params: set[str] = set()
+        self._param_values: dict[str, Any] = {}
+        self._params_lock = threading.Lock()
+        self._chained_notifier: Callable[[str, Any], None] | None = None
 
     def _ensure_init(self, first: str) -> None:
         if rospy.core.is_initialized():
@@ -172,6 +210,44 @@ class RosTransport(Transport):
         for node in list(self._nodes.values()):
             node.shutdown()
         self._nodes.clear()
+
+    def _forget_node(self, node: RosNode) -> None:
+        if self._nodes.get(node.name) is node:
+            del self._nodes[node.name]
+
+    def set_param(self, key: str, value: Any) -> None:
+        """Set a parameter on the master, skipping the round trip when it already holds ``value``.
+
+        A master call is an XML-RPC request (about 1 ms on loopback) made on the loop, and the
+        controller sets ``/state_resources`` on every handover, often to the value it already has.
+        After its first set this process subscribes to the parameter, so the master reports
+        other nodes' changes to it (``paramUpdate``); such a change forgets the remembered value.
+        """
+        with self._params_lock:
+            known = self._param_values.get(key, _UNKNOWN)
+        if known is not _UNKNOWN and known == value:
+            return
+        rospy.set_param(key, copy.deepcopy(value))  # rospy's cache keeps what it is given
+        if key not in self._watched_params:
+            self._watched_params.add(key)
+            cache = rospy.impl.paramserver.get_param_server_cache()
+            if cache.notifier != self._on_param_update:
+                self._chained_notifier = cache.notifier
+                cache.set_notifier(self._on_param_update)
+            # Subscribes. An empty dict reads as "unset" in rospy's cache: hence the default.
+            rospy.get_param_cached(key, None)
+        with self._params_lock:
+            self._param_values[key] = copy.deepcopy(value)
+
+    def _on_param_update(self, key: str, value: Any) -> None:  # rospy thread, under the cache's lock
+        """A subscribed parameter changed (our own set comes here first, then records its value)."""
+        changed = key.rstrip("/") + "/"
+        with self._params_lock:
+            for watched in list(self._param_values):
+                if changed.startswith(watched + "/") or (watched + "/").startswith(changed):
+                    del self._param_values[watched]
+        if self._chained_notifier is not None:
+            self._chained_notifier(key, value)
 
     # callbacks from rospy threads run on the loop
     def to_loop(self, callback: Callable[..., object], *args: Any) -> None:
@@ -202,6 +278,7 @@ class RosNode(Node):
     def publisher(
         self, topic: str, msg_type: type[M], *, queue_size: int = DEFAULT_QUEUE_SIZE, latch: bool = False
     ) -> Publisher[M]:
+        _check_topic_type(self.resolve(topic), msg_type)
         pub = _RosPublisher[M](self.resolve(topic), msg_type, queue_size, latch)
         self._closers.append(pub.unregister)
         return pub
@@ -214,6 +291,7 @@ class RosNode(Node):
         *,
         queue_size: int = DEFAULT_QUEUE_SIZE,
     ) -> Subscription[M]:
+        _check_topic_type(self.resolve(topic), msg_type)
         sub = _RosSubscription(self.transport, self.resolve(topic), msg_type, callback, queue_size)
         self._closers.append(sub.unsubscribe)
         return sub
@@ -251,7 +329,7 @@ class RosNode(Node):
         return rospy.get_param(self.resolve(name), default)
 
     def set_param(self, name: str, value: Any) -> None:
-        rospy.set_param(self.resolve(name), value)
+        self.transport.set_param(self.resolve(name), value)
 
     def shutdown(self) -> None:
         for close in reversed(self._closers):
@@ -260,6 +338,7 @@ class RosNode(Node):
             except Exception:
                 log.debug("closing failed", exc_info=True)
         self._closers.clear()
+        self.transport._forget_node(self)  # the name is free again, as on the embedded transport
 
 
 # --- topics -----------------------------------------------------------------------------
@@ -463,6 +542,8 @@ class _RosServerGoalHandle(ServerGoalHandle[G, R, F]):
             log.warning(
                 "action %s: %s failed in status %s", self._server.name, method.__name__, self.status.name
             )
+        if self.status.is_terminal:
+            self._server.forget(self.goal_id)
 
 
 class _RosActionServer(ActionServer[G, R, F]):
@@ -495,6 +576,11 @@ class _RosActionServer(ActionServer[G, R, F]):
             if handle is None:
                 handle = self._handles[key] = _RosServerGoalHandle(self, ros_handle)
             return handle
+
+    def forget(self, goal_id: str) -> None:
+        """Drop a finished goal's wrapper (a late cancel gets a fresh one, which sees it finished)."""
+        with self._lock:
+            self._handles.pop(goal_id, None)
 
     def _goal_cb(self, ros_handle: Any) -> None:  # rospy thread
         self._transport.to_loop(self._on_goal, self._wrap(ros_handle))
