@@ -689,11 +689,23 @@ class _RosActionClient(ActionClient[G, R, F]):
         self._watchdog: asyncio.TimerHandle | None = None
 
     def server_available(self) -> bool:
-        last = self._client.last_status_msg
-        if last is None or time.monotonic() - self._client.last_status_time > SERVER_SILENCE_LIMIT:
+        """The server is reporting its status and connected both ways, as actionlib's own
+        ``wait_for_server`` checks: goal and cancel reach it, its results and feedback reach us.
+        (A result published before our result subscriber is connected is lost, and the goal
+        would wait for it forever.)"""
+        client = self._client
+        last = client.last_status_msg
+        if last is None or time.monotonic() - client.last_status_time > SERVER_SILENCE_LIMIT:
             return False
         server = last._connection_header["callerid"]
-        return bool(self._client.pub_goal.impl.has_connection(server))
+        if not (
+            client.pub_goal.impl.has_connection(server) and client.pub_cancel.impl.has_connection(server)
+        ):
+            return False
+        return all(
+            any(connection.callerid_pub == server for connection in subscriber.impl.connections)
+            for subscriber in (client.result_sub, client.feedback_sub)
+        )
 
     async def wait_for_server(self, timeout: float) -> bool:
         deadline = time.monotonic() + timeout
