@@ -166,7 +166,9 @@ class BehaviourModule:
         self.servers: dict[str, StateServer] = {}
         self._events = node.publisher(topics.REGISTER_EVENT, String)
         self._feedback = node.publisher(topics.EMOTIONAL_FEEDBACK, EmotionalFeedback)
-        self._speech: Any = None
+        self._speech = node.publisher(
+            topics.TEXT_TO_SPEECH, String
+        )  # early, so over ROS the first line is heard
         node.subscribe(topics.EMOTIONAL_STATE, EmotionalState, self._on_emotion)
 
     def serve(self, name: str, execute: Execute, *, honour_cancel: bool = True) -> StateServer:
@@ -183,8 +185,6 @@ class BehaviourModule:
         )
 
     def say(self, text: str) -> None:
-        if self._speech is None:
-            self._speech = self.node.publisher(topics.TEXT_TO_SPEECH, String)
         self._speech.publish(String(data=text))
 
     def on_speech_text(self, callback: Callable[[str, MessageInfo], None]) -> None:
