@@ -229,8 +229,8 @@ def ros_graph() -> Iterator[dict[str, str]]:
                 answer: Any = master.lookupNode("/bench", "/rosout")
                 if answer[0] == 1:
                     break
-            except OSError:
-                pass
+            except (OSError, xmlrpc.client.Fault):
+                pass  # not up yet (or another program answers on the port: roscore then exits)
             if core.poll() is not None or time.monotonic() > deadline:
                 raise SystemExit("roscore did not start; fix: scripts/install-ros")
             time.sleep(0.05)

@@ -151,6 +151,12 @@ def _parse_speed(value: str | None) -> float | str | None:
     type=click.Path(path_type=Path),
     help="write the run's records here (JSON lines)",
 )
+@click.option(
+    "--ros",
+    "over_ros",
+    is_flag=True,
+    help="run every part as its own ROS 1 node (as `cyborg launch`); with --script, the script too",
+)
 def sim(
     config_path: Path | None,
     map_path: Path | None,
@@ -161,10 +167,12 @@ def sim(
     data_dir: Path | None,
     script_path: Path | None,
     transcript_path: Path | None,
+    over_ros: bool,
 ) -> None:
     """Run the whole simulated robot in this process, with its API and dashboard.
 
     With --script, run a scenario on a fresh robot in virtual time and write its transcript.
+    With --ros, the robot runs as ROS nodes, one process per part, in virtual time with --speed.
     """
     try:
         config = _load(config_path)
@@ -175,6 +183,9 @@ def sim(
             raise CyborgError(
                 f"map file {map_path} does not exist; fix: check the path (e.g. ../shared/maps/glassgarden.map)"
             )
+        if over_ros:
+            _sim_over_ros(config, speed, duration, port, data_dir, script_path, transcript_path, map_path)
+            return
         if script_path is not None:
             _run_script(config, script_path, transcript_path, speed, data_dir, map_path)
             return
@@ -197,6 +208,74 @@ def sim(
         _fail(exc)
     except KeyboardInterrupt:
         click.echo("stopped")
+
+
+def _ros_speed(speed: str | None) -> float | None:
+    """--speed over ROS: real time (None) or a factor; 'max' has no meaning across processes."""
+    parsed = _parse_speed(speed)
+    if parsed is None:
+        raise click.BadParameter(
+            "'max' needs one process; over ROS the nodes share a clock running at a fixed speed: "
+            "use e.g. --speed 20",
+            param_hint="--speed",
+        )
+    return None if parsed == "real" else float(parsed)
+
+
+def _sim_over_ros(
+    config: LoadedConfig,
+    speed: str | None,
+    duration: float | None,
+    port: int,
+    data_dir: Path | None,
+    script_path: Path | None,
+    transcript_path: Path | None,
+    map_path: Path | None,
+) -> None:
+    from cyborg.interfaces.ros_commands import all_parts, launch, run_scenario_ros
+    from cyborg.sim.runner import default_data_dir
+
+    factor = _ros_speed(speed)
+    config_path = Path(config.source).resolve()
+    if script_path is None:
+        if transcript_path is not None:
+            raise click.UsageError("--transcript goes with --script")
+        folder = (data_dir or default_data_dir()).resolve()
+        launch(
+            config_path,
+            config,
+            all_parts(config),
+            folder,
+            map_path,
+            port,
+            echo=True,
+            speed=factor,
+            duration=duration,
+        )
+        return
+    records = run_scenario_ros(
+        config_path,
+        config,
+        script_path,
+        transcript_path=transcript_path.resolve() if transcript_path else None,
+        speed=factor or 1.0,
+        data_dir=data_dir.resolve() if data_dir else None,
+        map_path=map_path.resolve() if map_path else None,
+        echo=True,
+    )
+    _echo_records(records)
+    if transcript_path:
+        click.secho(f"wrote {len(records)} records to {transcript_path}", fg="green")
+
+
+def _echo_records(records: list[dict[str, object]]) -> None:
+    for record in records:
+        t = float(record["t"])  # type: ignore[arg-type]
+        if record["type"] == "state":
+            click.echo(f"[{t:8.1f}s] {record['from'] or '-'} --{record['event']}--> {record['to']}")
+        elif record["type"] in ("say", "heard"):
+            who = "Cyborg" if record["type"] == "say" else "User"
+            click.echo(f"[{t:8.1f}s] {who}: {record['text']}")
 
 
 def _run_script(
@@ -225,14 +304,12 @@ def _run_script(
             speed=virtual_speed,
             map_path=map_path,
         )
-    for record in records:
-        if record["type"] == "state":
-            click.echo(f"[{record['t']:8.1f}s] {record['from'] or '-'} --{record['event']}--> {record['to']}")
-        elif record["type"] in ("say", "heard"):
-            who = "Cyborg" if record["type"] == "say" else "User"
-            click.echo(f"[{record['t']:8.1f}s] {who}: {record['text']}")
+    _echo_records(records)
     if transcript_path:
         click.secho(f"wrote {len(records)} records to {transcript_path}", fg="green")
+
+
+_speed_help = "virtual time at this factor of real time (all nodes share one clock); default real time"
 
 
 @cli.command("node")
@@ -255,6 +332,28 @@ def _run_script(
 @click.option("--host", default="127.0.0.1", show_default=True, help="address of the API (cyborg_api only)")
 @click.option("--port", default=8642, show_default=True, type=int, help="port of the API (cyborg_api only)")
 @click.option("--seed", default=0, show_default=True, type=int, help="seed of the node's randomness")
+@click.option("--speed", type=float, default=None, help=_speed_help)
+@click.option(
+    "--epoch",
+    default=None,
+    help="with --speed: wall-clock Unix time at which virtual time reads --start (default: now); "
+    "param:NS waits for `cyborg launch` to set NS/epoch",
+)
+@click.option("--start", "start_at", default=None, help="with --speed: virtual start, ISO date-time (UTC)")
+@click.option(
+    "--publish-clock/--no-publish-clock",
+    default=None,
+    help="with --speed: publish /clock (default: when NAME is a simulated base)",
+)
+@click.option(
+    "--script", "script_path", type=click.Path(path_type=Path), help="cyborg_scenario: the script to play"
+)
+@click.option(
+    "--transcript",
+    "transcript_path",
+    type=click.Path(path_type=Path),
+    help="cyborg_scenario: write records here",
+)
 def node(
     name: str,
     config_path: Path | None,
@@ -263,15 +362,37 @@ def node(
     host: str,
     port: int,
     seed: int,
+    speed: float | None,
+    epoch: str | None,
+    start_at: str | None,
+    publish_clock: bool | None,
+    script_path: Path | None,
+    transcript_path: Path | None,
 ) -> None:
-    """Run one part of the robot as the ROS 1 node NAME (cyborg_controller, a module, a gatekeeper, cyborg_api)."""
-    from cyborg.interfaces.ros_commands import run_node
+    """Run one part of the robot as the ROS 1 node NAME (cyborg_controller, a module, a gatekeeper,
+    cyborg_api, or cyborg_scenario with --script)."""
+    from cyborg.interfaces.ros_commands import ScenarioFiles, SimTime, parse_epoch, parse_start, run_node
     from cyborg.sim.runner import default_data_dir
 
+    if speed is not None and speed <= 0:
+        raise click.BadParameter(f"{speed!r} must be positive", param_hint="--speed")
+    sim_time = SimTime(speed=speed, epoch=parse_epoch(epoch), start=parse_start(start_at))
+    scenario = ScenarioFiles(script_path, transcript_path) if script_path is not None else None
     try:
         config = _load(config_path)
         check_modules(config)
-        run_node(name, config, data_dir or default_data_dir(), map_path, host, port, seed)
+        run_node(
+            name,
+            config,
+            data_dir or default_data_dir(),
+            map_path,
+            host,
+            port,
+            seed,
+            sim_time=sim_time,
+            publish_clock_too=publish_clock,
+            scenario=scenario,
+        )
     except CyborgError as exc:
         _fail(exc)
 
@@ -300,6 +421,9 @@ def node(
     type=click.Path(path_type=Path),
     help="write a roslaunch file instead of launching",
 )
+@click.option("--speed", type=float, default=None, help=_speed_help + "; sets /use_sim_time")
+@click.option("--start", "start_at", default=None, help="with --speed: virtual start, ISO date-time (UTC)")
+@click.option("--duration", type=float, default=None, help="stop after this many (virtual) seconds")
 def launch_command(
     config_path: Path | None,
     data_dir: Path | None,
@@ -307,10 +431,21 @@ def launch_command(
     port: int,
     only: tuple[str, ...],
     write_path: Path | None,
+    speed: float | None,
+    start_at: str | None,
+    duration: float | None,
 ) -> None:
-    """Start the whole robot over ROS 1: a master if none runs, then one process per part."""
-    from cyborg.interfaces.ros_commands import all_parts, launch, roslaunch_xml
+    """Start the whole robot over ROS 1: a master if none runs, then one process per part.
+
+    With --speed N every node runs in virtual time at N times real time from one shared origin,
+    /use_sim_time is set and the simulated base publishes /clock.
+    """
+    from cyborg.interfaces.ros_commands import all_parts, launch, parse_start, roslaunch_xml
     from cyborg.sim.runner import default_data_dir
+
+    if speed is not None and speed <= 0:
+        raise click.BadParameter(f"{speed!r} must be positive", param_hint="--speed")
+    start = parse_start(start_at)
 
     try:
         config = _load(config_path)
@@ -324,10 +459,25 @@ def launch_command(
             )
         folder = (data_dir or default_data_dir()).resolve()
         if write_path is not None:
+            if speed is not None:
+                raise click.UsageError(
+                    "--speed needs `cyborg launch` itself (it fixes the nodes' shared origin); drop --write"
+                )
             write_path.write_text(roslaunch_xml(path, parts, folder), encoding="utf-8")
             click.echo(f"wrote {write_path}")
             return
-        launch(path, parts, folder, map_path, port, echo=True)
+        launch(
+            path,
+            config,
+            parts,
+            folder,
+            map_path,
+            port,
+            echo=True,
+            speed=speed,
+            start=start,
+            duration=duration,
+        )
     except CyborgError as exc:
         _fail(exc)
 

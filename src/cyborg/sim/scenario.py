@@ -14,7 +14,7 @@ import logging
 import random
 import tempfile
 from collections.abc import Callable
-from datetime import UTC
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import IO
 
@@ -24,6 +24,7 @@ from cyborg.sim.records import Record, RecordStream
 from cyborg.sim.robot import Robot, build_robot
 from cyborg.sim.script import Script, Step
 from cyborg.transport import topics
+from cyborg.transport.base import Node
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, VirtualClock
 from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import String
@@ -31,50 +32,26 @@ from cyborg.transport.messages import String
 log = logging.getLogger(__name__)
 
 
-class ScenarioRun:
-    """One run: the robot, its records, and the script driver."""
+class ScenarioDriver:
+    """Plays a script's steps through ``node`` and keeps the run's records.
 
-    def __init__(
-        self,
-        config: LoadedConfig,
-        script: Script,
-        *,
-        data_dir: Path,
-        speed: float | None = None,
-        map_path: Path | None = None,
-    ) -> None:
-        start = script.start or DEFAULT_VIRTUAL_START
-        if start.tzinfo is None:
-            start = start.replace(tzinfo=UTC)
+    Works on any transport: in ``cyborg sim --script`` beside an embedded robot, and as the ROS
+    node ``cyborg_scenario`` beside a robot of ROS nodes. Times are the node's clock's loop
+    time (``at: 300`` fires when it reads 300), so every process must share the clock's origin.
+    """
+
+    def __init__(self, node: Node, script: Script, *, origin: float = 0.0) -> None:
+        self.node = node
+        self.clock = node.clock
         self.script = script
-        self.clock = VirtualClock(start=start, speed=speed)
-        self.transport = EmbeddedTransport(self.clock)
-        self.robot: Robot = build_robot(
-            config, self.transport, data_dir=data_dir, rng=random.Random(script.seed), map_path=map_path
-        )
         self.records: list[Record] = []
         self.listeners: list[Callable[[Record], None]] = []
         self._new_record = asyncio.Event()
-        node = self.transport.node("cyborg_scenario")
-        self.stream = RecordStream(node, origin=0.0)
+        self.stream = RecordStream(node, origin=origin)
         self.stream.listeners.append(self._on_record)
-        self._say = node.publisher(topics.TEXT_FROM_SPEECH, String)
-        self._event = node.publisher(topics.REGISTER_EVENT, String)
-        self._set_emotion = node.publisher(topics.SET_EMOTIONAL_STATE, String)
-        self._prepare()
-
-    def _prepare(self) -> None:
-        if self.script.emotion:
-            try:
-                self.robot.emotion.set_named(self.script.emotion)
-            except ValueError as exc:
-                raise ConfigError(f"emotion: {exc}") from exc
-        for entry in self.script.calendar:
-            if self.robot.calendar is None:
-                raise ConfigError(
-                    "calendar: this robot has no navigation module to keep a calendar; fix: remove 'calendar:' or add the navigation module"
-                )
-            self.robot.calendar(entry)
+        self.say = node.publisher(topics.TEXT_FROM_SPEECH, String)
+        self.event = node.publisher(topics.REGISTER_EVENT, String)
+        self.set_emotion = node.publisher(topics.SET_EMOTIONAL_STATE, String)
 
     def _on_record(self, record: Record) -> None:
         self.records.append(record)
@@ -98,7 +75,8 @@ class ScenarioRun:
             except TimeoutError:
                 return False
 
-    async def _drive(self) -> None:
+    async def drive(self) -> None:
+        """Play the steps in order (returns after the last one, or when one cannot happen)."""
         mark = 0
         for step in self.script.steps:
             if step.at is not None:
@@ -108,18 +86,63 @@ class ScenarioRun:
                 return
             await self.clock.sleep(step.delay)
             if step.say is not None:
-                self._say.publish(String(step.say))
+                self.say.publish(String(step.say))
             elif step.event is not None:
-                self._event.publish(String(step.event))
+                self.event.publish(String(step.event))
             elif step.emotion is not None:
-                self._set_emotion.publish(String(step.emotion))
+                self.set_emotion.publish(String(step.emotion))
             mark = len(self.records)
+
+    async def run(self) -> list[Record]:
+        """Play the script until its ``until`` time; return the records."""
+        driver = asyncio.ensure_future(self.drive())
+        try:
+            await self.clock.sleep(self.script.until - self.clock.monotonic())
+        finally:
+            driver.cancel()
+        return self.records
+
+
+class ScenarioRun:
+    """One run: the robot, its records, and the script driver."""
+
+    def __init__(
+        self,
+        config: LoadedConfig,
+        script: Script,
+        *,
+        data_dir: Path,
+        speed: float | None = None,
+        map_path: Path | None = None,
+    ) -> None:
+        self.script = script
+        self.clock = VirtualClock(start=script_start(script), speed=speed)
+        self.transport = EmbeddedTransport(self.clock)
+        self.robot: Robot = build_robot(
+            config, self.transport, data_dir=data_dir, rng=random.Random(script.seed), map_path=map_path
+        )
+        self.driver = ScenarioDriver(self.transport.node("cyborg_scenario"), script)
+        self.records = self.driver.records
+        self.listeners = self.driver.listeners
+        self.stream = self.driver.stream
+        self._prepare()
+
+    def _prepare(self) -> None:
+        if self.script.emotion:
+            try:
+                self.robot.emotion.set_named(self.script.emotion)
+            except ValueError as exc:
+                raise ConfigError(f"emotion: {exc}") from exc
+        for entry in self.script.calendar:
+            if self.robot.calendar is None:
+                raise ConfigError(
+                    "calendar: this robot has no navigation module to keep a calendar; fix: remove 'calendar:' or add the navigation module"
+                )
+            self.robot.calendar(entry)
 
     async def _main(self) -> None:
         self.robot.start()
-        driver = asyncio.ensure_future(self._drive())
-        await self.clock.sleep(self.script.until)
-        driver.cancel()
+        await self.driver.run()
         await self.robot.controller.stop()
 
     def run(self) -> list[Record]:
@@ -129,6 +152,12 @@ class ScenarioRun:
             self.transport.shutdown()
             self.clock.close()
         return self.records
+
+
+def script_start(script: Script) -> datetime:
+    """The virtual date-time a script starts at (UTC unless it says otherwise)."""
+    start = script.start or DEFAULT_VIRTUAL_START
+    return start if start.tzinfo is not None else start.replace(tzinfo=UTC)
 
 
 def run_scenario(

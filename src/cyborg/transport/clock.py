@@ -14,6 +14,7 @@ at a fixed multiple of real time instead (``--speed 10``).
 from __future__ import annotations
 
 import asyncio
+import math
 import selectors
 import time
 from abc import ABC, abstractmethod
@@ -119,6 +120,9 @@ class _VirtualTimeSelector(selectors.BaseSelector):
         speed = self._clock.speed
         if speed is not None:
             real_timeout = None if timeout is None else timeout / speed
+            before_origin = self._clock._real_origin - time.monotonic()
+            if real_timeout and before_origin > 0:  # time stands still until the origin
+                real_timeout = None if math.isinf(before_origin) else real_timeout + before_origin
             return self._inner.select(real_timeout)
         ready = self._inner.select(0)
         if ready or timeout == 0:
@@ -145,16 +149,54 @@ class VirtualClock(Clock):
 
     ``speed=None`` runs as fast as the work allows (deterministic);
     a number runs that many virtual seconds per real second.
+
+    ``real_origin`` (with a speed only) is the wall-clock time (Unix seconds, as ``time.time()``)
+    at which this clock reads ``start``; by default the moment it is made. Processes given the
+    same ``start``, ``speed`` and ``real_origin`` read the same virtual time (``cyborg launch
+    --speed``). Before its origin the clock stands still at ``start``; ``math.inf`` makes it wait
+    for :meth:`anchor`.
     """
 
-    def __init__(self, start: datetime | float = DEFAULT_VIRTUAL_START, speed: float | None = None) -> None:
+    def __init__(
+        self,
+        start: datetime | float = DEFAULT_VIRTUAL_START,
+        speed: float | None = None,
+        *,
+        real_origin: float | None = None,
+    ) -> None:
         super().__init__()
         if speed is not None and speed <= 0:
             raise ValueError(f"speed must be positive or None (as fast as possible), got {speed!r}")
+        if speed is None and real_origin is not None:
+            raise ValueError(
+                "a real-time origin needs a speed: with speed=None the clock does not follow real time"
+            )
         self.speed = speed
         self._start_epoch = start.timestamp() if isinstance(start, datetime) else float(start)
         self._virtual_elapsed = 0.0
         self._real_origin = time.monotonic()
+        if real_origin is not None:
+            self.anchor(real_origin)
+
+    def anchor(self, real_origin: float) -> None:
+        """Read ``start`` at wall-clock time ``real_origin`` (Unix seconds) and run at ``speed`` from there.
+
+        The origin is kept on the monotonic time line (CLOCK_MONOTONIC: one for every process of
+        the machine), converted from the wall clock once, so clock steps later do not move it.
+        """
+        if self.speed is None:
+            raise ValueError("only a clock with a speed follows real time; this one runs as fast as possible")
+        if math.isinf(real_origin):
+            self._real_origin = math.inf
+        else:
+            self._real_origin = time.monotonic() + (float(real_origin) - time.time())
+
+    @property
+    def real_origin(self) -> float:
+        """The wall-clock time (Unix seconds) at which this clock reads ``start`` (speed only)."""
+        if math.isinf(self._real_origin):
+            return math.inf
+        return time.time() - (time.monotonic() - self._real_origin)
 
     @property
     def is_virtual(self) -> bool:
@@ -166,7 +208,7 @@ class VirtualClock(Clock):
     def _loop_time(self) -> float:
         if self.speed is None:
             return self._virtual_elapsed
-        return (time.monotonic() - self._real_origin) * self.speed
+        return max(0.0, (time.monotonic() - self._real_origin) * self.speed)
 
     def _advance(self, seconds: float) -> None:
         self._virtual_elapsed += seconds

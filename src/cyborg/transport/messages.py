@@ -44,6 +44,14 @@ class Empty(Message):
     ros_type: ClassVar[str] = "std_msgs/Empty"
 
 
+@dataclass
+class Clock(Message):
+    """Simulated time on ``/clock`` (rosgraph_msgs/Clock): nodes with /use_sim_time follow it."""
+
+    ros_type: ClassVar[str] = "rosgraph_msgs/Clock"
+    clock: float = 0.0
+
+
 # --- cyborg_controller -----------------------------------------------------
 
 

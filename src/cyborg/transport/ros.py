@@ -80,6 +80,7 @@ def _ask_for_tcp_nodelay() -> None:
 _ask_for_tcp_nodelay()
 
 _UNKNOWN = object()
+FRESH_PUBLISHER_WAIT = 1.0  # seconds a new publisher's messages may wait for known subscribers
 SERVER_SILENCE_LIMIT = 1.0  # seconds without a status message before an action server counts as gone
 WATCHDOG_PERIOD = 0.2
 
@@ -345,13 +346,55 @@ class RosNode(Node):
 
 
 class _RosPublisher(Publisher[M]):
+    """A rospy publisher whose first messages wait for the subscribers the master already knows.
+
+    A subscriber connects to a new publisher only after the master told it about it (Python's
+    rosmaster hands such notices to workers that look for work every 0.1 s), so rospy drops what
+    a publisher made on the spot sends at once (a module's first sentence). For
+    FRESH_PUBLISHER_WAIT seconds after it is made, a message sent while fewer subscribers are
+    connected than the master lists waits, on a thread, until they are (or that time is up);
+    later messages queue behind it, so the order holds.
+    """
+
     def __init__(self, topic: str, msg_type: type[M], queue_size: int, latch: bool) -> None:
         self.topic = topic
         self._cls = ros_class(msg_type.ros_type)
         self._pub = rospy.Publisher(topic, self._cls, queue_size=queue_size, latch=latch)
+        self._fresh_until = time.monotonic() + FRESH_PUBLISHER_WAIT
+        self._expected: int | None = None
+        self._pending: deque[Any] | None = None
+        self._lock = threading.Lock()
 
     def publish(self, message: M) -> None:
-        self._pub.publish(to_ros(message, self._cls))
+        ros_message = to_ros(message, self._cls)
+        with self._lock:
+            if self._pending is not None:
+                self._pending.append(ros_message)
+                return
+            if time.monotonic() < self._fresh_until and self._missing_subscribers():
+                self._pending = deque([ros_message])
+                threading.Thread(target=self._flush_when_connected, name=f"publish {self.topic}").start()
+                return
+        self._pub.publish(ros_message)
+
+    def _missing_subscribers(self) -> bool:
+        if self._expected is None:
+            try:
+                _, subscribers, _ = rosgraph.Master(rospy.get_name()).getSystemState()
+            except Exception:
+                self._expected = 0
+            else:
+                self._expected = sum(len(nodes) for topic, nodes in subscribers if topic == self.topic)
+        return int(self._pub.get_num_connections()) < self._expected
+
+    def _flush_when_connected(self) -> None:
+        assert self._expected is not None
+        while time.monotonic() < self._fresh_until and self._pub.get_num_connections() < self._expected:
+            time.sleep(0.002)
+        with self._lock:
+            pending, self._pending = self._pending or deque(), None
+            for ros_message in pending:  # under the lock: a publish meanwhile queues behind these
+                self._pub.publish(ros_message)
 
     def subscriber_count(self) -> int:
         return int(self._pub.get_num_connections())
