@@ -81,7 +81,12 @@ def test_event_say_emotion_and_status(running_sim: str) -> None:
 def test_bad_input_is_refused_with_the_reason(running_sim: str) -> None:
     result = tool(running_sim, "emotion", "values", "0.5", "3", "0")
     assert result.returncode != 0
-    assert "'arousal' must be a number in [-1, 1], got 3.0" in result.stderr
+    assert "'AROUSAL': 3.0 is outside [-1, 1]" in result.stderr
+    values = json.dumps({"pleasure": 0.5, "arousal": 3, "dominance": 0}).encode()
+    request = urllib.request.Request(running_sim + "/api/emotion/values", data=values, method="POST")
+    with pytest.raises(urllib.error.HTTPError) as info:
+        urllib.request.urlopen(request)
+    assert info.value.code == 400 and "'arousal' must be a number in [-1, 1], got 3" in info.value.read().decode()
     request = urllib.request.Request(running_sim + "/api/event", data=b"not json", method="POST")
     with pytest.raises(urllib.error.HTTPError) as info:
         urllib.request.urlopen(request)

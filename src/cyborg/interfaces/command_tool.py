@@ -2,21 +2,26 @@
 
 ``cyborg event NAME``, ``cyborg say TEXT``, ``cyborg emotion set NAME``,
 ``cyborg emotion values P A D``, ``cyborg emotion on|off`` and
-``cyborg status [--follow]`` (thesis 1.4 and 10.1).
+``cyborg status [--follow]`` (thesis 1.4 and 10.1). With ``--ros`` the same commands go
+over the ROS graph instead (:mod:`cyborg.interfaces.ros_tool`).
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import functools
 import json
+import math
 import sys
 import urllib.error
 import urllib.request
-from typing import Any
+from collections.abc import Callable
+from typing import Any, Protocol
 
 import click
 
+from cyborg.errors import CyborgError
 from cyborg.interfaces.api import DEFAULT_PORT
 
 DEFAULT_URL = f"http://127.0.0.1:{DEFAULT_PORT}"
@@ -46,9 +51,90 @@ def _request(base: str, path: str, body: dict[str, Any] | None = None) -> Any:
         ) from None
 
 
-url_option = click.option(
-    "--url", default=DEFAULT_URL, show_default=True, envvar="CYBORG_URL", help="the running robot's API"
-)
+class HttpLink:
+    """The robot's local HTTP API (``cyborg sim``, or the ``cyborg_api`` ROS node)."""
+
+    def __init__(self, url: str) -> None:
+        self.url = url
+
+    def close(self) -> None:
+        pass
+
+    def send_event(self, name: str) -> bool | None:
+        answer = _request(self.url, "/api/event", {"name": name})
+        return answer.get("is_transition") if isinstance(answer, dict) else None
+
+    def say(self, text: str) -> None:
+        _request(self.url, "/api/say", {"text": text})
+
+    def set_emotion(self, name: str) -> None:
+        _request(self.url, "/api/emotion/set", {"name": name})
+
+    def set_values(self, pleasure: float, arousal: float, dominance: float) -> None:
+        _request(
+            self.url,
+            "/api/emotion/values",
+            {"pleasure": pleasure, "arousal": arousal, "dominance": dominance},
+        )
+
+    def switch(self, on: bool) -> None:
+        _request(self.url, "/api/emotion/switch", {"on": on})
+
+    def status(self) -> dict[str, Any]:
+        answer: dict[str, Any] = _request(self.url, "/api/status")
+        return answer
+
+    def follow(self, status: dict[str, Any], show: Callable[[dict[str, Any]], None]) -> None:
+        with contextlib.suppress(KeyboardInterrupt):
+            asyncio.run(_follow(self.url, status, show))
+
+
+class RobotLink(Protocol):
+    """What the commands need of a robot: the HTTP API by default, the ROS graph with --ros."""
+
+    def close(self) -> None: ...
+    def send_event(self, name: str) -> bool | None: ...
+    def say(self, text: str) -> None: ...
+    def set_emotion(self, name: str) -> None: ...
+    def set_values(self, pleasure: float, arousal: float, dominance: float) -> None: ...
+    def switch(self, on: bool) -> None: ...
+    def status(self) -> dict[str, Any]: ...
+    def follow(self, status: dict[str, Any], show: Callable[[dict[str, Any]], None]) -> None: ...
+
+
+def link_options(command: Callable[..., None]) -> Callable[..., None]:
+    """--url and --ros; the command receives ``link``, an open :class:`RobotLink`, instead."""
+
+    @click.option(
+        "--url", default=DEFAULT_URL, show_default=True, envvar="CYBORG_URL", help="the running robot's API"
+    )
+    @click.option(
+        "--ros",
+        "over_ros",
+        is_flag=True,
+        envvar="CYBORG_ROS",
+        help="talk to a robot of ROS nodes through its topics and services (ROS_MASTER_URI)",
+    )
+    @functools.wraps(command)
+    def wrapper(*args: Any, url: str, over_ros: bool, **kwargs: Any) -> None:
+        link: RobotLink
+        if over_ros:
+            from cyborg.interfaces.ros_tool import RosLink
+
+            try:
+                link = RosLink()
+            except CyborgError as exc:
+                raise ToolError(str(exc)) from None
+        else:
+            link = HttpLink(url)
+        try:
+            command(*args, link=link, **kwargs)
+        except CyborgError as exc:
+            raise ToolError(str(exc)) from None
+        finally:
+            link.close()
+
+    return wrapper
 
 
 def format_status(status: dict[str, Any]) -> str:
@@ -61,13 +147,13 @@ def format_status(status: dict[str, Any]) -> str:
 
 @click.command("event")
 @click.argument("name")
-@url_option
-def event_command(name: str, url: str) -> None:
+@link_options
+def event_command(name: str, link: RobotLink) -> None:
     """Send event NAME to the controller."""
-    answer = _request(url, "/api/event", {"name": name})
+    is_transition = link.send_event(name)
     note = (
         ""
-        if answer.get("is_transition") in (True, None)
+        if is_transition in (True, None)
         else " (not a transition of the current state: it will be dropped)"
     )
     click.echo(f"sent event {name}{note}")
@@ -75,11 +161,11 @@ def event_command(name: str, url: str) -> None:
 
 @click.command("say")
 @click.argument("text", nargs=-1, required=True)
-@url_option
-def say_command(text: tuple[str, ...], url: str) -> None:
+@link_options
+def say_command(text: tuple[str, ...], link: RobotLink) -> None:
     """Send TEXT as if speech-to-text heard it."""
     sentence = " ".join(text)
-    _request(url, "/api/say", {"text": sentence})
+    link.say(sentence)
     click.echo(f"heard: {sentence}")
 
 
@@ -90,49 +176,63 @@ def emotion_group() -> None:
 
 @emotion_group.command("set")
 @click.argument("name")
-@url_option
-def emotion_set(name: str, url: str) -> None:
-    _request(url, "/api/emotion/set", {"name": name})
+@link_options
+def emotion_set(name: str, link: RobotLink) -> None:
+    """Set the emotion by name (its prototype's PAD values)."""
+    link.set_emotion(name)
     click.echo(f"emotion set to {name}")
 
 
+def _pad_value(ctx: click.Context, param: click.Parameter, value: float) -> float:
+    if not math.isfinite(value) or abs(value) > 1:
+        raise click.BadParameter(f"{value!r} is outside [-1, 1]; PAD values run from -1 to 1")
+    return value
+
+
 @emotion_group.command("values")
-@click.argument("pleasure", type=float)
-@click.argument("arousal", type=float)
-@click.argument("dominance", type=float)
-@url_option
-def emotion_values(pleasure: float, arousal: float, dominance: float, url: str) -> None:
-    _request(url, "/api/emotion/values", {"pleasure": pleasure, "arousal": arousal, "dominance": dominance})
+@click.argument("pleasure", type=float, callback=_pad_value)
+@click.argument("arousal", type=float, callback=_pad_value)
+@click.argument("dominance", type=float, callback=_pad_value)
+@link_options
+def emotion_values(pleasure: float, arousal: float, dominance: float, link: RobotLink) -> None:
+    """Set the PAD values (each in [-1, 1])."""
+    link.set_values(pleasure, arousal, dominance)
     click.echo(f"PAD set to ({pleasure:+.2f}, {arousal:+.2f}, {dominance:+.2f})")
 
 
 @emotion_group.command("on")
-@url_option
-def emotion_on(url: str) -> None:
-    _request(url, "/api/emotion/switch", {"on": True})
+@link_options
+def emotion_on(link: RobotLink) -> None:
+    """Switch the emotion system on."""
+    link.switch(True)
     click.echo("emotion system on")
 
 
 @emotion_group.command("off")
-@url_option
-def emotion_off(url: str) -> None:
-    _request(url, "/api/emotion/switch", {"on": False})
+@link_options
+def emotion_off(link: RobotLink) -> None:
+    """Switch the emotion system off: feedback is ignored until it is on again."""
+    link.switch(False)
     click.echo("emotion system off (feedback is ignored)")
 
 
 @click.command("status")
 @click.option("--follow", "-f", is_flag=True, help="keep printing as the robot changes")
-@url_option
-def status_command(follow: bool, url: str) -> None:
+@link_options
+def status_command(follow: bool, link: RobotLink) -> None:
     """Show the previous state, event, current state, emotion and PAD values."""
-    status = _request(url, "/api/status")
+    status = link.status()
     click.echo(format_status(status))
     if follow:
-        with contextlib.suppress(KeyboardInterrupt):
-            asyncio.run(_follow(url, status))
+
+        def show(current: dict[str, Any]) -> None:
+            click.echo(format_status(current))
+            sys.stdout.flush()
+
+        link.follow(status, show)
 
 
-async def _follow(url: str, status: dict[str, Any]) -> None:
+async def _follow(url: str, status: dict[str, Any], show: Callable[[dict[str, Any]], None]) -> None:
     import aiohttp
 
     ws_url = url.rstrip("/").replace("http", "ws", 1) + "/api/ws"
@@ -146,8 +246,7 @@ async def _follow(url: str, status: dict[str, Any]) -> None:
                 status.update({k: record[k] for k in ("emotion", "pleasure", "arousal", "dominance")})
             else:
                 continue
-            click.echo(format_status(status))
-            sys.stdout.flush()
+            show(status)
 
 
 COMMANDS = [event_command, say_command, emotion_group, status_command]

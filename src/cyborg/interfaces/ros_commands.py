@@ -73,7 +73,7 @@ def master_running(uri: str | None = None) -> bool:
 
 def require_ros() -> None:
     try:
-        import rospy  # type: ignore[import-not-found]  # noqa: F401
+        import cyborg.transport.ros  # noqa: F401  (imports rospy and actionlib)
     except ImportError:
         raise CyborgError(
             "ROS 1 is not available in this environment; fix: run scripts/install-ros, then "
@@ -271,10 +271,7 @@ def run_node(
         if isinstance(clock, VirtualClock) and clock.real_origin > time.time():
             time.sleep(clock.real_origin - time.time())  # everyone starts at the origin
     except KeyboardInterrupt:
-        transport.shutdown()
-        import rospy
-
-        rospy.signal_shutdown("cyborg node stopped before it started")
+        transport.close("cyborg node stopped before it started")
         clock.close()
         return
 
@@ -327,10 +324,7 @@ def run_node(
     try:
         code = clock.run(main())
     finally:
-        transport.shutdown()
-        import rospy
-
-        rospy.signal_shutdown("cyborg node stopped")
+        transport.close()
         clock.close()
     if code:
         raise SystemExit(code)

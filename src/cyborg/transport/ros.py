@@ -212,6 +212,19 @@ class RosTransport(Transport):
             node.shutdown()
         self._nodes.clear()
 
+    def close(self, reason: str = "cyborg node stopped") -> None:
+        """Shut down every node of this process and leave the graph (rospy cannot rejoin it)."""
+        self.shutdown()
+        rospy.signal_shutdown(reason)
+
+    def subscribers_of(self, topic: str) -> list[str]:
+        """The nodes the master lists as subscribers of ``topic`` (empty if it does not answer)."""
+        try:
+            _, subscribers, _ = rosgraph.Master(rospy.get_name()).getSystemState()
+        except Exception:
+            return []
+        return [normalize_node_name(n) for name, nodes in subscribers if name == topic for n in nodes]
+
     def _forget_node(self, node: RosNode) -> None:
         if self._nodes.get(node.name) is node:
             del self._nodes[node.name]

@@ -1,0 +1,165 @@
+"""The command tool over ROS 1 (``cyborg event NAME --ros`` ...): the thesis's topics, no HTTP API.
+
+Each command joins the graph at ``ROS_MASTER_URI`` as a short-lived node
+``cyborg_tool_<pid>``, publishes on the controller's topics exactly as ``rostopic pub`` would
+(waiting first until the listening nodes are connected, so nothing is lost), reads the state
+from the latched ``state_change`` and the emotion from the ``get_emotional_state`` service.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import os
+import signal
+from collections.abc import Callable, Coroutine
+from typing import Any, TypeVar
+
+from cyborg.errors import CyborgError, ServiceTimeoutError, ServiceUnavailableError
+from cyborg.transport import topics
+from cyborg.transport.base import MessageInfo, Node
+from cyborg.transport.clock import RealClock
+from cyborg.transport.messages import (
+    EmotionalFeedback,
+    EmotionalState,
+    EmotionalStateService,
+    Message,
+    String,
+    SystemState,
+)
+
+T = TypeVar("T")
+CONNECT_TIMEOUT = 3.0  # seconds to wait for the listening nodes to connect, or for a latched message
+DELIVERY_GRACE = 0.3  # seconds rospy's writer threads get before the node leaves the graph
+
+
+class RosLink:
+    """One command's connection to a robot running as ROS nodes."""
+
+    def __init__(self) -> None:
+        from cyborg.interfaces.ros_commands import master_running, master_uri, require_ros
+
+        require_ros()
+        if not master_running():
+            raise CyborgError(
+                f"no ROS master answers at {master_uri()}; fix: start the robot with `cyborg launch` "
+                "(or `cyborg sim --ros`), or set ROS_MASTER_URI"
+            )
+        from cyborg.transport.ros import RosTransport
+
+        self._clock = RealClock()
+        self._transport = RosTransport(self._clock, process_name=f"cyborg_tool_{os.getpid()}")
+        self._node: Node = self._transport.node("cyborg_tool")
+
+    def close(self) -> None:
+        self._transport.close("command done")
+        self._clock.close()
+
+    def _run(self, main: Coroutine[Any, Any, T]) -> T:
+        return self._clock.run(main)
+
+    async def _publish(self, topic: str, message: Message) -> None:
+        listeners = self._transport.subscribers_of(topic)
+        if not listeners:
+            raise CyborgError(
+                f"no node listens on {topic}; fix: start the robot (`cyborg launch`) or check ROS_MASTER_URI"
+            )
+        publisher = self._node.publisher(topic, type(message), latch=True)
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + CONNECT_TIMEOUT
+        while publisher.subscriber_count() < len(listeners) and loop.time() < deadline:
+            await asyncio.sleep(0.01)
+        publisher.publish(message)
+        await asyncio.sleep(DELIVERY_GRACE)
+
+    # --- the commands -------------------------------------------------------------------------
+
+    def send_event(self, name: str) -> bool | None:
+        self._run(self._publish(topics.REGISTER_EVENT, String(name)))
+        return None  # the valid events are known to the controller, not on the wire
+
+    def say(self, text: str) -> None:
+        self._run(self._publish(topics.TEXT_FROM_SPEECH, String(text)))
+
+    def set_emotion(self, name: str) -> None:
+        self._run(self._publish(topics.SET_EMOTIONAL_STATE, String(name)))
+
+    def set_values(self, pleasure: float, arousal: float, dominance: float) -> None:
+        self._run(self._publish(topics.SET_EMOTIONAL_VALUES, EmotionalFeedback(pleasure, arousal, dominance)))
+
+    def switch(self, on: bool) -> None:
+        self._run(self._publish(topics.EMOTIONAL_CONTROLLER, String("on" if on else "off")))
+
+    def status(self) -> dict[str, Any]:
+        return self._run(self._status())
+
+    async def _status(self) -> dict[str, Any]:
+        status: dict[str, Any] = {"state": None, "previous_state": None, "event": None}
+        changed = asyncio.Event()
+
+        def on_change(message: SystemState, info: MessageInfo) -> None:
+            _apply_change(status, message)
+            changed.set()
+
+        subscription = self._node.subscribe(topics.STATE_CHANGE, SystemState, on_change)
+        try:
+            proxy = self._node.service_proxy(topics.GET_EMOTIONAL_STATE, EmotionalStateService)
+            try:
+                answer = await proxy.call(timeout=CONNECT_TIMEOUT)
+            except (ServiceUnavailableError, ServiceTimeoutError):
+                raise CyborgError(
+                    f"no emotion system answers on {topics.GET_EMOTIONAL_STATE}; fix: start the node "
+                    "cyborg_controller (`cyborg launch`), or check ROS_MASTER_URI"
+                ) from None
+            status.update(
+                emotion=answer.emotional_state,
+                pleasure=answer.current_pleasure,
+                arousal=answer.current_arousal,
+                dominance=answer.current_dominance,
+            )
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(changed.wait(), CONNECT_TIMEOUT)  # latched: arrives at once
+        finally:
+            subscription.unsubscribe()
+        return status
+
+    def follow(self, status: dict[str, Any], show: Callable[[dict[str, Any]], None]) -> None:
+        """Call ``show`` with the updated status on every state change and emotion update, until SIGINT."""
+        self._run(self._follow(status, show))
+
+    async def _follow(self, status: dict[str, Any], show: Callable[[dict[str, Any]], None]) -> None:
+        stop = asyncio.Event()
+        loop = asyncio.get_running_loop()
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            loop.add_signal_handler(sig, stop.set)
+        last: dict[str, Any] = dict(status)
+
+        def update(apply: Callable[[], None]) -> None:
+            apply()
+            if status != last:  # the latched messages repeat what the status already shows
+                last.clear()
+                last.update(status)
+                show(status)
+
+        def on_change(message: SystemState, info: MessageInfo) -> None:
+            update(lambda: _apply_change(status, message))
+
+        def on_emotion(message: EmotionalState, info: MessageInfo) -> None:
+            update(
+                lambda: status.update(
+                    emotion=message.to_emotional_state,
+                    pleasure=message.current_pleasure,
+                    arousal=message.current_arousal,
+                    dominance=message.current_dominance,
+                )
+            )
+
+        self._node.subscribe(topics.STATE_CHANGE, SystemState, on_change, queue_size=1000)
+        self._node.subscribe(topics.EMOTIONAL_STATE, EmotionalState, on_emotion, queue_size=1000)
+        await stop.wait()
+
+
+def _apply_change(status: dict[str, Any], message: SystemState) -> None:
+    status.update(
+        state=message.to_system_state, previous_state=message.from_system_state, event=message.event
+    )

@@ -1,0 +1,194 @@
+"""What the thesis's four scenarios (10.2) must show, checked on a transcript's records.
+
+Used by the embedded runs (tests/scenarios) and the ROS runs (tests/ros). Where the emotion
+model may vary (which opinion the robot voices), a check accepts any sentence the navigation
+database holds for the emotion in effect at that moment.
+"""
+
+from __future__ import annotations
+
+import itertools
+from typing import Any
+
+from cyborg.navigation.database import DEFAULT_RESPONSES, ResponseType
+
+Record = dict[str, Any]
+
+
+def transitions(records: list[Record]) -> list[tuple[str, str, str]]:
+    return [(r["from"], r["event"], r["to"]) for r in records if r["type"] == "state"]
+
+
+def said(records: list[Record]) -> list[str]:
+    return [r["text"] for r in records if r["type"] == "say"]
+
+
+def contains_in_order(sequence: list[Any], expected: list[Any]) -> bool:
+    it = iter(sequence)
+    return all(any(item == wanted for item in it) for wanted in expected)
+
+
+def emotion_at(records: list[Record], index: int) -> str:
+    for record in reversed(records[:index]):
+        if record["type"] == "emotion":
+            return str(record["emotion"])
+    return "neutral"
+
+
+def opinions_for(emotion: str, place: str) -> set[str]:
+    fitting = [r for r in DEFAULT_RESPONSES if r.type is ResponseType.OPINION and r.emotion == emotion]
+    fitting = fitting or [
+        r for r in DEFAULT_RESPONSES if r.type is ResponseType.OPINION and r.emotion is None
+    ]
+    return {r.say(place) for r in fitting}
+
+
+def assert_opinion(records: list[Record], place: str) -> str:
+    """The first sentence about ``place`` is an opinion fitting the emotion at that moment."""
+    for index, record in enumerate(records):
+        if record["type"] == "say" and place in record["text"]:
+            emotion = emotion_at(records, index)
+            assert record["text"] in opinions_for(emotion, place), (record, emotion)
+            return emotion
+    raise AssertionError(f"nothing was said about {place}")
+
+
+def check_scenario_a(records: list[Record]) -> None:
+    """Thesis 10.2.1: it wanders and plays music alone, then a user talks, asks the way and sends it."""
+    states = transitions(records)
+    assert states[0] == ("", "start", "idle")
+    first = records[0]
+    assert first["t"] < 1.0  # at once (over ROS: once the node has heard the latched state)
+    assert {k: v for k, v in first.items() if k != "t"} == {
+        "type": "emotion",
+        "emotion": "neutral",
+        "pleasure": 0.0,
+        "arousal": 0.0,
+        "dominance": 0.0,
+    }
+    before_user = [
+        s for s, r in zip(states, [r for r in records if r["type"] == "state"], strict=True) if r["t"] < 300
+    ]
+    # observation 1 and 2: it wanders on its own, then plays music
+    assert contains_in_order(
+        before_user,
+        [
+            ("idle", "navigation_emotional", "navigation_planning"),
+            ("navigation_planning", "navigation_start_wandering", "navigation_moving"),
+            ("navigation_moving", "navigation_wandering_completed", "idle"),
+            ("idle", "music_play", "music"),
+            ("music", "succeeded", "idle"),
+        ],
+    )
+    emotions = [r["emotion"] for r in records if r["type"] == "emotion" and r["t"] < 300]
+    assert "unconcerned" in emotions and "happy" in emotions
+    # observation 3: the user
+    assert contains_in_order(
+        states,
+        [
+            ("idle", "conversation_interest", "conversation"),
+            ("conversation", "navigation_feedback", "navigation_talking"),
+            ("navigation_talking", "navigation_feedback_completed", "conversation"),
+            ("conversation", "navigation_information", "navigation_talking"),
+            ("navigation_talking", "navigation_command", "navigation_planning"),
+            ("navigation_planning", "navigation_start_moving", "navigation_moving"),
+            ("navigation_moving", "succeeded", "navigation_talking"),
+            ("navigation_talking", "succeeded", "idle"),
+            ("idle", "navigation_command", "navigation_planning"),
+            ("navigation_planning", "navigation_start_moving", "navigation_moving"),
+            ("navigation_moving", "succeeded", "navigation_talking"),
+            ("navigation_talking", "succeeded", "idle"),
+        ],
+    )
+    assert contains_in_order(
+        said(records),
+        [
+            "I think I know where that is, would you like me to show you?",
+            "At once.",
+            "Human, this is cafeteria",
+        ],
+    )
+    assert_opinion(records, "el6")
+    assert_opinion(records, "entrance 2")
+    poses = [(r["x"], r["y"]) for r in records if r["type"] == "pose"]
+    assert len(set(poses)) > 50  # it really drove around
+
+
+def check_scenario_b(records: list[Record]) -> None:
+    """Thesis 10.2.2: wandering and music alternate until a user interrupts the music."""
+    states = transitions(records)
+    wanders = states.count(("navigation_moving", "navigation_wandering_completed", "idle"))
+    plays = states.count(("music", "succeeded", "idle"))
+    assert wanders >= 2 and plays >= 1, "it alternates between wandering and music on its own"
+    assert contains_in_order(
+        states,
+        [
+            ("idle", "music_play", "music"),
+            ("music", "conversation_interest", "conversation"),  # the user interrupts the music
+            ("conversation", "navigation_information", "navigation_talking"),
+            ("navigation_talking", "navigation_command", "navigation_planning"),
+            ("navigation_planning", "navigation_start_moving", "navigation_moving"),
+            ("navigation_moving", "succeeded", "navigation_talking"),
+            ("navigation_talking", "succeeded", "idle"),
+        ],
+    )
+    assert contains_in_order(
+        said(records),
+        ["I think I know where that is, would you like me to show you?", "At once.", "Human, this is el6"],
+    )
+
+
+def check_scenario_c(records: list[Record]) -> None:
+    """Thesis 10.2.3: the calendar sends it to the cafeteria, and back after a user took it away."""
+    states = transitions(records)
+    assert states[1] == ("idle", "navigation_scheduler", "navigation_planning")
+    assert contains_in_order(
+        states,
+        [
+            ("idle", "navigation_scheduler", "navigation_planning"),
+            ("navigation_planning", "navigation_start_moving", "navigation_moving"),
+            ("navigation_moving", "succeeded", "navigation_talking"),
+            ("navigation_talking", "succeeded", "idle"),
+            ("idle", "conversation_interest", "conversation"),
+            ("conversation", "navigation_information", "navigation_talking"),
+            ("navigation_talking", "navigation_command", "navigation_planning"),
+            ("navigation_moving", "succeeded", "navigation_talking"),
+            ("navigation_talking", "succeeded", "idle"),
+            ("idle", "navigation_scheduler", "navigation_planning"),  # back to the cafeteria
+            ("navigation_moving", "succeeded", "navigation_talking"),
+        ],
+    )
+    sentences = said(records)
+    assert contains_in_order(sentences, ["Human, this is el6"])
+    about_cafeteria = [s for s in sentences if "cafeteria" in s]
+    assert len(about_cafeteria) >= 2, "it talks about the cafeteria on both arrivals"
+    assert assert_opinion(records, "cafeteria") in {"neutral", "curious", "unconcerned", "happy"}
+    assert "I am happy about cafeteria" in sentences or emotion_at(records, len(records)) != "neutral"
+
+
+def check_scenario_d(records: list[Record]) -> None:
+    """Thesis 10.2.4: a long conversation; the motivator rotates its questions."""
+    states = transitions(records)
+    assert states[1] == ("idle", "conversation_interest", "conversation")
+    questions = {
+        "Do you want to play Simon says?",
+        "Do you know any funny jokes?",
+        "What do you think of the weather?",
+        "Do you want to take a selfie?",
+        "Can I follow you?",
+    }
+    asked = [s for s in said(records) if s in questions]
+    assert len(asked) >= 8, asked
+    assert all(a != b for a, b in itertools.pairwise(asked)), "the motivator rotates its questions"
+    assert len(set(asked)) >= 4
+    moods = [r for r in records if r["type"] == "emotion"]
+    assert {r["emotion"] for r in moods} <= {"neutral", "unconcerned"}, "the emotion barely changes"
+    assert max(abs(r[k]) for r in moods for k in ("pleasure", "arousal", "dominance")) < 0.2
+
+
+CHECKS = {
+    "scenario_a": check_scenario_a,
+    "scenario_b": check_scenario_b,
+    "scenario_c": check_scenario_c,
+    "scenario_d": check_scenario_d,
+}
