@@ -189,7 +189,7 @@ def _pad_value(ctx: click.Context, param: click.Parameter, value: float) -> floa
     return value
 
 
-@emotion_group.command("values")
+@emotion_group.command("values", context_settings={"ignore_unknown_options": True})  # -0.5 is a value
 @click.argument("pleasure", type=float, callback=_pad_value)
 @click.argument("arousal", type=float, callback=_pad_value)
 @click.argument("dominance", type=float, callback=_pad_value)
