@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import pytest
@@ -47,6 +48,19 @@ def test_match_by_type_text_and_fields() -> None:
         ("until: 10\nsteps:\n  - say: hi\n", "line 3: step 1: give exactly one of 'at'"),
         ("until: 10\nsteps:\n  - when: {type: sing}\n    say: hi\n", "unknown record type 'sing'"),
         ("steps: []\n", "missing 'until'"),
+        (
+            "until: 10\ncalendar:\n  - {location: cafeteria, start: soon, end: 2026-11-23T16:00:00}\n",
+            "line 3: calendar entry 1 start: 'soon' is not a date-time; fix: write it as 2026-11-23T15:00:00",
+        ),
+        (
+            "until: 10\ncalendar:\n  - location: cafeteria\n    start: 2026-11-23T16:00:00\n"
+            "    end: 2026-11-23T15:00:00\n",
+            "line 3: calendar entry 1: end 2026-11-23T15:00:00 is not after start",
+        ),
+        (
+            "until: 10\ncalendar:\n  - {start: 2026-11-23T15:00:00, end: 2026-11-23T16:00:00}\n",
+            "line 3: calendar entry 1 location: missing 'location'; fix: add it (e.g. location: cafeteria)",
+        ),
         ("until: soon\n", "'soon' is not a time"),
     ],
 )
@@ -62,3 +76,57 @@ def test_cli_reports_a_bad_script(tmp_path: Path) -> None:
     result = CliRunner().invoke(cli, ["sim", "--script", str(script), "--speed", "max"])
     assert result.exit_code == 1
     assert "bad.yaml: line 3: step 1 shout: unknown key 'shout'" in result.output
+
+
+@pytest.mark.parametrize(
+    ("steps", "expected"),
+    [
+        (
+            "  - at: 1\n    event: musc_play\n",
+            "line 3: step 1: event 'musc_play' is no transition of this state machine; fix: use one of",
+        ),
+        (
+            "  - at: 1\n    emotion: joyful\n",
+            "line 3: step 1: 'joyful' is no emotion of this robot; fix: use one of",
+        ),
+    ],
+)
+def test_cli_refuses_events_and_emotions_the_robot_does_not_know(
+    tmp_path: Path, steps: str, expected: str
+) -> None:
+    script = tmp_path / "typo.yaml"
+    script.write_text("until: 10\nsteps:\n" + steps)
+    result = CliRunner().invoke(cli, ["sim", "--script", str(script), "--speed", "max"])
+    assert result.exit_code == 1, result.output
+    assert f"typo.yaml: {expected}" in result.output
+    assert "music_play" in result.output or "happy" in result.output  # the fix lists the known names
+
+
+def test_calendar_entry_at_an_unknown_place_names_its_line(tmp_path: Path) -> None:
+    script = tmp_path / "cal.yaml"
+    script.write_text(
+        "until: 10\ncalendar:\n  - {location: cafeteria, start: 2026-11-23T15:00:00, end: 2026-11-23T16:00:00}\n"
+        "  - {location: moon base, start: 2026-11-23T15:00:00, end: 2026-11-23T16:00:00}\n"
+    )
+    result = CliRunner().invoke(cli, ["sim", "--script", str(script), "--speed", "max"])
+    assert result.exit_code == 1, result.output
+    assert "cal.yaml: line 4: calendar entry 2:" in result.output and "moon base" in result.output
+
+
+def test_transcript_ends_a_trip_with_the_arrival_pose(tmp_path: Path) -> None:
+    from cyborg.controller.config import load_config
+    from cyborg.interfaces.cli import packaged_config
+    from cyborg.sim.base import SimulatedBase
+    from cyborg.sim.scenario import ScenarioRun
+
+    script = parse_script("until: 400\nsteps:\n  - at: 1\n    say: go to the cafeteria\n")
+    run = ScenarioRun(load_config(packaged_config("cyborg.yaml")), script, data_dir=tmp_path)
+    records = run.run()
+    arrived = next(r for r in records if r["type"] == "state" and r["from"] == "navigation_moving")
+    assert arrived["event"] == "succeeded"
+    poses = [r for r in records if r["type"] == "pose"]
+    assert all(b["t"] - a["t"] >= 0.999 for a, b in itertools.pairwise(poses)), "at most one a second"
+    base = next(c for c in run.robot.components.values() if isinstance(c, SimulatedBase))
+    last = poses[-1]
+    assert (last["x"], last["y"]) == (round(base.x, 3), round(base.y, 3)), "the arrival pose is recorded"
+    assert last["t"] <= arrived["t"] + 1.0

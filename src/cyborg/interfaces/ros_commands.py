@@ -43,8 +43,9 @@ from typing import IO, Any
 import click
 
 from cyborg.controller.config import LoadedConfig
-from cyborg.errors import ConfigError, CyborgError
+from cyborg.errors import CyborgError
 from cyborg.sim.nodes import API, CONTROLLER, NodeContext, Part, build_part, part_names
+from cyborg.sim.script import Script
 from cyborg.transport.base import Node, Publisher
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, Clock, RealClock, VirtualClock
 from cyborg.transport.messages import Clock as ClockMessage
@@ -574,12 +575,11 @@ def launch(
         robot.stop_all()
 
 
-def prepare_calendar(
-    config: LoadedConfig, data_dir: Path, map_path: Path | None, entries: Sequence[Any]
-) -> None:
+def prepare_calendar(config: LoadedConfig, data_dir: Path, map_path: Path | None, script: Script) -> None:
     """Put a script's calendar entries into the navigation module's database before its node starts."""
-    if not entries:
+    if not script.calendar:
         return
+    from cyborg.sim.scenario import add_calendar
     from cyborg.transport.embedded import EmbeddedTransport
 
     context = NodeContext(data_dir=data_dir, rng=random.Random(0), map_path=map_path)
@@ -590,13 +590,7 @@ def prepare_calendar(
             if isinstance(raw, dict) and raw.get("kind") == "navigation":
                 build_part(name, config, transport, context)  # what the node will open
                 break
-        if context.calendar is None:
-            raise ConfigError(
-                "calendar: this robot has no navigation module to keep a calendar; fix: remove "
-                "'calendar:' or add the navigation module"
-            )
-        for entry in entries:
-            context.calendar(entry)
+        add_calendar(context.calendar, script)
     finally:
         transport.shutdown()
         clock.close()
@@ -615,16 +609,17 @@ def run_scenario_ros(
     say: Callable[[str], None] = click.echo,
 ) -> list[dict[str, Any]]:
     """Run a scenario over ROS: the robot's nodes (no API) plus ``cyborg_scenario``; return the records."""
-    from cyborg.sim.scenario import script_start
+    from cyborg.sim.scenario import check_script, script_start
     from cyborg.sim.script import load_script
 
     script = load_script(script_path)
+    check_script(script, config)
     with contextlib.ExitStack() as stack:
         if data_dir is None:
             data_dir = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="cyborg-scenario-")))
         if transcript_path is None:
             transcript_path = data_dir / "transcript.jsonl"
-        prepare_calendar(config, data_dir, map_path, script.calendar)
+        prepare_calendar(config, data_dir, map_path, script)
         parts = [name for name in part_names(config) if name != API] + [SCENARIO]
         robot = Launch(
             config_path,

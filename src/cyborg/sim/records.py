@@ -9,6 +9,7 @@ transcript, the HTTP API and the dashboard all read these records.
 
 from __future__ import annotations
 
+import asyncio
 import json
 import math
 from collections.abc import Callable
@@ -36,6 +37,8 @@ class RecordStream:
         self.listeners: list[Callable[[Record], None]] = []
         self._last_pose_t = -math.inf
         self._last_pose: tuple[float, float, float] | None = None
+        self._pending_pose: tuple[float, float, float] | None = None
+        self._pose_flush: asyncio.TimerHandle | None = None
         node.subscribe(topics.STATE_CHANGE, SystemState, self._on_state, queue_size=1000)
         node.subscribe(topics.EMOTIONAL_STATE, EmotionalState, self._on_emotion, queue_size=1000)
         node.subscribe(SPOKEN_TOPIC, String, self._on_spoken, queue_size=1000)
@@ -76,10 +79,25 @@ class RecordStream:
             round(p.position.y, 3),
             round(yaw_of(p.orientation.z, p.orientation.w), 3),
         )
-        now = self.now()
-        if pose == self._last_pose or now - self._last_pose_t < POSE_INTERVAL:
+        if pose == self._last_pose:
             return
-        self._last_pose, self._last_pose_t = pose, now
+        since_last = self.now() - self._last_pose_t
+        if since_last < POSE_INTERVAL:
+            # Held back, not lost: the last pose of a trip (the arrival) comes out a moment later.
+            self._pending_pose = pose
+            if self._pose_flush is None:
+                self._pose_flush = self.node.clock.call_later(POSE_INTERVAL - since_last, self._flush_pose)
+            return
+        self._emit_pose(pose)
+
+    def _flush_pose(self) -> None:
+        self._pose_flush = None
+        pose, self._pending_pose = self._pending_pose, None
+        if pose is not None and pose != self._last_pose:
+            self._emit_pose(pose)
+
+    def _emit_pose(self, pose: tuple[float, float, float]) -> None:
+        self._last_pose, self._last_pose_t = pose, self.now()
         self.emit("pose", x=pose[0], y=pose[1], theta=pose[2])
 
     def _on_decision(self, m: String, info: MessageInfo) -> None:

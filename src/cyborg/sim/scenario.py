@@ -19,10 +19,10 @@ from pathlib import Path
 from typing import IO
 
 from cyborg.controller.config import LoadedConfig
-from cyborg.errors import ConfigError
+from cyborg.errors import ConfigError, CyborgError
 from cyborg.sim.records import Record, RecordStream
 from cyborg.sim.robot import Robot, build_robot
-from cyborg.sim.script import Script, Step
+from cyborg.sim.script import CalendarEntry, Script, Step, check_against
 from cyborg.transport import topics
 from cyborg.transport.base import Node
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, VirtualClock
@@ -115,6 +115,7 @@ class ScenarioRun:
         speed: float | None = None,
         map_path: Path | None = None,
     ) -> None:
+        check_script(script, config)
         self.script = script
         self.clock = VirtualClock(start=script_start(script), speed=speed)
         self.transport = EmbeddedTransport(self.clock)
@@ -133,12 +134,7 @@ class ScenarioRun:
                 self.robot.emotion.set_named(self.script.emotion)
             except ValueError as exc:
                 raise ConfigError(f"emotion: {exc}") from exc
-        for entry in self.script.calendar:
-            if self.robot.calendar is None:
-                raise ConfigError(
-                    "calendar: this robot has no navigation module to keep a calendar; fix: remove 'calendar:' or add the navigation module"
-                )
-            self.robot.calendar(entry)
+        add_calendar(self.robot.calendar, self.script)
 
     async def _main(self) -> None:
         self.robot.start()
@@ -152,6 +148,29 @@ class ScenarioRun:
             self.transport.shutdown()
             self.clock.close()
         return self.records
+
+
+def check_script(script: Script, config: LoadedConfig) -> None:
+    """Refuse events and emotions in ``script`` that the robot of ``config`` does not know."""
+    events = {event for state in config.machine.states.values() for event in state.transitions}
+    emotions = {"neutral", *config.model.emotion.prototypes}
+    check_against(script, events, emotions)
+
+
+def add_calendar(calendar: Callable[[CalendarEntry], None] | None, script: Script) -> None:
+    """Put the script's calendar entries into the navigation database; errors name the entry's line."""
+    for number, entry in enumerate(script.calendar, start=1):
+        if calendar is None:
+            raise ConfigError(
+                "calendar: this robot has no navigation module to keep a calendar; "
+                "fix: remove 'calendar:' or add the navigation module"
+            )
+        try:
+            calendar(entry)
+        except CyborgError as exc:
+            raise ConfigError(
+                f"line {entry.line or '?'}: calendar entry {number}: {exc}", source=script.source
+            ) from exc
 
 
 def script_start(script: Script) -> datetime:

@@ -99,6 +99,15 @@ class CalendarEntry(BaseModel):
     end: datetime
     recurrence: str | None = None
     ignore: bool = False
+    line: int = Field(0, exclude=True)
+
+    @model_validator(mode="after")
+    def _ends_after_start(self) -> CalendarEntry:
+        if self.end <= self.start:
+            raise ValueError(
+                f"end {self.end.isoformat()} is not after start {self.start.isoformat()}; fix: swap them"
+            )
+        return self
 
 
 class Script(BaseModel):
@@ -110,6 +119,7 @@ class Script(BaseModel):
     calendar: list[CalendarEntry] = Field(default_factory=list)
     until: float
     steps: list[Step] = Field(default_factory=list)
+    source: str = Field("<script>", exclude=True)  # the file, for error messages
 
     @field_validator("until", mode="before")
     @classmethod
@@ -117,18 +127,46 @@ class Script(BaseModel):
         return parse_seconds(value)
 
 
-def _step_lines(text: str) -> list[int]:
-    """Line numbers (1-based) of each entry of the top-level ``steps`` list."""
+def _item_lines(text: str, key: str) -> list[int]:
+    """Line numbers (1-based) of each entry of the top-level list ``key`` (``steps``, ``calendar``)."""
     try:
         root = yaml.compose(text, Loader=yaml.SafeLoader)
     except yaml.YAMLError:
         return []
     if not isinstance(root, yaml.MappingNode):
         return []
-    for key, value in root.value:
-        if key.value == "steps" and isinstance(value, yaml.SequenceNode):
+    for name, value in root.value:
+        if name.value == key and isinstance(value, yaml.SequenceNode):
             return [item.start_mark.line + 1 for item in value.value]
     return []
+
+
+def check_against(script: Script, events: set[str], emotions: set[str]) -> None:
+    """Refuse steps that a robot with these events and emotion names could not act on.
+
+    A misspelt event would be dropped by the controller and a misspelt emotion rejected by the
+    emotion system, so the run would end without doing what the script meant.
+    """
+    problems: list[str] = []
+    known_events = ", ".join(sorted(events))
+    known_emotions = ", ".join(sorted(emotions))
+    if script.emotion is not None and script.emotion not in emotions:
+        problems.append(
+            f"emotion: {script.emotion!r} is no emotion of this robot; fix: use one of {known_emotions}"
+        )
+    for number, step in enumerate(script.steps, start=1):
+        where = f"line {step.line or '?'}: step {number}"
+        if step.event is not None and step.event not in events:
+            problems.append(
+                f"{where}: event {step.event!r} is no transition of this state machine; "
+                f"fix: use one of {known_events}"
+            )
+        if step.emotion is not None and step.emotion not in emotions:
+            problems.append(
+                f"{where}: {step.emotion!r} is no emotion of this robot; fix: use one of {known_emotions}"
+            )
+    if problems:
+        raise ConfigError(problems, source=script.source)
 
 
 def load_script(path: str | Path) -> Script:
@@ -151,28 +189,48 @@ def parse_script(text: str, source: str = "<script>") -> Script:
             "a script is a mapping with 'until' and 'steps'; fix: see the README's scenario section",
             source=source,
         )
-    lines = _step_lines(text)
+    lines = {key: _item_lines(text, key) for key in ("steps", "calendar")}
     try:
         script = Script.model_validate(data)
     except ValidationError as exc:
         raise ConfigError([_describe(error, lines) for error in exc.errors()], source=source) from exc
-    for step, line in zip(script.steps, lines, strict=False):
+    for step, line in zip(script.steps, lines["steps"], strict=False):
         step.line = line
+    for entry, line in zip(script.calendar, lines["calendar"], strict=False):
+        entry.line = line
+    script.source = source
     return script
 
 
-def _describe(error: Any, lines: list[int]) -> str:
+_KEY_FIXES = {
+    "steps": "use at/when/delay and one of say/event/emotion",
+    "calendar": "use location, start, end and optionally recurrence, ignore",
+}
+_MISSING_EXAMPLES = {
+    "until": "until: 600",
+    "location": "location: cafeteria",
+    "start": "start: 2026-11-23T15:00:00",
+    "end": "end: 2026-11-23T16:00:00",
+}
+
+
+def _describe(error: Any, lines: dict[str, list[int]]) -> str:
     loc = list(error["loc"])
     where = "top level"
-    if len(loc) >= 2 and loc[0] == "steps" and isinstance(loc[1], int):
-        line = lines[loc[1]] if loc[1] < len(lines) else "?"
+    if len(loc) >= 2 and loc[0] in lines and isinstance(loc[1], int):
+        known = lines[loc[0]]
+        line = known[loc[1]] if loc[1] < len(known) else "?"
+        what = "step" if loc[0] == "steps" else "calendar entry"
         rest = ".".join(str(p) for p in loc[2:])
-        where = f"line {line}: step {loc[1] + 1}" + (f" {rest}" if rest else "")
+        where = f"line {line}: {what} {loc[1] + 1}" + (f" {rest}" if rest else "")
     elif loc:
         where = ".".join(str(p) for p in loc)
     message = error["msg"].removeprefix("Value error, ")
     if error["type"] == "extra_forbidden":
-        message = f"unknown key {loc[-1]!r}; fix: use at/when/delay and one of say/event/emotion"
+        message = f"unknown key {loc[-1]!r}; fix: {_KEY_FIXES.get(str(loc[0]), 'remove it')}"
     elif error["type"] == "missing":
-        message = f"missing {loc[-1]!r}; fix: add it (e.g. until: 600)"
+        example = _MISSING_EXAMPLES.get(str(loc[-1]), f"{loc[-1]}: ...")
+        message = f"missing {loc[-1]!r}; fix: add it (e.g. {example})"
+    elif error["type"].startswith("datetime"):
+        message = f"{error.get('input')!r} is not a date-time; fix: write it as 2026-11-23T15:00:00"
     return f"{where}: {message}"
