@@ -121,12 +121,18 @@ def test_transcript_ends_a_trip_with_the_arrival_pose(tmp_path: Path) -> None:
 
     script = parse_script("until: 400\nsteps:\n  - at: 1\n    say: go to the cafeteria\n")
     run = ScenarioRun(load_config(packaged_config("cyborg.yaml")), script, data_dir=tmp_path)
+    base = next(c for c in run.robot.components.values() if isinstance(c, SimulatedBase))
+    at_arrival: list[tuple[float, float]] = []
+
+    def snapshot(record: dict[str, object]) -> None:
+        if record["type"] == "state" and record["from"] == "navigation_moving" and not at_arrival:
+            at_arrival.append((round(base.x, 3), round(base.y, 3)))
+
+    run.listeners.append(snapshot)
     records = run.run()
     arrived = next(r for r in records if r["type"] == "state" and r["from"] == "navigation_moving")
     assert arrived["event"] == "succeeded"
     poses = [r for r in records if r["type"] == "pose"]
     assert all(b["t"] - a["t"] >= 0.999 for a, b in itertools.pairwise(poses)), "at most one a second"
-    base = next(c for c in run.robot.components.values() if isinstance(c, SimulatedBase))
-    last = poses[-1]
-    assert (last["x"], last["y"]) == (round(base.x, 3), round(base.y, 3)), "the arrival pose is recorded"
-    assert last["t"] <= arrived["t"] + 1.0
+    around = [(r["x"], r["y"]) for r in poses if arrived["t"] - 1.0 <= r["t"] <= arrived["t"] + 1.0]
+    assert at_arrival[0] in around, "the arrival pose is recorded"
