@@ -22,9 +22,19 @@ CYBORG = [sys.executable, "-m", "cyborg.interfaces.cli"]
 
 @pytest.fixture
 def running_sim(tmp_path: Path) -> Iterator[str]:
+    yield from start_sim("demo.yaml", tmp_path)
+
+
+@pytest.fixture
+def running_cyborg(tmp_path: Path) -> Iterator[str]:
+    """The default robot (with its speech gatekeeper), ten times faster than real time."""
+    yield from start_sim("cyborg.yaml", tmp_path, "--speed", "10")
+
+
+def start_sim(config: str, data: Path, *extra: str) -> Iterator[str]:
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
     process = subprocess.Popen(
-        [*CYBORG, "sim", "--config", str(packaged_config("demo.yaml")), "--port", "0", "--db", str(tmp_path)],
+        [*CYBORG, "sim", "--config", str(packaged_config(config)), "--port", "0", "--db", str(data), *extra],
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         text=True,
@@ -86,7 +96,10 @@ def test_bad_input_is_refused_with_the_reason(running_sim: str) -> None:
     request = urllib.request.Request(running_sim + "/api/emotion/values", data=values, method="POST")
     with pytest.raises(urllib.error.HTTPError) as info:
         urllib.request.urlopen(request)
-    assert info.value.code == 400 and "'arousal' must be a number in [-1, 1], got 3" in info.value.read().decode()
+    assert (
+        info.value.code == 400
+        and "'arousal' must be a number in [-1, 1], got 3" in info.value.read().decode()
+    )
     request = urllib.request.Request(running_sim + "/api/event", data=b"not json", method="POST")
     with pytest.raises(urllib.error.HTTPError) as info:
         urllib.request.urlopen(request)
@@ -103,3 +116,21 @@ def test_openapi_document_lists_the_commands(running_sim: str) -> None:
         spec = json.loads(response.read())
     assert spec["openapi"].startswith("3.")
     assert {"/api/event", "/api/say", "/api/emotion/set", "/api/status"} <= set(spec["paths"])
+
+
+def test_status_reports_the_gatekeepers_counts(running_cyborg: str) -> None:
+    url = running_cyborg
+    wait_for_state(url, "idle")
+    tool(url, "say", "hello")
+    wait_for_state(url, "conversation")
+    deadline = time.monotonic() + 20
+    while True:
+        with urllib.request.urlopen(url + "/api/status") as response:
+            counts = json.loads(response.read())["gatekeepers"]["cyborg_speech_gatekeeper"]
+        if counts["passed"] >= 1 or time.monotonic() > deadline:
+            break
+        time.sleep(0.2)
+    assert counts["resource"] == "speech" and counts["passed"] >= 1, counts
+    shown = tool(url, "status").stdout.splitlines()
+    line = next(x for x in shown if "gatekeeper cyborg_speech_gatekeeper" in x)
+    assert re.search(r"\(speech, held by \w+\): passed \d+, dropped \d+", line), line

@@ -83,6 +83,9 @@ def test_only_the_module_in_control_gets_through(clock: VirtualClock) -> None:
     assert gate.stats.passed == len(heard)
     assert gate.stats.dropped_by_sender["talker_b"] >= 5
     assert gate.stats.dropped_by_sender["talker_a"] >= 4
+    report = gate.report()
+    assert report["held_by"] == "talker_b" and report["passed"] == len(heard)
+    assert report["dropped_by_sender"] == dict(gate.stats.dropped_by_sender)
 
 
 def test_tts_speaks_one_sentence_at_a_time_and_bounds_its_queue(clock: VirtualClock) -> None:

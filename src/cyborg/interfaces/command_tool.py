@@ -145,6 +145,15 @@ def format_status(status: dict[str, Any]) -> str:
     )
 
 
+def format_gatekeeper(name: str, counts: dict[str, Any]) -> str:
+    by_sender = ", ".join(f"{who} {n}" for who, n in sorted((counts.get("dropped_by_sender") or {}).items()))
+    return (
+        f"  gatekeeper {name} ({counts.get('resource')}, held by {counts.get('held_by') or 'nobody'}): "
+        f"passed {counts.get('passed', 0)}, dropped {counts.get('dropped', 0)}"
+        + (f" ({by_sender})" if by_sender else "")
+    )
+
+
 @click.command("event")
 @click.argument("name")
 @link_options
@@ -223,6 +232,8 @@ def status_command(follow: bool, link: RobotLink) -> None:
     """Show the previous state, event, current state, emotion and PAD values."""
     status = link.status()
     click.echo(format_status(status))
+    for name, counts in (status.get("gatekeepers") or {}).items():
+        click.echo(format_gatekeeper(name, counts))
     if follow:
 
         def show(current: dict[str, Any]) -> None:

@@ -8,6 +8,7 @@ from typing import Any
 from cyborg.errors import CyborgError
 from cyborg.interfaces.api import RobotAPI
 from cyborg.interfaces.dashboard import register as register_dashboard
+from cyborg.modules.gatekeeper import Gatekeeper
 from cyborg.sim.robot import Robot
 from cyborg.transport.base import Transport
 
@@ -21,10 +22,12 @@ def serve_api(host: str, port: int, say: Callable[..., Any]) -> Callable[[Transp
     """A ``serve`` hook for :func:`cyborg.sim.runner.run_sim` that starts the HTTP API."""
 
     async def serve(transport: Transport, robot: Robot) -> Stop:
+        gatekeepers = {name: c for name, c in robot.components.items() if isinstance(c, Gatekeeper)}
         api = RobotAPI(
             transport.node("cyborg_api"),
             machine=robot.config.machine,
             emotions=dict(robot.config.model.emotion.prototypes),
+            extra_status=lambda: {"gatekeepers": {name: g.report() for name, g in gatekeepers.items()}},
         )
         for extend in EXTENSIONS:
             extend(api, robot)

@@ -45,6 +45,7 @@ class Gatekeeper:
         self.allowed: str | None = None
         self.known = False
         self.stats = GatekeeperStats()
+        self._warned: set[str] = set()  # senders already logged at INFO in this state
         self._output = node.publisher(output_topic, msg_type)
         node.subscribe(topics.STATE_CHANGE, SystemState, self._on_state_change)
         node.subscribe(input_topic, msg_type, self._on_message, queue_size=100)
@@ -63,6 +64,7 @@ class Gatekeeper:
         holder = resources.get(self.resource)
         self.allowed = normalize_node_name(holder) if isinstance(holder, str) else None
         self.known = True
+        self._warned.clear()
 
     def _on_message(self, message: Message, info: MessageInfo) -> None:
         if self.known and self.allowed is not None and normalize_node_name(info.sender) == self.allowed:
@@ -71,10 +73,24 @@ class Gatekeeper:
             return
         self.stats.dropped += 1
         self.stats.dropped_by_sender[info.sender] += 1
-        log.debug(
-            "%s: dropped a message from %s (%s is held by %s)",
+        first_in_state = info.sender not in self._warned
+        self._warned.add(info.sender)
+        log.log(
+            logging.INFO if first_in_state else logging.DEBUG,
+            "%s: dropped a message from %s (%s is held by %s; %d dropped so far)",
             self.node.name,
             info.sender,
             self.resource,
-            self.allowed,
+            self.allowed or "nobody",
+            self.stats.dropped,
         )
+
+    def report(self) -> dict[str, object]:
+        """The counts, for status displays: resource, holder, passed, dropped and by whom."""
+        return {
+            "resource": self.resource,
+            "held_by": self.allowed,
+            "passed": self.stats.passed,
+            "dropped": self.stats.dropped,
+            "dropped_by_sender": dict(self.stats.dropped_by_sender),
+        }
