@@ -32,4 +32,4 @@ def test_sentences_become_wav_files(tmp_path: Path) -> None:
     with wave.open(str(path)) as wav:
         seconds = wav.getnframes() / wav.getframerate()
     assert 1.0 < seconds < 5.0
-    assert tts.spoken == ["Human, this is the cafeteria"]
+    assert list(tts.spoken) == ["Human, this is the cafeteria"]

@@ -24,6 +24,7 @@ log = logging.getLogger(__name__)
 
 SPEECH_INPUT_TOPIC = "/cyborg_tts/say"
 SPOKEN_TOPIC = "/cyborg_tts/spoken"
+SPOKEN_KEPT = 1000  # sentences remembered in memory (every one is logged and published)
 WORDS_PER_SECOND = 2.6
 
 
@@ -52,7 +53,8 @@ class TextToSpeech:
         self.queue: deque[str] = deque()
         self.queue_size = queue_size
         self.dropped = 0
-        self.spoken: list[str] = []
+        self.spoken: deque[str] = deque(maxlen=SPOKEN_KEPT)  # the latest sentences, for tests and status
+        self.sentences = 0
         self.voice = voice
         self.espeak = shutil.which("espeak-ng")
         wants_audio = audio_device_present() if play_audio is None else play_audio
@@ -87,9 +89,10 @@ class TextToSpeech:
     async def _speak(self, text: str) -> None:
         log.info("saying: %s", text)
         self.spoken.append(text)
+        self.sentences += 1
         self._spoken_pub.publish(String(data=text))
         if self.wav_dir is not None and self.espeak:
-            path = self.wav_dir / f"{len(self.spoken):04d}.wav"
+            path = self.wav_dir / f"{self.sentences:04d}.wav"
             await self._espeak("-w", str(path), text)
         if self.play_audio:
             await self._espeak(text)
