@@ -163,7 +163,9 @@ def check_scenario_c(records: list[Record]) -> None:
     about_cafeteria = [s for s in sentences if "cafeteria" in s]
     assert len(about_cafeteria) >= 2, "it talks about the cafeteria on both arrivals"
     assert assert_opinion(records, "cafeteria") in {"neutral", "curious", "unconcerned", "happy"}
-    assert "I am happy about cafeteria" in sentences or emotion_at(records, len(records)) != "neutral"
+    for index, record in enumerate(records):  # every arrival there voices an opinion fitting the mood
+        if record["type"] == "say" and "cafeteria" in record["text"]:
+            assert record["text"] in opinions_for(emotion_at(records, index), "cafeteria"), record
 
 
 def check_scenario_d(records: list[Record]) -> None:
