@@ -1,6 +1,6 @@
 """The thesis's four scenarios (10.2) over ROS: every part its own `cyborg node` process.
 
-``cyborg sim --ros --script`` (:func:`run_scenario_ros`) starts the robot's nodes and the
+``cyborg sim --ros --script FILE`` (run here as a user runs it) starts the robot's nodes and the
 ``cyborg_scenario`` node on the session's roscore, in shared virtual time at SPEED times real
 time; the simulated base publishes that time on /clock. The transcript must pass the same
 checks as the embedded run (tests/scenarios/expectations.py).
@@ -9,6 +9,8 @@ checks as the embedded run (tests/scenarios/expectations.py).
 from __future__ import annotations
 
 import importlib.util
+import json
+import subprocess
 import sys
 from datetime import UTC
 from pathlib import Path
@@ -17,9 +19,6 @@ from types import ModuleType
 import pytest
 
 from conftest import Observers, RosSession
-from cyborg.controller.config import load_config
-from cyborg.interfaces.cli import packaged_config
-from cyborg.interfaces.ros_commands import run_scenario_ros
 from cyborg.sim.scenario import script_start
 from cyborg.sim.script import load_script
 
@@ -45,17 +44,12 @@ def test_scenario_over_ros(name: str, ros: RosSession, observe: Observers, tmp_p
     script_path = SCENARIOS / f"{name}.yaml"
     script = load_script(script_path)
     clock = observe.topic("/clock", Clock)
-    lines: list[str] = []
-    records = run_scenario_ros(
-        packaged_config("cyborg.yaml"),
-        load_config(packaged_config("cyborg.yaml")),
-        script_path,
-        transcript_path=tmp_path / "transcript.jsonl",
-        speed=SPEED,
-        data_dir=tmp_path / "data",
-        map_path=None,
-        say=lines.append,
-    )
+    transcript = tmp_path / "transcript.jsonl"
+    command = [sys.executable, "-m", "cyborg.interfaces.cli", "sim", "--ros", "--script", str(script_path)]
+    command += ["--speed", str(SPEED), "--transcript", str(transcript), "--db", str(tmp_path / "data")]
+    result = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+    records = [json.loads(line) for line in transcript.read_text().splitlines()]
     _expectations().CHECKS[name](records)
     assert records[-1]["t"] <= script.until + 1
 
@@ -67,4 +61,4 @@ def test_scenario_over_ros(name: str, ros: RosSession, observe: Observers, tmp_p
     start = script_start(script).astimezone(UTC).timestamp()
     assert start <= stamps[0] < start + 60
     assert stamps[-1] - stamps[0] >= 0.8 * script.until
-    assert any("virtual time" in line for line in lines)
+    assert "virtual time: " in result.stdout and f"wrote {len(records)} records" in result.stdout
