@@ -388,3 +388,29 @@ def test_glassgarden_info_to_cafeteria(clock: VirtualClock, transport: EmbeddedT
     assert math.dist(client.position, cafeteria.position) < ARRIVED
     assert took == pytest.approx(route.length / SPEED, abs=0.5)
     assert all(planner.is_free(x, y) for _, x, y, _ in client.poses)  # never through a wall
+
+
+def test_without_a_start_it_starts_at_the_information_desk(
+    transport: EmbeddedTransport, campus: OccupancyMap, campus_planner: RoutePlanner
+) -> None:
+    """The issue: the information desk is the start (the campus map's RobotHome is 2.5 m away)."""
+    base = SimulatedBase(transport.node("rosarnl_node"), campus, rng=random.Random(1), planner=campus_planner)
+    desk = campus.pose("information desk")
+    assert (base.x, base.y, base.theta) == (desk.x, desk.y, desk.theta)
+    client = Client(transport)
+    transport.clock.run(transport.clock.sleep(0.1))
+    assert client.position == desk.position  # what the navigation module hears
+
+
+def test_on_glassgarden_it_starts_at_info_not_at_a_robot_home(transport: EmbeddedTransport) -> None:
+    glassgarden = load_map(GLASSGARDEN)
+    base = SimulatedBase(transport.node("rosarnl_node"), glassgarden, rng=random.Random(1))
+    assert (base.x, base.y) == glassgarden.pose("info").position
+
+
+def test_a_map_without_an_information_desk_starts_at_its_robot_home(transport: EmbeddedTransport) -> None:
+    grid = np.zeros((40, 40), dtype=np.uint8)
+    poses = (NamedPose("lab", 1.0, 1.0, 0.0), NamedPose("home", 3.0, 2.0, 1.0, kind="RobotHome"))
+    plain = OccupancyMap(grid=grid, resolution=0.1, origin=(0.0, 0.0), poses=poses)
+    base = SimulatedBase(transport.node("rosarnl_node"), plain, rng=random.Random(1), robot_radius=0.1)
+    assert (base.x, base.y, base.theta) == (3.0, 2.0, 1.0)
