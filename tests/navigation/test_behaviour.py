@@ -195,8 +195,29 @@ def test_origin_of_event(event: str, guiding: bool, origin: Origin | None) -> No
 
 
 @pytest.mark.parametrize("emotion", EMOTIONS)
-def test_wandering_stops_only_in_a_positive_mood(emotion: str) -> None:
-    assert should_stop_wandering(emotion) is (emotion in ("happy", "loved", "dignified"))
+def test_wandering_stops_once_no_longer_bored_unconcerned_or_curious(emotion: str) -> None:
+    assert should_stop_wandering(emotion) is (emotion not in ("bored", "unconcerned", "curious"))
+
+
+@pytest.mark.parametrize("origin", [Origin.COMMAND, Origin.GUIDE])
+@pytest.mark.parametrize("emotion", EMOTIONS)
+def test_a_requested_place_off_the_loaded_map_is_not_a_target(origin: Origin, emotion: str) -> None:
+    chosen = plan(
+        origin,
+        emotion,
+        requested=EL6,
+        scheduled=None,
+        places=[CAFETERIA],
+        rng=random.Random(0),
+        off_map={"el6"},
+    )
+    assert (chosen.kind, chosen.target) == (PlanKind.NOT_ON_MAP, EL6)
+    assert chosen.feedback == (0.0, 0.0, 0.0)
+
+
+def test_asked_where_a_place_off_the_map_is_it_does_not_offer_to_show_it() -> None:
+    assert talk_kind("navigation_information", None, asked_on_map=False) is TalkKind.NOT_ON_MAP
+    assert talk_kind("navigation_feedback", None, asked_on_map=False) is TalkKind.OPINION
 
 
 # --- what the talking state says ----------------------------------------------------------

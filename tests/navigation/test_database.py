@@ -5,7 +5,7 @@ from __future__ import annotations
 import logging
 import math
 import sqlite3
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
 from zoneinfo import ZoneInfo
@@ -452,3 +452,111 @@ def test_events_between_lists_occurrences_in_order(db: NavigationDatabase) -> No
         ("cafeteria", at(2024, 5, 7, 12)),
         ("el5", at(2024, 5, 8, 10)),
     ]
+
+
+# --- maps: the map in use and importing its goals ------------------------------------------
+
+
+@dataclass(frozen=True)
+class Goal:
+    name: str
+    x: float
+    y: float
+    theta: float = 0.0
+
+
+GLASSGARDEN_GOALS = (
+    Goal("waitingarea", -33.581, 10.627),
+    Goal("info", -33.505, 1.139),
+    Goal("hallway", -30.251, -79.089),
+    Goal("elevator1", -29.414, -50.281),
+    Goal("elevator2", -21.912, -42.451),
+    Goal("entrance2", -18.246, -65.898),
+    Goal("hallway1", 1.102, -6.031),
+    Goal("stairs", -31.494, -71.056),
+)
+
+
+def test_map_goals_named_like_default_places_place_them(db: NavigationDatabase) -> None:
+    lines = [db.import_pose(goal, "glassgarden") for goal in GLASSGARDEN_GOALS]
+    assert lines[0] == "updated 'waiting area' (the map's 'waitingarea') to (-33.58, 10.63)"
+    waiting, elevator = db.get_location("waiting area"), db.get_location("elevator")
+    assert (waiting.x, waiting.y, waiting.map) == (-33.581, 10.627, "glassgarden")
+    assert waiting.crowded and waiting.pleasantness == 0.4  # the default's knowledge is kept
+    assert (elevator.x, elevator.y) == (-29.414, -50.281)  # elevator1: the first elevator
+    assert db.get_location("elevator1") == elevator and db.get_location("waitingarea") == waiting
+    assert db.get_location("elevator2").name == "elevator2"  # the second one is a place of its own
+    assert db.get_location("info").x == -33.505 and db.get_location("entrance 2").y == -65.898
+    assert db.get_location("hallway1").x == 1.102 and db.get_location("hallway").x == -30.251
+    assert not {"waitingarea", "elevator1", "info", "entrance2"} & {loc.name for loc in db.list_locations()}
+
+
+def test_importing_the_same_map_again_moves_the_same_places(db: NavigationDatabase) -> None:
+    for _ in range(2):
+        for goal in GLASSGARDEN_GOALS:
+            db.import_pose(goal, "glassgarden")
+    assert len(db.list_locations()) == 8 + 4  # the defaults, plus hallway, hallway1, elevator2, stairs
+    assert db.get_location("waiting area").aliases == ("waitingarea",)
+
+
+def test_the_speech_matcher_of_the_map_finds_the_default_names(db: NavigationDatabase) -> None:
+    for goal in GLASSGARDEN_GOALS:
+        db.import_pose(goal, "glassgarden")
+    matcher = db.matcher(on_map=True)
+    for text, place in [
+        ("the waiting area", "waiting area"),
+        ("the elevator", "elevator"),
+        ("elevator 2", "elevator2"),
+    ]:
+        found = matcher.find(text)
+        assert found is not None and found.location == place, text
+
+
+def test_only_places_on_the_imported_map_are_on_the_map(db: NavigationDatabase) -> None:
+    assert db.current_map() is None
+    assert db.locations_on_map() == db.list_locations()  # before any map: all of them
+    for goal in GLASSGARDEN_GOALS:
+        db.import_pose(goal, "glassgarden")
+    assert db.current_map() == "glassgarden"
+    on_map = {loc.name for loc in db.locations_on_map()}
+    assert "stairs" in on_map and "waiting area" in on_map
+    assert not on_map & {"cafeteria", "el5", "el6", "entrance"}  # (0, 0) placeholders: never targets
+    assert not db.on_current_map(db.get_location("cafeteria"))
+    db.import_pose(Goal("cafeteria", 66.0, 2.0), "campus")
+    assert db.current_map() == "campus"
+    assert [loc.name for loc in db.locations_on_map()] == ["cafeteria"]
+    assert "stairs" not in db.matcher(on_map=True).names
+    assert "on map 'glassgarden', not on the map in use ('campus')" in db.off_map_reason(
+        db.get_location("stairs")
+    )
+
+
+def test_the_map_in_use_persists_and_needs_a_name(tmp_path: Path) -> None:
+    with NavigationDatabase(tmp_path / "nav.db") as db:
+        db.use_map("campus")
+        with pytest.raises(DatabaseError, match="map name is empty"):
+            db.use_map("  ")
+    with NavigationDatabase(tmp_path / "nav.db") as db:
+        assert db.current_map() == "campus"
+
+
+def test_a_version_1_file_gains_the_map_setting_and_the_not_on_map_sentence(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = tmp_path / "nav.db"
+    with monkeypatch.context() as old:
+        old.setattr(database, "_MIGRATIONS", database._MIGRATIONS[:1])
+        old.setattr(database, "SCHEMA_VERSION", 1)
+        old.setattr(database, "_COLUMNS", {k: v for k, v in database._COLUMNS.items() if k != "settings"})
+        with NavigationDatabase(path) as db:
+            db.add_location(Location("gym", map="campus"))
+            for response in db.list_responses(ResponseType.NOT_ON_MAP):  # as a version 1 file had none
+                db.remove_response(response.id or 0)
+    with NavigationDatabase(path) as db:
+        assert db.get_location("gym").map == "campus"
+        assert db.current_map() is None
+        assert [r.say("gym") for r in db.responses(ResponseType.NOT_ON_MAP, "happy")] == [
+            "I know the gym, but it is not on the map I have here."
+        ]
+    with sqlite3.connect(path) as raw:
+        assert raw.execute("PRAGMA user_version").fetchone() == (SCHEMA_VERSION,) == (2,)

@@ -229,3 +229,18 @@ def test_import_map_reads_goals_of_a_real_arnl_map(db_path: Path, tmp_path: Path
     assert (cafe.x, cafe.y, cafe.map) == (8.0, 2.0, "glassgarden")
     assert cafe.heading == pytest.approx(1.5708, abs=1e-3)
     assert (printer.x, printer.y) == (1.0, 1.5)
+
+
+def test_import_map_of_glassgarden_places_the_default_places_at_its_goals(db_path: Path) -> None:
+    glassgarden = Path(__file__).resolve().parents[2].parent / "shared" / "maps" / "glassgarden.map"
+    result = run(db_path, "import-map", str(glassgarden))
+    assert result.exit_code == 0, result.output
+    assert "updated 'waiting area' (the map's 'waitingarea') to (-33.58, 10.63)" in result.output
+    assert "updated 'elevator' (the map's 'elevator1') to (-29.41, -50.28)" in result.output
+    with NavigationDatabase(db_path) as db:
+        assert db.current_map() == "glassgarden"
+        on_map = {loc.name for loc in db.locations_on_map()}
+    assert {"information desk", "waiting area", "elevator", "entrance 2", "cafeteria", "stairs"} <= on_map
+    assert "waitingarea" not in on_map and "elevator1" not in on_map
+    listed = run(db_path, "locations", "list").output.splitlines()
+    assert listed[-1] == "map in use: glassgarden (places on other maps are not targets)"

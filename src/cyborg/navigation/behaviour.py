@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import enum
 import random
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 
 from cyborg.navigation.database import Location, Response, ResponseType
@@ -31,6 +31,7 @@ class PlanKind(enum.Enum):
     MOVE = "move"
     WANDER = "wander"
     REFUSE = "refuse"
+    NOT_ON_MAP = "not_on_map"  # asked for a known place that the loaded map does not have
     NOTHING = "nothing"
 
 
@@ -66,11 +67,19 @@ def plan(
     places: Sequence[Location],
     rng: random.Random,
     here: Location | None = None,
+    off_map: Collection[str] = (),
 ) -> Plan:
-    """Choose the target (or wandering) from why we plan and how the robot feels."""
+    """Choose the target (or wandering) from why we plan and how the robot feels.
+
+    ``places`` are the places on the loaded map (the only possible targets);
+    ``off_map`` names known places that are not on it: asked for one, the robot
+    says so instead of driving to a pose that belongs to another map.
+    """
     if origin in (Origin.COMMAND, Origin.GUIDE):
         if requested is None:
             return Plan(PlanKind.NOTHING, "a command without a known place")
+        if requested.name in off_map:
+            return Plan(PlanKind.NOT_ON_MAP, f"{requested.name} is not on the loaded map", requested)
         if origin is Origin.COMMAND and emotion == ANGRY:
             return Plan(
                 PlanKind.REFUSE, f"angry: refuses to go to {requested.name}", requested, BOSSED_AROUND
@@ -112,13 +121,13 @@ def plan(
 
 
 def should_stop_wandering(emotion: str) -> bool:
-    """Wandering ends once the robot is in a positive mood.
+    """Wandering ends once the robot is no longer bored, unconcerned or curious (issue; thesis 11.3.1).
 
-    The spec says "no longer bored, unconcerned or curious"; on the way from
-    unconcerned to happy the mood passes ``neutral`` for a while, so stopping on
-    a positive mood reproduces the scenarios' two minutes of wandering.
+    Any other emotion ends it, ``neutral`` included. The module waits for the
+    emotion to hold for a moment (``WANDER_DEBOUNCE``) so that one flicker of the
+    label does not end it.
     """
-    return emotion in HAPPY
+    return emotion not in WANDERING_MOODS
 
 
 class TalkKind(enum.Enum):
@@ -126,11 +135,16 @@ class TalkKind(enum.Enum):
     STUCK = "stuck"
     OPINION = "opinion"
     OFFER_GUIDE = "offer_guide"
+    NOT_ON_MAP = "not_on_map"
     NOTHING = "nothing"
 
 
-def talk_kind(event: str, origin: Origin | None) -> TalkKind:
-    """What the talking state says, from the event that led there (7.7)."""
+def talk_kind(event: str, origin: Origin | None, *, asked_on_map: bool = True) -> TalkKind:
+    """What the talking state says, from the event that led there (7.7).
+
+    Asked where a place is that the loaded map does not have (``asked_on_map``
+    False), it says so instead of offering to show the way.
+    """
     if event == "succeeded" and origin is Origin.GUIDE:  # a question on the way still gets an opinion
         return TalkKind.ARRIVED
     if event in ("succeeded", "navigation_feedback"):
@@ -138,7 +152,7 @@ def talk_kind(event: str, origin: Origin | None) -> TalkKind:
     if event == "aborted":
         return TalkKind.STUCK
     if event == "navigation_information":
-        return TalkKind.OFFER_GUIDE
+        return TalkKind.OFFER_GUIDE if asked_on_map else TalkKind.NOT_ON_MAP
     return TalkKind.NOTHING
 
 
@@ -153,4 +167,5 @@ RESPONSE_FOR_TALK = {
     TalkKind.STUCK: ResponseType.STUCK,
     TalkKind.OPINION: ResponseType.OPINION,
     TalkKind.OFFER_GUIDE: ResponseType.OFFER_GUIDE,
+    TalkKind.NOT_ON_MAP: ResponseType.NOT_ON_MAP,
 }

@@ -10,6 +10,9 @@ holds three kinds of data:
   (RFC 5545 RRULE), optionally ignored, with a UID so an .ics import updates;
 * responses: sentences with the placeholder ``LOCATION``, by response type and
   emotion (NULL emotion = fits any emotion).
+* the map in use: the map imported last (``import_pose`` records it). Only
+  places on it are targets; the default places keep (0, 0) placeholders and
+  no map until a map's goal places them.
 
 A missing file is created with defaults. A file that is not a database, fails
 ``PRAGMA integrity_check`` or holds someone else's tables is moved aside to
@@ -60,6 +63,10 @@ _MIGRATIONS: tuple[tuple[str, ...], ...] = (
         "type TEXT NOT NULL, emotion TEXT)",
         "CREATE INDEX responses_by_type ON responses (type, emotion)",
     ),
+    (
+        # Which map the robot uses now (the one imported last): only places on it are targets.
+        "CREATE TABLE settings (key TEXT PRIMARY KEY, value TEXT NOT NULL)",
+    ),
 )
 SCHEMA_VERSION = len(_MIGRATIONS)
 _COLUMNS: dict[str, set[str]] = {
@@ -77,7 +84,9 @@ _COLUMNS: dict[str, set[str]] = {
         "uid",
     },
     "responses": {"id", "sentence", "type", "emotion"},
+    "settings": {"key", "value"},
 }
+CURRENT_MAP_KEY = "current_map"
 
 
 class ResponseType(enum.Enum):
@@ -92,10 +101,20 @@ class ResponseType(enum.Enum):
     ASK_LOCATION = "ask_location"
     UNKNOWN_LOCATION = "unknown_location"
     DECLINED = "declined"
+    NOT_ON_MAP = "not_on_map"
 
     @property
     def needs_location(self) -> bool:
-        return self in (ResponseType.OPINION, ResponseType.ARRIVED, ResponseType.STUCK)
+        return self in (
+            ResponseType.OPINION,
+            ResponseType.ARRIVED,
+            ResponseType.STUCK,
+            ResponseType.NOT_ON_MAP,
+        )
+
+
+NEW_RESPONSE_TYPES: dict[int, tuple[ResponseType, ...]] = {2: (ResponseType.NOT_ON_MAP,)}
+"""Response types added by a schema version: migrating an older file adds their default sentences."""
 
 
 EMOTION_SYNONYMS = {"elated": "happy", "inhibited": "sad", "puzzled": "surprised"}
@@ -196,6 +215,7 @@ DEFAULT_RESPONSES: tuple[Response, ...] = (
     Response("Where would you like me to go?", _R.ASK_LOCATION),
     Response("I am sorry, I do not know that place.", _R.UNKNOWN_LOCATION),
     Response("All right, maybe another time.", _R.DECLINED),
+    Response("I know the LOCATION, but it is not on the map I have here.", _R.NOT_ON_MAP),
 )
 
 
@@ -229,6 +249,8 @@ class NavigationDatabase(SQLiteFile):
                         conn.execute(sql)
                     if step == 0:
                         self._seed(conn)
+                    else:
+                        self._seed_responses(conn, NEW_RESPONSE_TYPES.get(step + 1, ()))
                     conn.execute(f"PRAGMA user_version = {step + 1}")
             except sqlite3.Error as exc:
                 raise DatabaseError(
@@ -248,28 +270,110 @@ class NavigationDatabase(SQLiteFile):
     def _seed(self, conn: sqlite3.Connection) -> None:
         for location in DEFAULT_LOCATIONS:
             self._insert_location(conn, location)
-        for response in DEFAULT_RESPONSES:
-            conn.execute(
+        self._seed_responses(conn, tuple(ResponseType))
+
+    @staticmethod
+    def _seed_responses(conn: sqlite3.Connection, kinds: Iterable[ResponseType]) -> None:
+        """Add the default sentences of each of ``kinds`` that has no sentence yet."""
+        for kind in kinds:
+            [(count,)] = conn.execute("SELECT COUNT(*) FROM responses WHERE type = ?", (kind.value,))
+            if count:
+                continue
+            conn.executemany(
                 "INSERT INTO responses (sentence, type, emotion) VALUES (?, ?, ?)",
-                (response.sentence, response.type.value, response.emotion),
+                [(r.sentence, r.type.value, r.emotion) for r in DEFAULT_RESPONSES if r.type is kind],
             )
+
+    # --- the map in use ----------------------------------------------------------------------
+
+    def current_map(self) -> str | None:
+        """The map the robot uses (the one imported last), or None before any map was imported."""
+        rows = self._read("SELECT value FROM settings WHERE key = ?", (CURRENT_MAP_KEY,))
+        return str(rows[0][0]) if rows else None
+
+    def use_map(self, map_name: str) -> None:
+        """Record ``map_name`` as the map the robot uses: from now on only places on it are targets."""
+        name = map_name.strip()
+        if not name:
+            raise DatabaseError("the map name is empty; give the map's name, e.g. its file's stem 'campus'")
+        if name == self.current_map():
+            return
+        with self._writing(f"set the map in use to {name!r}") as conn:
+            conn.execute(
+                "INSERT INTO settings (key, value) VALUES (?, ?) "
+                "ON CONFLICT (key) DO UPDATE SET value = excluded.value",
+                (CURRENT_MAP_KEY, name),
+            )
+        log.info("navigation database %s: the robot now uses map %r", self.path, name)
+
+    def on_current_map(self, location: Location) -> bool:
+        """True if ``location`` is on the map in use (any place is, before a map was imported)."""
+        current = self.current_map()
+        return current is None or location.map == current
+
+    def locations_on_map(self) -> list[Location]:
+        """The places the robot can go to: those on the map in use."""
+        current = self.current_map()
+        return [loc for loc in self.list_locations() if current is None or loc.map == current]
+
+    def off_map_reason(self, location: Location) -> str:
+        """Why ``location`` is no target, and how to fix it (for logs)."""
+        where = f"on map {location.map!r}" if location.map else "not placed on any map"
+        return (
+            f"location {location.name!r} is {where}, not on the map in use ({self.current_map()!r}); "
+            "fix: import a map that has it (`cyborg db import-map MAP`), or remove it and add it again "
+            f"with --map {self.current_map()} --x X --y Y"
+        )
 
     # --- locations ---------------------------------------------------------------------------
 
     def import_pose(self, pose: Any, map_name: str) -> str:
-        """Add or update one location from a map pose; a line saying what happened."""
+        """Add or update one location from a map pose; a line saying what happened.
+
+        ``map_name`` becomes the map in use (:meth:`use_map`). A pose whose name is
+        a known name or alias moves that place. Else, a pose named like a default
+        place after normalisation (``waitingarea`` ~ "waiting area", ``elevator1``
+        ~ "elevator": the first of several) places that default place and becomes
+        its alias, unless another pose of this map placed it already.
+        """
+        self.use_map(map_name)
         x, y, heading = float(pose.x), float(pose.y), float(pose.theta)
         if not all(math.isfinite(v) for v in (x, y, heading)):
             return f"skipped {pose.name!r}: its pose ({x}, {y}, {heading}) is not finite"
         known = self.find_location(pose.name)
         try:
             if known is None:
+                default = self._default_place_named_like(pose.name, map_name.strip())
+                if default is not None:
+                    spoken = {normalise(form) for form in (default.name, *default.aliases)}
+                    aliases = default.aliases
+                    if normalise(pose.name) not in spoken:
+                        aliases = (*aliases, " ".join(str(pose.name).split()))
+                    moved = replace(default, aliases=aliases, map=map_name, x=x, y=y, heading=heading)
+                    self.update_location(default.name, moved)
+                    return f"updated {default.name!r} (the map's {pose.name!r}) to ({x:.2f}, {y:.2f})"
                 self.add_location(Location(pose.name, map=map_name, x=x, y=y, heading=heading))
                 return f"added {pose.name!r} at ({x:.2f}, {y:.2f})"
             self.update_location(known.name, replace(known, map=map_name, x=x, y=y, heading=heading))
             return f"updated {known.name!r} to ({x:.2f}, {y:.2f})"
         except CyborgError as exc:
             return f"skipped {pose.name!r}: {exc}"
+
+    def _default_place_named_like(self, name: str, map_name: str) -> Location | None:
+        """The stored default place a map goal called ``name`` stands for, if not on ``map_name`` yet."""
+        key = _compact(name)
+        keys = [key]
+        first = re.fullmatch(r"(.*\D)1", key)  # "elevator1": the first elevator is "the elevator"
+        if first:
+            keys.append(first.group(1))
+        for wanted in keys:
+            for default in DEFAULT_LOCATIONS:
+                if all(_compact(form) != wanted for form in (default.name, *default.aliases)):
+                    continue
+                place = self.find_location(default.name)
+                if place is not None and place.map != map_name:
+                    return place
+        return None
 
     def list_locations(self) -> list[Location]:
         rows = self._read("SELECT * FROM locations ORDER BY name COLLATE NOCASE")
@@ -290,9 +394,10 @@ class NavigationDatabase(SQLiteFile):
             raise self._unknown_location(name_or_alias)
         return found
 
-    def matcher(self, threshold: float | None = None) -> LocationMatcher:
-        """A keyword matcher over the current locations and their aliases."""
-        places = [(loc.name, loc.aliases) for loc in self.list_locations()]
+    def matcher(self, threshold: float | None = None, *, on_map: bool = False) -> LocationMatcher:
+        """A keyword matcher over the locations (only those on the map in use if ``on_map``)."""
+        locations = self.locations_on_map() if on_map else self.list_locations()
+        places = [(loc.name, loc.aliases) for loc in locations]
         return LocationMatcher(places) if threshold is None else LocationMatcher(places, threshold)
 
     def add_location(self, location: Location) -> Location:
@@ -702,6 +807,11 @@ def _valid_location(location: Location) -> Location:
         raise DatabaseError(f"pleasantness={location.pleasantness} of {name!r} is outside -1..1; e.g. 0.5")
     heading = math.remainder(location.heading, 2 * math.pi)
     return replace(location, name=name, aliases=aliases, map=location.map.strip(), heading=heading)
+
+
+def _compact(name: str) -> str:
+    """A name as speech would match it, without spaces: "Waiting Area" and "waitingarea" -> "waitingarea"."""
+    return "".join(normalise(name).split())
 
 
 def _emotion_key(emotion: str | None) -> str | None:

@@ -115,8 +115,11 @@ def locations_list(ctx: click.Context) -> None:
             )
             for loc in db.list_locations()
         ]
+        current = db.current_map()
     headers = ("name", "aliases", "map", "x", "y", "heading", "tolerance", "crowded", "pleasant")
     click.echo(_table(headers, rows))
+    if current is not None:
+        click.echo(f"map in use: {current} (places on other maps are not targets)")
 
 
 @locations.command("add")

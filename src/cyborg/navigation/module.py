@@ -31,10 +31,11 @@ from cyborg.navigation.behaviour import (
     talk_kind,
 )
 from cyborg.navigation.database import Location, NavigationDatabase, ResponseType
-from cyborg.navigation.keywords import Intent, detect
+from cyborg.navigation.keywords import Intent, detect_answer, detect_navigation
 from cyborg.transport import topics
 from cyborg.transport.base import GoalStatus, MessageInfo, Node
 from cyborg.transport.messages import (
+    EmotionalState,
     EmptyService,
     Header,
     MoveBaseAction,
@@ -57,6 +58,11 @@ MOVING_FEEDBACK = (0.0, 0.03, 0.01)
 WANDERING_FEEDBACK = (0.02, 0.05, 0.02)
 ARRIVAL_PLEASURE_SCALE = 0.125  # pleasantness 0.8 -> +0.1 pleasure on arrival
 AT_PLACE_DISTANCE = 3.0
+WANDER_CHECK = 1.0
+"""Seconds between checks of the emotion while wandering."""
+WANDER_DEBOUNCE = 2.0
+"""Seconds the emotion must stay outside bored/unconcerned/curious before wandering ends (one
+flicker of the label between two emotions does not end it)."""
 OWN_STATES = frozenset({"navigation_planning", "navigation_moving", "navigation_talking"})
 
 
@@ -97,6 +103,8 @@ class NavigationModule(BehaviourModule):
         self.system_state = ""
         self.sulking = False
         self.wandering_now = False
+        self.emotion_since = node.clock.monotonic()
+        self._warned_off_map: set[str] = set()
         self._answer: asyncio.Future[Intent] | None = None
         self.move_base = node.action_client(topics.MOVE_BASE, MoveBaseAction)
         self.wander = node.service_proxy(topics.WANDER, EmptyService)
@@ -117,8 +125,20 @@ class NavigationModule(BehaviourModule):
     def _on_pose(self, message: PoseWithCovarianceStamped, info: MessageInfo) -> None:
         self.pose = (message.pose.pose.position.x, message.pose.pose.position.y)
 
+    def _on_emotion(self, message: EmotionalState, info: MessageInfo) -> None:
+        before = self.emotion
+        super()._on_emotion(message, info)
+        if self.emotion != before:
+            self.emotion_since = self.node.clock.monotonic()
+
     def _on_text(self, text: str, info: MessageInfo) -> None:
-        found = detect(text, self.db.matcher())
+        # Places on the loaded map first: on Glassgården "waiting area" is the map's "waitingarea".
+        # Then the others, so that asking for one gets "not on this map" rather than silence.
+        found = (
+            detect_navigation(text, self.db.matcher(on_map=True))
+            or detect_navigation(text, self.db.matcher())
+            or detect_answer(text)
+        )
         if found is None:
             return
         if found.intent in (Intent.YES, Intent.NO):
@@ -136,10 +156,10 @@ class NavigationModule(BehaviourModule):
         self.publish_event(found.intent.value)
 
     def here(self) -> Location | None:
-        """The known place the robot is at, if any."""
+        """The known place on the loaded map the robot is at, if any."""
         if self.pose is None:
             return None
-        for place in self.db.list_locations():
+        for place in self.db.locations_on_map():
             if math.dist(self.pose, (place.x, place.y)) <= max(place.tolerance, AT_PLACE_DISTANCE):
                 return place
         return None
@@ -159,6 +179,12 @@ class NavigationModule(BehaviourModule):
             return
         place = self.db.find_location(ongoing[0].event.location)
         if place is None:
+            return
+        if not self.db.on_current_map(place):
+            self.scheduled = None
+            if place.name not in self._warned_off_map:
+                self._warned_off_map.add(place.name)
+                log.warning("calendar: not going there: %s", self.db.off_map_reason(place))
             return
         self.scheduled = place
         if self.sulking and self.emotion == ANGRY:
@@ -180,14 +206,16 @@ class NavigationModule(BehaviourModule):
 
     async def planning(self, ctx: GoalContext) -> None:
         origin = origin_of(ctx.event, self.guiding)
+        on_map = self.db.locations_on_map()
         chosen = plan(
             origin,
             self.emotion,
             requested=self.requested,
             scheduled=self.scheduled,
-            places=self.db.list_locations(),
+            places=on_map,
             rng=self.rng,
             here=self.here(),
+            off_map={p.name for p in self.db.list_locations()} - {p.name for p in on_map},
         )
         log.info("planning (%s, %s): %s", ctx.event, self.emotion, chosen.reason)
         self.origin, self.current_plan = origin, chosen
@@ -197,8 +225,15 @@ class NavigationModule(BehaviourModule):
         if chosen.kind is PlanKind.REFUSE:
             await ctx.sleep(self._say(ResponseType.REFUSE, chosen.target.name if chosen.target else ""))
             return
+        if chosen.kind is PlanKind.NOT_ON_MAP:
+            assert chosen.target is not None
+            log.warning("not going there: %s", self.db.off_map_reason(chosen.target))
+            await ctx.sleep(self._say(ResponseType.NOT_ON_MAP, chosen.target.name))
+            return
         if chosen.kind is PlanKind.NOTHING:
             raise Abort(chosen.reason)
+        if origin is Origin.COMMAND and chosen.target is not None:
+            await ctx.sleep(self._say(ResponseType.CONFIRM, chosen.target.name))  # "At once.", then go
         self.publish_event(
             "navigation_start_moving" if chosen.kind is PlanKind.MOVE else "navigation_start_wandering"
         )
@@ -250,15 +285,27 @@ class NavigationModule(BehaviourModule):
         self.send_emotion(target.pleasantness * ARRIVAL_PLEASURE_SCALE, 0.0, 0.0)
 
     async def _wander(self, ctx: GoalContext) -> None:
+        """Wander until the emotion has left bored/unconcerned/curious for ``WANDER_DEBOUNCE`` s.
+
+        ``wander_limit`` is a safety cap for an emotion that never changes.
+        """
         await self.wander.call(timeout=5.0)
-        started = self.node.clock.monotonic()
+        clock = self.node.clock
+        started = last_feedback = clock.monotonic()
         self.wandering_now = True
         try:
             while True:
-                await ctx.sleep(self.feedback_interval)
-                self.send_emotion(*WANDERING_FEEDBACK)
-                long_enough = self.node.clock.monotonic() - started >= self.wander_limit
-                if should_stop_wandering(self.emotion) or long_enough:
+                await ctx.sleep(WANDER_CHECK)
+                now = clock.monotonic()
+                if now - last_feedback >= self.feedback_interval:
+                    self.send_emotion(*WANDERING_FEEDBACK)
+                    last_feedback = now
+                settled = now - self.emotion_since >= WANDER_DEBOUNCE
+                if should_stop_wandering(self.emotion) and settled:
+                    log.info("wandering ends: the robot is %s now", self.emotion)
+                    break
+                if now - started >= self.wander_limit:
+                    log.info("wandering ends: %.0f s (wander_limit) are over", self.wander_limit)
                     break
         finally:
             self.wandering_now = False
@@ -283,13 +330,17 @@ class NavigationModule(BehaviourModule):
         return estimated_duration(text)
 
     async def talking(self, ctx: GoalContext) -> None:
-        kind = talk_kind(ctx.event, self.origin)
+        asked_on_map = self.asked is None or self.db.on_current_map(self.asked)
+        kind = talk_kind(ctx.event, self.origin, asked_on_map=asked_on_map)
         place = {
             TalkKind.ARRIVED: self.arrived_at,
             TalkKind.OPINION: self.arrived_at if ctx.event == "succeeded" else self.asked,
             TalkKind.STUCK: self.failed_target,
             TalkKind.OFFER_GUIDE: self.asked,
+            TalkKind.NOT_ON_MAP: self.asked,
         }.get(kind)
+        if kind is TalkKind.NOT_ON_MAP and place is not None:
+            log.warning("cannot show the way: %s", self.db.off_map_reason(place))
         self.origin = None
         if kind is TalkKind.OFFER_GUIDE:
             self._answer = self.node.clock.loop.create_future()  # listen while still speaking
