@@ -23,10 +23,13 @@ from cyborg.interfaces.dashboard import (
     remaining_route,
     route_points,
 )
+from cyborg.interfaces.remote import remote_robot
 from cyborg.sim.maps import Cell, KeepOutZone, NamedPose, OccupancyMap
 from cyborg.sim.robot import Robot, build_robot
+from cyborg.transport import topics
 from cyborg.transport.clock import RealClock
 from cyborg.transport.embedded import EmbeddedTransport
+from cyborg.transport.messages import String
 
 MACHINE = """
 initial: idle
@@ -243,3 +246,72 @@ def test_png_bytes_refuses_values_outside_the_palette() -> None:
         png_bytes(np.array([[0, 1]], dtype=np.uint8), [(0, 0, 0, 255)])
     with pytest.raises(ValueError, match="non-empty 2-D"):
         png_bytes(np.zeros((0, 3), dtype=np.uint8), [(0, 0, 0, 255)])
+
+
+def test_health_shows_the_motivator_rule_and_feedback_ages_where_known(tmp_path: Path) -> None:
+    async def check(fetch: Fetch, robot: Robot) -> None:
+        health = (await fetch("/api/health"))[1]
+        settings = robot.config.model.motivator
+        assert health["motivator"] == {
+            "selection": settings.selection.value,
+            "rate_seconds": settings.rate_seconds,
+        }
+        modules = {m["name"]: m for m in health["modules"]}
+        assert "seconds_since_feedback" not in modules["cyborg_idle"], "nothing knows it: no field"
+
+        now = robot.controller.node.clock.now()
+        # As the controller may report it (by module or by action name) ...
+        robot.controller.last_feedback_at = {"cyborg_idle": now - 3.0, "/cyborg_music/play": now - 40.0}  # type: ignore[attr-defined]
+        # ... or a module itself.
+        robot.components["cyborg_idle"].last_feedback_at = now - 99.0  # type: ignore[attr-defined]
+        modules = {m["name"]: m for m in (await fetch("/api/health"))[1]["modules"]}
+        assert 3.0 <= modules["cyborg_idle"]["seconds_since_feedback"] < 4.0, "the controller's word wins"
+        assert modules["cyborg_idle"]["last_feedback_at"] == pytest.approx(now - 3.0, abs=1e-3)
+        assert 40.0 <= modules["cyborg_music"]["seconds_since_feedback"] < 41.0
+
+    serve(tmp_path, None, check)
+
+
+def test_under_ros_the_emotion_switch_is_followed_from_its_topic(tmp_path: Path) -> None:
+    """`cyborg node cyborg_api` has no emotion system in process: it follows emotional_controller."""
+    config_path = tmp_path / "machine.yaml"
+    config_path.write_text(MACHINE)
+    config = load_config(config_path)
+    clock = RealClock()
+    transport = EmbeddedTransport(clock)
+
+    async def main() -> None:
+        node = transport.node("cyborg_api")
+        api = RobotAPI(node, machine=config.machine)
+        register(api, remote_robot(node, config, None))  # type: ignore[arg-type]
+        url = (await api.start("127.0.0.1", 0)).rstrip("/")
+        switch = transport.node("rostopic_pub").publisher(topics.EMOTIONAL_CONTROLLER, String)
+        try:
+            async with ClientSession() as session:
+
+                async def enabled(expected: bool | None) -> None:
+                    for _ in range(100):
+                        async with session.get(url + "/api/health") as response:
+                            health = await response.json()
+                        if health["emotion_enabled"] is expected:
+                            return
+                        await clock.sleep(0.02)
+                    raise AssertionError(f"emotion_enabled is {health['emotion_enabled']}, not {expected}")
+
+                await enabled(None)  # nothing seen yet: not known (the emotion system keeps its switch)
+                switch.publish(String(data="off"))
+                await enabled(False)
+                switch.publish(String(data="louder"))  # not a switch: the emotion system ignores it too
+                await clock.sleep(0.1)
+                await enabled(False)
+                async with session.post(url + "/api/emotion/switch", json={"on": True}) as response:
+                    assert response.status == 200
+                await enabled(True)  # the API's own command counts as well
+        finally:
+            await api.stop()
+
+    try:
+        clock.run(main())
+    finally:
+        transport.shutdown()
+        clock.close()

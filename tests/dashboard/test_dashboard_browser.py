@@ -9,17 +9,19 @@ downloaded.
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import shutil
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
-from playwright.sync_api import Browser, ConsoleMessage, Page, expect, sync_playwright
+from playwright.sync_api import Browser, ConsoleMessage, Page, Route, WebSocketRoute, expect, sync_playwright
 
 from cyborg.interfaces.cli import packaged_config
 
@@ -42,10 +44,13 @@ NOTHING = "\u2013"  # what the page shows before it knows a value
 class Sim:
     """One `cyborg sim` process with the packaged Cyborg; its output goes to a file (never blocks)."""
 
-    def __init__(self, data: Path, port: int = 0, config: Path | None = None) -> None:
+    def __init__(
+        self, data: Path, port: int = 0, config: Path | None = None, occupancy_map: Path | None = None
+    ) -> None:
         data.mkdir(parents=True, exist_ok=True)
         self.output = data / "sim.log"
         chosen = ["--config", str(config)] if config else []
+        chosen += ["--map", str(occupancy_map)] if occupancy_map else []
         with self.output.open("w") as out:
             self.process = subprocess.Popen(
                 [*CYBORG, "sim", "--port", str(port), "--db", str(data), "--speed", SPEED, *chosen],
@@ -83,10 +88,19 @@ def sim(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
         robot.stop()
 
 
-def open_page(browser: Browser, url: str, errors: list[str]) -> Page:
-    """A 1400x900 page on ``url`` that appends its console errors to ``errors``."""
-    tab = browser.new_context(viewport={"width": 1400, "height": 900}).new_page()
+def open_page(
+    browser: Browser,
+    url: str,
+    errors: list[str],
+    size: tuple[int, int] = (1400, 900),
+    before: Callable[[Page], None] | None = None,
+) -> Page:
+    """A page (1400x900 unless told) on ``url`` that appends its console errors to ``errors``;
+    ``before`` may route requests before the page loads."""
+    tab = browser.new_context(viewport={"width": size[0], "height": size[1]}).new_page()
     tab.set_default_timeout(15_000)
+    if before is not None:
+        before(tab)
 
     def on_console(message: ConsoleMessage) -> None:
         if message.type == "error":
@@ -285,6 +299,349 @@ def test_without_a_base_the_map_panel_says_so(browser: Browser, tmp_path: Path) 
         expect(page.locator("#map-message")).to_contain_text("rosarnl_node: {kind: simulated_base}")
         expect(page.locator("#map-caption")).to_have_text("no simulated base")
         page.screenshot(path=str(SHOTS / "cyborg-dashboard-no-base.png"))
+    finally:
+        page.context.close()
+        robot.stop()
+    assert not errors, "the page logged errors:\n" + "\n".join(errors)
+
+
+GLASSGARDEN = Path(__file__).resolve().parents[2].parent / "shared" / "maps" / "glassgarden.map"
+SMALL = (1280, 800)  # the smallest window the layout is made for
+Box = dict[str, float]
+
+
+def box_of(page: Page, selector: str) -> Box:
+    found = page.locator(selector).first.bounding_box()
+    assert found is not None, f"{selector} is not shown"
+    return found
+
+
+def inside(inner: Box, outer: Box, slack: float = 1.0) -> bool:
+    return (
+        inner["x"] >= outer["x"] - slack
+        and inner["y"] >= outer["y"] - slack
+        and inner["x"] + inner["width"] <= outer["x"] + outer["width"] + slack
+        and inner["y"] + inner["height"] <= outer["y"] + outer["height"] + slack
+    )
+
+
+def test_the_emotion_shown_survives_state_changes(page: Page, sim: str) -> None:
+    """The emotion name and bars follow the emotion records, not the status the page loaded with."""
+    page.request.post(sim + "/api/emotion/switch", data={"on": False})  # no decay or feedback meanwhile
+    try:
+        loaded_with = page.locator("#emotion-name").inner_text()
+        wanted = "sad" if loaded_with != "sad" else "angry"
+        pleasure = page.request.get(sim + "/api/emotions").json()["prototypes"][wanted][0]
+        page.select_option("#emotion-select", wanted)
+        page.click("#emotion-set")
+        expect(page.locator("#emotion-name")).to_have_text(wanted)
+        go_idle(page, sim)
+        page.locator('#event-buttons button[data-event="music_play"]').click()
+        expect(page.locator("#top-state")).to_have_text("music")
+        page.wait_for_timeout(1500)  # the status and health polls that follow a state change
+        expect(page.locator("#emotion-name")).to_have_text(wanted)
+        expect(page.locator("#top-emotion")).to_have_text(wanted)
+        expect(page.locator("#val-p")).to_have_text(f"{pleasure:+.2f}")
+        go_idle(page, sim)
+        page.wait_for_timeout(500)
+        expect(page.locator("#emotion-name")).to_have_text(wanted)
+    finally:
+        page.request.post(sim + "/api/emotion/switch", data={"on": True})
+
+
+class FakeSocket:
+    """Stands in for the robot's websocket: says hello, then sends whatever records the test gives."""
+
+    def __init__(self, page: Page) -> None:
+        self.route: WebSocketRoute | None = None
+        page.route_web_socket(re.compile(r".*/api/ws$"), self._connect)
+
+    def _connect(self, route: WebSocketRoute) -> None:
+        self.route = route
+        route.send(json.dumps({"type": "hello", "status": {"state": "idle", "emotion": "neutral"}}))
+
+    def send(self, page: Page, record: dict[str, Any]) -> None:
+        page.wait_for_function("() => !window.cyborgDashboard.syncing")
+        assert self.route is not None
+        self.route.send(json.dumps(record))
+
+
+def test_motivator_decisions_show_reward_cost_and_the_choice(browser: Browser, sim: str) -> None:
+    errors: list[str] = []
+    socket: list[FakeSocket] = []
+    page = open_page(browser, sim + "/", errors, before=lambda tab: socket.append(FakeSocket(tab)))
+    try:
+        fake = socket[0]
+        seq = 10**6
+        # Ranked by reward among those whose reward exceeds their cost: "music_play" wins on reward
+        # although "joke_ask" has the larger net; "weather_ask" costs more than it brings.
+        candidates = [
+            {"event": "joke_ask", "reward": 0.3, "cost": 0.1, "net": 0.2, "eligible": True},
+            {"event": "music_play", "reward": 0.5, "cost": 0.45, "net": 0.05, "eligible": True},
+            {"event": "weather_ask", "reward": 0.05, "cost": 0.2, "net": -0.15, "eligible": False},
+        ]
+        fake.send(
+            page,
+            {
+                "seq": seq,
+                "t": 50.0,
+                "type": "motivator",
+                "event": "music_play",
+                "candidates": candidates,
+                "reason": "music_play: reward 0.5000, cost 0.4500: reward > cost",
+                "rule": "reward",
+            },
+        )
+        row = page.locator(f'#log li[data-seq="{seq}"]')
+        expect(row.locator(".line")).to_have_text("chose music_play")
+        expect(row.locator(".rule")).to_contain_text("by reward")
+        chips = row.locator(".cand")
+        expect(chips).to_have_count(3)
+        chosen = row.locator(".cand.chosen")
+        expect(chosen).to_have_count(1)
+        expect(chosen).to_have_text("✓ music_play reward 0.5000 · cost 0.4500 · net 0.0500")
+        assert chips.first.get_attribute("data-event") == "music_play", "the chosen one comes first"
+        expect(row.locator('.cand[data-event="joke_ask"]')).to_have_text(
+            "joke_ask reward 0.3000 · cost 0.1000 · net 0.2000"
+        )
+        refused = row.locator('.cand[data-event="weather_ask"]')
+        expect(refused).to_have_class(re.compile(r"\bineligible\b"))
+        expect(refused).to_have_text("✗ weather_ask reward 0.0500 · cost 0.2000 · net -0.1500")
+        expect(refused).to_have_attribute(
+            "title", re.compile("not eligible: its cost is not below its reward")
+        )
+
+        # Nothing chosen, with or without candidates, even in odd shapes: one line saying why.
+        for n, t in enumerate((52.0, 54.0, 56.0), start=1):
+            fake.send(
+                page,
+                {
+                    "seq": seq + n,
+                    "t": t,
+                    "type": "motivator",
+                    "event": None,
+                    "candidates": [],
+                    "reason": f"{t - 50:.1f} s of 10 s in state 'idle': waiting before choosing",
+                },
+            )
+        waiting = page.locator('#log li[data-type="motivator"][data-chosen="no"]')
+        expect(waiting).to_have_count(1)  # three alike: one row that counts them
+        expect(waiting.locator(".line")).to_have_text(
+            "nothing chosen: 6.0 s of 10 s in state 'idle': waiting before choosing"
+        )
+        expect(waiting.locator(".repeats")).to_have_text("\u00d73")
+        fake.send(page, {"seq": seq + 4, "t": 58.0, "type": "motivator", "event": None, "reason": ""})
+        fake.send(
+            page,
+            {
+                "seq": seq + 5,
+                "t": 60.0,
+                "type": "motivator",
+                "event": None,
+                "candidates": [candidates[2]],
+                "reason": "all candidates' reward <= cost in state 'idle'",
+            },
+        )
+        lines = page.locator('#log li[data-type="motivator"] .line').all_inner_texts()
+        assert lines[:3] == [
+            "nothing chosen: all candidates' reward <= cost in state 'idle'",
+            "nothing chosen: no reason given",
+            "nothing chosen: 6.0 s of 10 s in state 'idle': waiting before choosing",
+        ], lines
+        rule = page.request.get(sim + "/api/health").json()["motivator"]["selection"]
+        latest = page.locator(f'#log li[data-seq="{seq + 5}"]')
+        expect(latest.locator(".rule")).to_contain_text(f"by {rule}")  # no rule in the record: the config's
+        expect(latest.locator(".cand.ineligible")).to_contain_text("weather_ask")
+        page.screenshot(path=str(SHOTS / "cyborg-dashboard-motivator.png"))
+    finally:
+        page.context.close()
+    assert not errors, "the page logged errors:\n" + "\n".join(errors)
+
+
+def test_health_shows_feedback_age_and_an_unknown_emotion_switch(browser: Browser, sim: str) -> None:
+    """Fields the robot may send: a module's last feedback (else its last activity) and a switch it cannot see."""
+
+    def add_fields(route: Route) -> None:
+        health = route.fetch().json()
+        for module in health["modules"]:
+            if module["name"] == "cyborg_joke":
+                module["last_feedback_at"] = health["time"] - 42.0
+                module["seconds_since_feedback"] = 42.0
+        health["emotion_enabled"] = None  # as `cyborg node cyborg_api` says before any on/off
+        route.fulfill(json=health)
+
+    errors: list[str] = []
+    page = open_page(browser, sim + "/", errors, before=lambda tab: tab.route("**/api/health", add_fields))
+    try:
+        joke = page.locator('#health-table tr[data-module="cyborg_joke"] td').last
+        expect(joke).to_have_text("42 s ago")
+        expect(page.locator("#health-table th").last).to_have_text("last feedback")
+        expect(page.locator('#health-table tr[data-module="cyborg_weather"] td').last).to_have_text("never")
+        expect(page.locator("#emotion-switch-state")).to_have_text("on/off not known yet")
+        assert page.locator("#emotion-switch").evaluate("box => box.indeterminate")
+    finally:
+        page.context.close()
+    assert not errors, "the page logged errors:\n" + "\n".join(errors)
+
+
+def test_layout_at_1280x800_shows_every_module_and_a_readable_log(browser: Browser, sim: str) -> None:
+    errors: list[str] = []
+    page = open_page(browser, sim + "/", errors, size=SMALL)
+    try:
+        expect(page.locator("#conn")).to_have_attribute("data-state", "open")
+        assert page.evaluate("() => document.documentElement.scrollHeight") <= SMALL[1], (
+            "the page does not scroll"
+        )
+        for _ in range(6):  # short state records to fill the log
+            go_idle(page, sim)
+            page.request.post(sim + "/api/event", data={"name": "music_play"})
+            expect(page.locator("#top-state")).to_have_text("music")
+        go_idle(page, sim)
+        page.wait_for_timeout(1200)
+
+        # Measured in one go: the page redraws the table every second and the log with each record.
+        seen = page.evaluate(
+            """() => {
+              const within = (el, box) => { const r = el.getBoundingClientRect();
+                return r.top >= box.top - 1 && r.bottom <= box.bottom + 1 && r.left >= box.left - 1 && r.right <= box.right + 1; };
+              const table = document.querySelector('#panel-health .scroll').getBoundingClientRect();
+              const log = document.getElementById('log').getBoundingClientRect();
+              const rows = [...document.querySelectorAll('#health-table tbody tr')];
+              return {
+                modules: rows.map(r => r.dataset.module),
+                outOfView: rows.filter(r => !within(r, table)).map(r => r.dataset.module),
+                cut: [...document.querySelectorAll('#health-table td')]
+                  .filter(c => c.scrollWidth > c.clientWidth + 1).map(c => c.textContent),
+                logRows: [...document.querySelectorAll('#log li')].filter(r => within(r, log)).length,
+              };
+            }"""
+        )
+        modules = page.request.get(sim + "/api/health").json()["modules"]
+        assert sorted(seen["modules"]) == sorted(m["name"] for m in modules)
+        assert not seen["outOfView"], f"module rows not in view: {seen['outOfView']}"
+        assert not seen["cut"], f"cut cells: {seen['cut']}"
+        assert seen["logRows"] >= 10, f"only {seen['logRows']} log rows in view"
+
+        figure = box_of(page, "#panel-emotion .emotion-plots figure")
+        for item in page.locator("#pad-legend span").all():
+            assert inside(item.bounding_box() or {}, figure), f"the legend's {item.inner_text()} is cut"
+        space = page.evaluate("() => window.cyborgDashboard.spaceLabels")
+        assert len(space["labels"]) == 10
+        for label in space["labels"]:
+            assert label["x"] >= 0 and label["x"] + label["w"] <= space["width"], f"{label['name']} is cut"
+            assert label["y"] >= 0 and label["y"] + label["h"] <= space["height"], f"{label['name']} is cut"
+        page.screenshot(path=str(SHOTS / "cyborg-dashboard-1280x800.png"))
+    finally:
+        page.context.close()
+    assert not errors, "the page logged errors:\n" + "\n".join(errors)
+
+
+def label_height(page: Page, state: str) -> float:
+    return box_of(page, f'[id="state:{state}"] text')["height"]
+
+
+def test_state_machine_zooms_to_readable_labels(browser: Browser, sim: str) -> None:
+    errors: list[str] = []
+    page = open_page(browser, sim + "/", errors, size=SMALL)
+    try:
+        expect(page.locator("#graph svg")).to_be_visible()
+        go_idle(page, sim)
+        graph = box_of(page, "#graph")
+        fitted = box_of(page, '[id="state:idle"]')["width"]
+        assert label_height(page, "idle") < 9, "fitted to the panel, the names are too small to read"
+        assert inside(box_of(page, "#graph svg .graph"), graph), "at first the whole machine is in view"
+
+        page.click('#graph-tools button[data-zoom="in"]')
+        page.wait_for_timeout(200)
+        zoomed = box_of(page, '[id="state:idle"]')["width"]
+        assert zoomed == pytest.approx(fitted * 1.5, rel=0.02), "+ zooms in"
+        page.mouse.move(graph["x"] + graph["width"] / 2, graph["y"] + graph["height"] / 2)
+        page.mouse.wheel(0, 400)
+        page.wait_for_timeout(300)
+        assert box_of(page, '[id="state:idle"]')["width"] < zoomed * 0.95, "the wheel zooms out"
+        page.click('#graph-tools button[data-zoom="fit"]')
+        page.wait_for_timeout(200)
+        assert box_of(page, '[id="state:idle"]')["width"] == pytest.approx(fitted, rel=0.02)
+
+        # Follow: the active state in view, labels big enough to read, as it changes.
+        page.check("#graph-follow")
+        page.wait_for_timeout(300)
+        assert label_height(page, "idle") >= 12, "follow zooms in to a readable size"
+        assert inside(box_of(page, '[id="state:idle"]'), graph)
+        page.locator('#event-buttons button[data-event="conversation_interest"]').click()
+        expect(page.locator("#top-state")).to_have_text("conversation")
+        page.wait_for_timeout(400)
+        assert inside(box_of(page, '[id="state:conversation"]'), graph), "follow keeps the new state in view"
+        assert label_height(page, "conversation") >= 12
+        page.screenshot(path=str(SHOTS / "cyborg-dashboard-graph-follow.png"))
+        go_idle(page, sim)
+    finally:
+        page.context.close()
+    assert not errors, "the page logged errors:\n" + "\n".join(errors)
+
+
+def visible_place_labels(page: Page) -> list[Box]:
+    boxes: list[Box] = page.locator("#map .place-label").evaluate_all(
+        """labels => labels.filter(l => l.getAttribute('visibility') !== 'hidden').map(l => {
+             const r = l.getBoundingClientRect();
+             return {name: l.parentNode.dataset.name, x: r.x, y: r.y, width: r.width, height: r.height};
+           })"""
+    )
+    return boxes
+
+
+def overlapping(boxes: list[Box]) -> list[tuple[Any, Any]]:
+    return [
+        (a["name"], b["name"])
+        for i, a in enumerate(boxes)
+        for b in boxes[i + 1 :]
+        if a["x"] < b["x"] + b["width"] - 0.5
+        and b["x"] < a["x"] + a["width"] - 0.5
+        and a["y"] < b["y"] + b["height"] - 0.5
+        and b["y"] < a["y"] + a["height"] - 0.5
+    ]
+
+
+def test_a_crowded_map_keeps_names_apart_and_zooms(browser: Browser, tmp_path: Path) -> None:
+    assert GLASSGARDEN.is_file(), f"{GLASSGARDEN} is missing (the shared folder beside the repository)"
+    robot = Sim(tmp_path / "data", occupancy_map=GLASSGARDEN)
+    errors: list[str] = []
+    page = open_page(browser, robot.url + "/", errors, size=SMALL)
+    try:
+        expect(page.locator("#map-caption")).to_contain_text("21 places")
+        expect(page.locator("#map .place")).to_have_count(21)
+        area = box_of(page, "#map")
+        page.wait_for_timeout(500)
+        fitted = visible_place_labels(page)
+        assert fitted and not overlapping(fitted), f"names cover each other: {overlapping(fitted)}"
+        assert all(inside(label, area) for label in fitted), "a name sticks out of the map"
+        hidden = int(page.locator("#map").get_attribute("data-hidden-labels") or "0")
+        assert hidden > 0 and len(fitted) + hidden == 21
+        expect(page.locator("#map-hint")).to_have_text(re.compile(rf"^{hidden} names? hidden, zoom in$"))
+        text_size = page.locator("#map .place-label text").first.evaluate(
+            "t => parseFloat(getComputedStyle(t).fontSize)"
+        )
+        assert text_size >= 11
+
+        for _ in range(3):
+            page.click('#map-tools button[data-zoom="in"]')
+        page.wait_for_timeout(300)
+        zoomed = visible_place_labels(page)
+        assert not overlapping(zoomed)
+        assert int(page.locator("#map").get_attribute("data-hidden-labels") or "0") < hidden, (
+            "zoomed in, more of the places in view have their names"
+        )
+        before = robot_dot(page)
+        page.mouse.move(area["x"] + area["width"] / 2, area["y"] + area["height"] / 2)
+        page.mouse.down()
+        page.mouse.move(area["x"] + area["width"] / 2 + 60, area["y"] + area["height"] / 2 + 40, steps=5)
+        page.mouse.up()
+        page.wait_for_timeout(300)
+        after = robot_dot(page)
+        assert after[0] - before[0] == pytest.approx(60, abs=8) and after[1] - before[1] == pytest.approx(
+            40, abs=8
+        ), f"dragging pans the map: the robot went from {before} to {after}"
+        page.screenshot(path=str(SHOTS / "cyborg-dashboard-glassgarden.png"))
     finally:
         page.context.close()
         robot.stop()

@@ -4,7 +4,7 @@ One page in the spirit of SMACH Viewer, the command tool and MobileEyes: the
 state machine with its active state, each module's health, the emotion, the
 map with the robot's pose and route, the event log and controls. The page is
 plain HTML/JS/CSS from :file:`static/` (no build step, nothing fetched from the
-internet); it reads the API's websocket and the JSON endpoints added here:
+internet; pan and zoom come from the vendored svg-pan-zoom, BSD-2-Clause); it reads the API's websocket and the JSON endpoints added here:
 ``/api/health``, ``/api/map`` (+ ``/api/map.png``) and ``/api/route``.
 Register it with :func:`register` (``cyborg.interfaces.serve.EXTENSIONS`` does).
 """
@@ -17,7 +17,7 @@ import itertools
 import math
 import struct
 import zlib
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -186,6 +186,34 @@ class Dashboard:
         occupancy = getattr(self._base(), "map", None)
         return occupancy if isinstance(occupancy, OccupancyMap) else None
 
+    def _emotion_enabled(self) -> bool | None:
+        """Whether the emotion system is on; None where that is not known (see remote.EmotionSwitchMirror)."""
+        enabled = getattr(self.robot.emotion, "enabled", True)
+        return None if enabled is None else bool(enabled)
+
+    def _motivator_settings(self) -> dict[str, Any]:
+        """The configured selection rule and rate, which the page shows with the motivator's decisions."""
+        settings = getattr(getattr(self.robot.config, "model", None), "motivator", None)
+        rule = getattr(settings, "selection", None)
+        return {
+            "selection": getattr(rule, "value", rule),
+            "rate_seconds": _finite(getattr(settings, "rate_seconds", None)),
+        }
+
+    def _last_feedback_at(self, name: str, component: object, servers: Sequence[str]) -> float | None:
+        """When module ``name`` last sent feedback, in clock seconds (``clock.now()``), if anything says.
+
+        Read from the controller's ``last_feedback_at`` (a mapping by module name or action name)
+        or from the module's own ``last_feedback_at``; None if neither knows.
+        """
+        known = getattr(self.robot.controller, "last_feedback_at", None)
+        if isinstance(known, Mapping):
+            for key in (name, *servers, *(f"/{server}" for server in servers)):
+                value = _finite(known.get(key))
+                if value is not None:
+                    return value
+        return _finite(getattr(component, "last_feedback_at", None))
+
     def _robot_time(self) -> float:
         """Seconds since the API's record stream started: the ``t`` of records."""
         return round(self.api.stream.now(), 3)
@@ -201,6 +229,11 @@ class Dashboard:
         return web.FileResponse(page, headers={"Cache-Control": "no-cache"})
 
     async def health(self, request: web.Request) -> web.Response:
+        """The controller, each module, the emotion switch and the motivator's rule, for the page.
+
+        ``emotion_enabled`` is null where it is not known (under ROS before any on/off was seen);
+        a module has ``last_feedback_at`` / ``seconds_since_feedback`` only where something reports it.
+        """
         controller = self.robot.controller
         now = self.clock.monotonic()
         active_module = self._module_of_state(controller.active_state)
@@ -215,17 +248,20 @@ class Dashboard:
             ]
             active = name == active_module
             left = self.left_at.get(name)
-            modules.append(
-                {
-                    "name": name,
-                    "states": states,
-                    "active": active,
-                    "goal_status": goal.name if active and goal is not None else None,
-                    "seconds_since_active": 0.0
-                    if active
-                    else (round(now - left, 1) if left is not None else None),
-                }
-            )
+            module: dict[str, Any] = {
+                "name": name,
+                "states": states,
+                "active": active,
+                "goal_status": goal.name if active and goal is not None else None,
+                "seconds_since_active": 0.0
+                if active
+                else (round(now - left, 1) if left is not None else None),
+            }
+            feedback_at = self._last_feedback_at(name, component, servers)
+            if feedback_at is not None:
+                module["last_feedback_at"] = feedback_at
+                module["seconds_since_feedback"] = round(max(0.0, self.clock.now() - feedback_at), 1)
+            modules.append(module)
         return web.json_response(
             {
                 "t": self._robot_time(),
@@ -238,7 +274,8 @@ class Dashboard:
                 "active_module": active_module,
                 "seconds_in_state": round(now - self.state_since, 2),
                 "stats": dataclasses.asdict(controller.stats),
-                "emotion_enabled": bool(getattr(self.robot.emotion, "enabled", True)),
+                "emotion_enabled": self._emotion_enabled(),
+                "motivator": self._motivator_settings(),
                 "has_base": self._map() is not None,
                 "modules": modules,
             }

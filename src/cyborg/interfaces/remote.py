@@ -2,8 +2,11 @@
 
 In ``cyborg sim`` the dashboard reads the in-process controller and base. As a
 ROS node (``cyborg node cyborg_api``) it has neither, so these mirrors follow
-the state changes, the base's pose and path state on their topics, and load
-the same map file the simulated base uses.
+the state changes, the base's pose and path state on their topics, the last
+on/off sent to the emotion system, and load the same map file the simulated
+base uses. Not on the wire, so not shown under ROS: the goal status of the
+active module, the controller's counters beyond handovers, and the base's
+planned route.
 """
 
 from __future__ import annotations
@@ -47,6 +50,23 @@ class ControllerMirror:
             listener(message)
 
 
+class EmotionSwitchMirror:
+    """Follows ``emotional_controller``: the last valid "on"/"off" anyone sent the emotion system.
+
+    ``enabled`` is None until such a message is seen: the topic is not latched and the emotion
+    system keeps its switch across restarts, so before that the API node cannot tell.
+    """
+
+    def __init__(self, node: Node) -> None:
+        self.enabled: bool | None = None
+        node.subscribe(topics.EMOTIONAL_CONTROLLER, String, self._on_switch, queue_size=10)
+
+    def _on_switch(self, message: String, info: MessageInfo) -> None:
+        word = message.data.strip().lower()
+        if word in ("on", "off"):  # the emotion system ignores anything else too
+            self.enabled = word == "on"
+
+
 class BaseMirror:
     """Follows the base's pose and path state; ``map`` is loaded from the same file."""
 
@@ -79,7 +99,7 @@ class RemoteRobot:
 
 
 def remote_robot(node: Node, config: LoadedConfig, occupancy_map: Any | None) -> RemoteRobot:
-    robot = RemoteRobot(config=config, controller=ControllerMirror(node))
+    robot = RemoteRobot(config=config, controller=ControllerMirror(node), emotion=EmotionSwitchMirror(node))
     if occupancy_map is not None:
         robot.components["rosarnl_node"] = BaseMirror(node, occupancy_map)
     return robot

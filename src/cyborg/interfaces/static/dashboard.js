@@ -1,15 +1,19 @@
 // Cyborg dashboard: plain JavaScript, no build step, nothing loaded from outside the robot.
 // Reads the robot's API: /api/ws (live records), /api/status, /api/health, /api/machine,
 // /api/graph.svg, /api/emotions, /api/map, /api/route and /api/records; sends commands with POST.
+// Pan and zoom of the state machine and the map: svg-pan-zoom (vendored, see svg-pan-zoom.LICENSE).
 "use strict";
 
 (() => {
   const $ = (id) => document.getElementById(id);
+  const SVGNS = "http://www.w3.org/2000/svg";
 
   const PLOT_WINDOW = 300; // seconds of robot time in the PAD plot
   const LOG_KEEP = 5000; // records kept for the log
   const LOG_SHOWN = 400; // rows drawn at once
   const TRAIL = 60; // poses kept for the robot's trail
+  const READABLE = 15; // px: the height of a graph label's box that "follow" zooms to (about 12 px type)
+  const ZOOM_STEP = 1.5; // one click on + or −
   const EMOTION_COLOURS = {
     neutral: "#a0a7b4",
     happy: "#f5c518",
@@ -39,16 +43,19 @@
     emotion: null,
     history: [],
     records: [],
+    lastDecision: null, // the newest "nothing chosen" decision, while repeats of it fold into its row
     t: 0,
     health: null,
     hasBase: null,
+    graphZoom: null,
     map: null,
-    mapImage: null,
+    mapView: null,
     route: null,
     remaining: null,
     pathState: null,
     pose: null,
     trail: [],
+    spaceLabels: [],
     drawQueued: false,
   };
   window.cyborgDashboard = dash; // for the tests and for poking around in the console
@@ -75,6 +82,7 @@
   function say(text, isError = false) {
     const box = $("control-message");
     box.textContent = text;
+    box.title = text;
     box.classList.toggle("error", isError);
   }
 
@@ -96,6 +104,7 @@
   }
 
   const signed = (v) => (v >= 0 ? "+" : "") + Number(v).toFixed(2);
+  const num = (v, digits = 4) => (v != null && isFinite(v) ? Number(v).toFixed(digits) : "–");
 
   function emotionColour(name, p = 0, a = 0) {
     if (EMOTION_COLOURS[name]) return EMOTION_COLOURS[name];
@@ -106,6 +115,13 @@
   function el(tag, className, text) {
     const node = document.createElement(tag);
     if (className) node.className = className;
+    if (text != null) node.textContent = text;
+    return node;
+  }
+
+  function svgEl(tag, attributes = {}, text = null) {
+    const node = document.createElementNS(SVGNS, tag);
+    for (const [key, value] of Object.entries(attributes)) node.setAttribute(key, value);
     if (text != null) node.textContent = text;
     return node;
   }
@@ -134,18 +150,60 @@
     });
   }
 
+  // Pan and zoom (mouse wheel, drag, double click, and the panel's −/fit/+ buttons) for an SVG.
+  // Until the user zooms or pans, the whole drawing stays fitted to its box as the box changes size.
+  function makeZoomable(svg, tools, options = {}) {
+    let moved = false;
+    for (const kind of ["wheel", "mousedown", "touchstart", "dblclick"]) {
+      svg.addEventListener(kind, () => { moved = true; }, { passive: true });
+    }
+    const zoom = window.svgPanZoom(svg, {
+      zoomScaleSensitivity: 0.25,
+      minZoom: 0.8,
+      maxZoom: 12,
+      fit: true,
+      center: true,
+      ...options,
+    });
+    const refit = () => {
+      zoom.resize();
+      zoom.fit();
+      zoom.center();
+    };
+    for (const button of tools.querySelectorAll("button[data-zoom]")) {
+      button.onclick = () => {
+        const what = button.dataset.zoom;
+        moved = what !== "fit";
+        if (what === "in") zoom.zoomBy(ZOOM_STEP);
+        else if (what === "out") zoom.zoomBy(1 / ZOOM_STEP);
+        else refit();
+      };
+    }
+    let last = "";
+    new ResizeObserver(() => {
+      const size = `${svg.clientWidth}x${svg.clientHeight}`;
+      if (size === last || !svg.clientWidth || !svg.clientHeight) return;
+      last = size;
+      if (moved) zoom.resize();
+      else refit();
+    }).observe(svg);
+    zoom.moved = () => moved;
+    zoom.markMoved = () => { moved = true; };
+    return zoom;
+  }
+
   // --- status and the state machine ------------------------------------------------------
 
+  // The state part of the status: the emotion comes from the emotion records alone (see applyEmotion).
   function applyStatus(status) {
+    const before = dash.status.state;
     dash.status = { ...dash.status, ...status };
     const s = dash.status;
     $("top-state").textContent = s.state || "–";
     $("events-state").textContent = s.state || "–";
     renderEventButtons(s.valid_events || []);
     highlightGraph();
-    if (s.emotion != null) {
-      applyEmotion({ emotion: s.emotion, pleasure: s.pleasure, arousal: s.arousal, dominance: s.dominance });
-    }
+    if (s.state !== before && $("graph-follow").checked) requestAnimationFrame(followActive);
   }
 
   async function refreshStatus() {
@@ -170,6 +228,7 @@
       svg.removeAttribute("width");
       svg.removeAttribute("height");
       svg.setAttribute("preserveAspectRatio", "xMidYMid meet");
+      dash.graphZoom = makeZoomable(svg, $("graph-tools"), { maxZoom: 15 });
       const leaves = machine.states.filter((s) => s.leaf).length;
       $("graph-caption").textContent = `${leaves} states · initial ${machine.initial}`;
       highlightGraph();
@@ -177,6 +236,24 @@
       box.innerHTML = "";
       box.append(el("p", "muted", `The state machine cannot be drawn: ${error.message}`));
     }
+  }
+
+  // Bring the active state into view, zoomed in until its label is readable (never zooms out).
+  function followActive() {
+    const zoom = dash.graphZoom;
+    const node = dash.status.state && document.getElementById(`state:${dash.status.state}`);
+    if (!zoom || !node) return;
+    const area = $("graph").querySelector("svg").getBoundingClientRect();
+    const box = node.getBoundingClientRect();
+    const label = (node.querySelector("text") || node).getBoundingClientRect();
+    const point = { x: box.x + box.width / 2 - area.x, y: box.y + box.height / 2 - area.y };
+    const factor = label.height > 0 ? Math.max(1, READABLE / label.height) : 1;
+    if (factor > 1.01) zoom.zoomAtPointBy(factor, point);
+    const margin = 0.15;
+    const inside = point.x > area.width * margin && point.x < area.width * (1 - margin) &&
+      point.y > area.height * margin && point.y < area.height * (1 - margin);
+    if (factor > 1.01 || !inside) zoom.panBy({ x: area.width / 2 - point.x, y: area.height / 2 - point.y });
+    zoom.markMoved();
   }
 
   function highlightGraph() {
@@ -248,9 +325,7 @@
     dash.t = Math.max(dash.t, health.t);
     $("top-time").textContent = fmtClock(dash.t);
     $("top-phase").textContent = health.phase;
-    const sw = $("emotion-switch");
-    if (document.activeElement !== sw) sw.checked = health.emotion_enabled;
-    $("emotion-switch-state").textContent = health.emotion_enabled ? "" : "switched off";
+    showEmotionSwitch(health.emotion_enabled);
     $("health-caption").textContent =
       `${health.active_state || "–"} for ${health.seconds_in_state.toFixed(0)} s · goal ${health.goal_status || "none"}`;
 
@@ -268,22 +343,31 @@
       stats.append(chip);
     }
 
+    // A module that reports when its last feedback came shows its age; the others show when they were active.
+    const withFeedback = health.modules.some((m) => m.seconds_since_feedback != null);
+    $("health-table").querySelector("th:last-child").textContent = withFeedback ? "last feedback" : "last active";
     const body = $("health-table").querySelector("tbody");
     body.replaceChildren();
     const modules = [...health.modules].sort((x, y) => (y.active - x.active) || (x.states.length ? 0 : 1) - (y.states.length ? 0 : 1));
     for (const m of modules) {
       const row = el("tr", m.active ? "active" : "");
       row.dataset.module = m.name;
-      row.append(el("td", "", m.name));
-      const states = el("td", "muted", m.states.join(", ") || "–");
+      const name = el("td", "", m.name);
+      name.title = m.name;
+      row.append(name);
+      const states = el("td", "muted states", m.states.join(", ") || "–");
       states.title = m.states.join(", ");
       row.append(states);
       const goal = el("td");
       if (m.goal_status) goal.append(el("span", `goal goal-${m.goal_status}`, m.goal_status.toLowerCase()));
       else goal.append(el("span", "muted", m.states.length ? "idle" : "–"));
       row.append(goal);
-      const since = m.active ? `for ${health.seconds_in_state.toFixed(0)} s` : (m.states.length ? fmtAgo(m.seconds_since_active) : "");
-      row.append(el("td", "", since));
+      const active = m.active ? `for ${health.seconds_in_state.toFixed(0)} s` : (m.states.length ? fmtAgo(m.seconds_since_active) : "");
+      const since = el("td", "since", m.seconds_since_feedback != null ? fmtAgo(m.seconds_since_feedback) : active);
+      since.title = m.seconds_since_feedback != null
+        ? `last feedback ${fmtAgo(m.seconds_since_feedback)}${active ? ` · active ${active}` : ""}`
+        : (active ? `active ${active}` : "");
+      row.append(since);
       body.append(row);
     }
 
@@ -293,6 +377,17 @@
       else showNoBase();
     }
     scheduleDraw();
+  }
+
+  // true / false, or null where the robot cannot tell (the ROS API node has seen no on/off message yet).
+  function showEmotionSwitch(enabled) {
+    const sw = $("emotion-switch");
+    if (document.activeElement !== sw) {
+      sw.indeterminate = enabled == null;
+      sw.checked = enabled !== false;
+    }
+    $("emotion-switch-state").textContent =
+      enabled == null ? "on/off not known yet" : enabled ? "" : "switched off";
   }
 
   // --- emotion -------------------------------------------------------------------------------
@@ -319,7 +414,7 @@
 
   function drawPlot() {
     const { ctx, w, h } = fitCanvas($("pad-plot"));
-    const pad = { l: 28, r: 8, t: 20, b: 16 };
+    const pad = { l: 28, r: 8, t: 8, b: 16 };
     const history = dash.history;
     const now = Math.max(dash.t, history.length ? history[history.length - 1].t : 0);
     // The window grows with the data, from one minute up to PLOT_WINDOW.
@@ -345,20 +440,13 @@
     }
     ctx.textAlign = "center";
     ctx.textBaseline = "top";
-    const step = window_ <= 60 ? 15 : 60;
+    // Minute ticks, thinned out so that their labels never touch.
+    const step = window_ <= 60 ? 15 : 60 * Math.max(1, Math.ceil((window_ / 60) * 34 / Math.max(1, w - pad.l - pad.r)));
     for (let ago = 0; ago <= window_; ago += step) {
       const label = ago === 0 ? "now" : step < 60 ? `-${ago}s` : `-${ago / 60}m`;
-      ctx.fillText(label, Math.min(Math.max(x(now - ago), pad.l + 12), w - pad.r - 12), h - pad.b + 3);
-    }
-    ctx.textAlign = "left";
-    ctx.textBaseline = "middle";
-    let lx = pad.l + 6;
-    for (const [, label, colour] of SERIES) {
-      ctx.fillStyle = colour;
-      ctx.fillRect(lx, 8, 10, 3);
-      ctx.fillStyle = "#aeb5c2";
-      ctx.fillText(label, lx + 13, 10);
-      lx += 20 + ctx.measureText(label).width;
+      const at = x(now - ago);
+      if (ago > 0 && at < pad.l + 10) continue; // would sit on the axis labels
+      ctx.fillText(label, Math.min(Math.max(at, pad.l + 12), w - pad.r - 12), h - pad.b + 3);
     }
     const points = history;
     if (!points.length) return;
@@ -380,7 +468,7 @@
 
   function drawSpace() {
     const { ctx, w, h } = fitCanvas($("pad-space"));
-    const size = Math.min(w, h) - 24;
+    const size = Math.max(10, Math.min(w, h) - 24);
     const cx = w / 2;
     const cy = h / 2;
     const x = (p) => cx + (p * size) / 2;
@@ -414,7 +502,10 @@
       placed.push({ x: x(dash.emotion.p) - r, y: y(dash.emotion.a) - r, w: 2 * r, h: 2 * r });
     }
     const overlaps = (box) => placed.some((b) => box.x < b.x + b.w && b.x < box.x + box.w && box.y < b.y + b.h && b.y < box.y + box.h);
+    // A label box moved inside the canvas, so no name is cut at its edge.
+    const inside = (box) => ({ ...box, x: Math.min(Math.max(box.x, 1), w - box.w - 1), y: Math.min(Math.max(box.y, 1), h - box.h - 1) });
     ctx.textBaseline = "middle";
+    const labels = [];
     for (const [name, [p, a, d]] of Object.entries(prototypes)) {
       const colour = emotionColour(name, p, a);
       const current = name === dash.emotion?.name;
@@ -426,13 +517,15 @@
       const tw = ctx.measureText(name).width;
       const r = radius(d) + 7;
       const spots = [[0, -r], [0, r], [r + tw / 2 - 4, 0], [-r - tw / 2 + 4, 0]];
-      const boxes = spots.map(([dx, dy]) => ({ x: x(p) + dx - tw / 2, y: y(a) + dy - 6, w: tw, h: 12 }));
+      const boxes = spots.map(([dx, dy]) => inside({ x: x(p) + dx - tw / 2, y: y(a) + dy - 6, w: tw, h: 12 }));
       const box = boxes.find((b) => !overlaps(b)) || boxes[0];
       placed.push(box);
+      labels.push({ name, ...box });
       ctx.globalAlpha = 1;
       ctx.fillStyle = current ? "#ffffff" : "#aeb5c2";
       ctx.fillText(name, box.x + tw / 2, box.y + 6);
     }
+    dash.spaceLabels = { width: w, height: h, labels };
     ctx.globalAlpha = 1;
     const recent = dash.history.slice(-40);
     if (recent.length > 1) {
@@ -472,6 +565,9 @@
   }
 
   // --- map -------------------------------------------------------------------------------------
+  // An SVG: the grid image, keep-out zones, route and trail live in metres inside the pan/zoom
+  // viewport; places, their names and the robot are drawn on top in screen pixels, so they keep
+  // their size at any zoom, and a name that would cover another is left out until zoomed in.
 
   function showNoBase() {
     dash.map = null;
@@ -493,27 +589,111 @@
     try {
       const info = await getJSON("/api/map");
       dash.map = info;
+      buildMap(info);
       await loadMapImage();
       $("map-message").hidden = true;
-      $("map-caption").textContent =
-        `${info.source || "map"} · ${info.size_m[0].toFixed(0)} × ${info.size_m[1].toFixed(0)} m · ${info.locations.length} places`;
+      $("map-caption").textContent = `${info.source || "map"} · ${info.locations.length} places`;
+      $("map-caption").title = `${info.size_m[0].toFixed(1)} × ${info.size_m[1].toFixed(1)} m, ${info.resolution} m per cell`;
     } catch (error) {
       $("map-message").hidden = false;
       $("map-message").firstElementChild.textContent = `The map cannot be shown: ${error.message}`;
     }
   }
 
-  // The grid image, shrunk by the robot to about the canvas's size in device pixels (walls kept).
-  async function loadMapImage() {
-    const canvas = $("map");
-    const wanted = Math.ceil(Math.max(canvas.clientWidth, canvas.clientHeight, 100) * (window.devicePixelRatio || 1));
-    if (dash.mapImage && dash.mapImage.wanted >= wanted) return;
-    const response = await fetch(`${dash.map.image}?max=${wanted}`, { cache: "no-store" });
-    if (!response.ok) throw new Error(`${dash.map.image}: HTTP ${response.status} ${await response.text()}`);
-    const perPixel = Number(response.headers.get("X-Cells-Per-Pixel") || "1");
-    const bitmap = await createImageBitmap(await response.blob());
-    dash.mapImage = { bitmap, perPixel, wanted };
+  function buildMap(info) {
+    const svg = $("map");
+    if (dash.mapView) dash.mapView.zoom.destroy();
+    svg.replaceChildren();
+    const [width, height] = info.size_m;
+    const [x0, y0] = info.origin;
+    // World coordinates: metres from the map's upper-left corner, y down.
+    const wx = (x) => x - x0;
+    const wy = (y) => y0 + height - y;
+    svg.setAttribute("viewBox", `0 0 ${width} ${height}`);
+    const world = svgEl("g", { id: "map-world", class: "svg-pan-zoom_viewport" });
+    const image = svgEl("image", { class: "grid-image", preserveAspectRatio: "none" });
+    const zones = svgEl("g", { class: "zones" });
+    for (const zone of info.keep_out) {
+      const points = zone.corners.map(([x, y]) => `${wx(x)},${wy(y)}`).join(" ");
+      const shape = svgEl(zone.line ? "polyline" : "polygon", { points, class: zone.line ? "keep-out line" : "keep-out" });
+      shape.append(svgEl("title", {}, `keep out${zone.name ? `: ${zone.name}` : ""}`));
+      zones.append(shape);
+    }
+    const trail = svgEl("polyline", { class: "trail" });
+    const route = svgEl("polyline", { class: "route" });
+    const remaining = svgEl("polyline", { class: "route-ahead" });
+    world.append(image, zones, trail, route, remaining);
+    const overlay = svgEl("g", { id: "map-overlay" });
+    const places = info.locations.map((place) => {
+      const group = svgEl("g", { class: "place" });
+      group.dataset.name = place.name;
+      const marker = svgEl("path", { class: "place-marker", d: "M0,-4 L4,0 L0,4 L-4,0 Z" });
+      marker.append(svgEl("title", {}, `${place.name} (${place.x.toFixed(1)}, ${place.y.toFixed(1)})`));
+      const label = svgEl("g", { class: "place-label" });
+      const back = svgEl("rect", { height: 14, rx: 2 });
+      const text = svgEl("text", { x: 3, y: 7 }, place.name);
+      label.append(back, text);
+      group.append(marker, label);
+      overlay.append(group);
+      return { place, group, marker, label, back, text, width: 0 };
+    });
+    const goal = svgEl("circle", { class: "goal", r: 5, visibility: "hidden" });
+    const robot = svgEl("g", { class: "robot", visibility: "hidden" });
+    const body = svgEl("circle", { r: 6 });
+    const heading = svgEl("line", { x1: 0, y1: 0, x2: 12, y2: 0 });
+    robot.append(body, heading);
+    overlay.append(goal, robot);
+    svg.append(world, overlay);
+    for (const p of places) {
+      p.width = p.text.getComputedTextLength() + 6;
+      p.back.setAttribute("width", p.width);
+    }
+    dash.mapView = { svg, world, image, trail, route, remaining, overlay, places, goal, robot, body, heading, wx, wy, loaded: 0 };
+    dash.mapView.zoom = makeZoomable(svg, $("map-tools"), {
+      viewportSelector: world,
+      maxZoom: 40,
+      onUpdatedCTM: () => {
+        placeOverlay();
+        clearTimeout(dash.mapView.sharpen);
+        dash.mapView.sharpen = setTimeout(() => loadMapImage().catch(() => {}), 250);
+      },
+    });
     scheduleDraw();
+  }
+
+  // The grid image at about the pixel size it is shown at (walls kept), sharper as one zooms in.
+  async function loadMapImage() {
+    const view = dash.mapView;
+    const m = dash.map;
+    if (!view || !m) return;
+    const { realZoom } = view.zoom.getSizes();
+    const ratio = window.devicePixelRatio || 1;
+    const full = Math.max(...m.cells);
+    const shown = Math.max(...m.size_m) * realZoom * ratio;
+    const wanted = Math.min(full, Math.max(100, 2 ** Math.ceil(Math.log2(shown))));
+    if (view.loaded >= wanted || view.loading >= wanted) return;
+    view.loading = wanted;
+    try {
+      const response = await fetch(`${m.image}?max=${wanted}`, { cache: "no-store" });
+      if (!response.ok) throw new Error(`${m.image}: HTTP ${response.status} ${await response.text()}`);
+      const perPixel = Number(response.headers.get("X-Cells-Per-Pixel") || "1");
+      const url = URL.createObjectURL(await response.blob());
+      if (view !== dash.mapView || wanted < view.loaded) return;
+      // Each image pixel covers perPixel x perPixel cells; the image's lower-left corner is the origin.
+      const [cols, rows] = m.cells;
+      const w = Math.ceil(cols / perPixel) * perPixel * m.resolution;
+      const h = Math.ceil(rows / perPixel) * perPixel * m.resolution;
+      const old = view.image.getAttribute("href");
+      view.image.setAttribute("href", url);
+      view.image.setAttribute("x", "0");
+      view.image.setAttribute("y", String(rows * m.resolution - h));
+      view.image.setAttribute("width", String(w));
+      view.image.setAttribute("height", String(h));
+      if (old) URL.revokeObjectURL(old);
+      view.loaded = wanted;
+    } finally {
+      if (view.loading === wanted) view.loading = 0;
+    }
   }
 
   async function refreshRoute() {
@@ -563,118 +743,88 @@
     $("map-pose").textContent = text;
   }
 
+  // What lives in metres: route and trail.
   function drawMap() {
-    const canvas = $("map");
-    const { ctx, w, h } = fitCanvas(canvas);
-    ctx.clearRect(0, 0, w, h);
-    const m = dash.map;
-    if (!m) return;
-    const [width, height] = m.size_m;
-    const [x0, y0] = m.origin;
-    const margin = 10;
-    const scale = Math.min((w - 2 * margin) / width, (h - 2 * margin) / height);
-    const ox = (w - width * scale) / 2;
-    const oy = (h - height * scale) / 2;
-    const px = (x) => ox + (x - x0) * scale;
-    const py = (y) => oy + (y0 + height - y) * scale;
-    if (dash.mapImage) {
-      // Each image pixel covers perPixel x perPixel cells; the image's lower-left corner is the origin.
-      const { bitmap, perPixel } = dash.mapImage;
-      const cell = m.resolution * perPixel * scale;
-      ctx.imageSmoothingEnabled = false;
-      ctx.drawImage(bitmap, ox, py(y0 + bitmap.height * m.resolution * perPixel), bitmap.width * cell, bitmap.height * cell);
-    }
-    for (const zone of m.keep_out) {
-      ctx.beginPath();
-      zone.corners.forEach(([x, y], i) => (i ? ctx.lineTo(px(x), py(y)) : ctx.moveTo(px(x), py(y))));
-      if (!zone.line) {
-        ctx.closePath();
-        ctx.fillStyle = "rgba(255, 107, 107, 0.22)";
-        ctx.fill();
-      }
-      ctx.strokeStyle = "rgba(255, 107, 107, 0.9)";
-      ctx.lineWidth = zone.line ? 2 : 1;
-      ctx.stroke();
-    }
-    ctx.font = "10px system-ui, sans-serif";
-    ctx.textAlign = "left";
-    ctx.textBaseline = "middle";
-    const placed = []; // label boxes so far: a label goes where it covers no other
+    const view = dash.mapView;
+    if (!view || !dash.map) return;
+    const points = (list) => (list || []).map((q) => `${view.wx(q[0])},${view.wy(q[1])}`).join(" ");
+    view.trail.setAttribute("points", points(dash.trail.map((q) => [q.x, q.y])));
+    const route = dash.route && dash.route.length ? dash.route : null;
+    view.route.setAttribute("points", points(route));
+    view.remaining.setAttribute("points", route ? points(dash.remaining && dash.remaining.length ? dash.remaining : route) : "");
+    placeOverlay();
+  }
+
+  // What lives in screen pixels: places, names, the goal and the robot.
+  function placeOverlay() {
+    const view = dash.mapView;
+    if (!view) return;
+    const { realZoom } = view.zoom.getSizes();
+    const pan = view.zoom.getPan();
+    const sx = (x) => pan.x + view.wx(x) * realZoom;
+    const sy = (y) => pan.y + view.wy(y) * realZoom;
+    const width = view.svg.clientWidth;
+    const height = view.svg.clientHeight;
+    const placed = [];
     const overlaps = (b) => placed.some((o) => b.x < o.x + o.w && o.x < b.x + b.w && b.y < o.y + o.h && o.y < b.y + b.h);
-    for (const place of m.locations) {
-      const x = px(place.x);
-      const y = py(place.y);
-      ctx.fillStyle = "#a78bfa";
-      ctx.beginPath();
-      ctx.moveTo(x, y - 4);
-      ctx.lineTo(x + 4, y);
-      ctx.lineTo(x, y + 4);
-      ctx.lineTo(x - 4, y);
-      ctx.closePath();
-      ctx.fill();
-      placed.push({ x: x - 4, y: y - 4, w: 8, h: 8 });
-    }
-    for (const place of m.locations) {
-      const x = px(place.x);
-      const y = py(place.y);
-      const tw = ctx.measureText(place.name).width + 4;
-      const spots = [[x + 6, y - 6], [x - 6 - tw, y - 6], [x - tw / 2, y - 19], [x - tw / 2, y + 7]];
-      const boxes = spots.map(([bx, by]) => ({ x: bx, y: by, w: tw, h: 12 }));
-      const box = boxes.find((b) => !overlaps(b)) || boxes[0];
-      placed.push(box);
-      ctx.fillStyle = "rgba(18, 21, 26, 0.72)";
-      ctx.fillRect(box.x, box.y, box.w, box.h);
-      ctx.fillStyle = "#d8ccff";
-      ctx.fillText(place.name, box.x + 2, box.y + 6);
-    }
-    if (dash.trail.length > 1) {
-      ctx.strokeStyle = "rgba(110, 168, 254, 0.45)";
-      ctx.lineWidth = 2;
-      ctx.beginPath();
-      dash.trail.forEach((q, i) => (i ? ctx.lineTo(px(q.x), py(q.y)) : ctx.moveTo(px(q.x), py(q.y))));
-      ctx.stroke();
-    }
     const pose = dash.pose;
-    const route = dash.route;
-    const line = (points) => {
-      ctx.beginPath();
-      points.forEach(([x, y], i) => (i ? ctx.lineTo(px(x), py(y)) : ctx.moveTo(px(x), py(y))));
-      ctx.stroke();
-    };
-    if (route && route.length) {
-      ctx.strokeStyle = "rgba(76, 195, 138, 0.35)"; // the whole planned route
-      ctx.lineWidth = 2;
-      line(route);
-      ctx.strokeStyle = "#4cc38a"; // what is still ahead
-      ctx.setLineDash([6, 4]);
-      line(dash.remaining && dash.remaining.length ? dash.remaining : route);
-      ctx.setLineDash([]);
-      const [gx, gy] = route[route.length - 1];
-      ctx.fillStyle = "#4cc38a";
-      ctx.beginPath();
-      ctx.arc(px(gx), py(gy), 5, 0, 2 * Math.PI);
-      ctx.fill();
-    }
     if (pose) {
-      const x = px(pose.x);
-      const y = py(pose.y);
-      const r = Math.max(6, 0.35 * scale);
-      ctx.fillStyle = "#6ea8fe";
-      ctx.strokeStyle = "#ffffff";
-      ctx.lineWidth = 2;
-      ctx.beginPath();
-      ctx.arc(x, y, r, 0, 2 * Math.PI);
-      ctx.fill();
-      ctx.stroke();
-      ctx.beginPath();
-      ctx.moveTo(x, y);
-      ctx.lineTo(x + Math.cos(pose.theta) * r * 2, y - Math.sin(pose.theta) * r * 2);
-      ctx.stroke();
-      canvas.dataset.robot = `${x.toFixed(1)},${y.toFixed(1)}`;
+      const x = sx(pose.x);
+      const y = sy(pose.y);
+      const r = Math.max(6, 0.35 * realZoom);
+      view.robot.setAttribute("visibility", "visible");
+      view.robot.setAttribute("transform", `translate(${x.toFixed(1)} ${y.toFixed(1)}) rotate(${(-pose.theta * 180) / Math.PI})`);
+      view.body.setAttribute("r", r.toFixed(1));
+      view.heading.setAttribute("x2", (2 * r).toFixed(1));
+      view.svg.dataset.robot = `${x.toFixed(1)},${y.toFixed(1)}`;
+      placed.push({ x: x - r, y: y - r, w: 2 * r, h: 2 * r });
     }
+    const route = dash.route;
+    if (route && route.length) {
+      const [gx, gy] = route[route.length - 1];
+      view.goal.setAttribute("visibility", "visible");
+      view.goal.setAttribute("cx", sx(gx).toFixed(1));
+      view.goal.setAttribute("cy", sy(gy).toFixed(1));
+    } else {
+      view.goal.setAttribute("visibility", "hidden");
+    }
+    for (const p of view.places) {
+      p.x = sx(p.place.x);
+      p.y = sy(p.place.y);
+      p.group.setAttribute("transform", `translate(${p.x.toFixed(1)} ${p.y.toFixed(1)})`);
+      placed.push({ x: p.x - 4, y: p.y - 4, w: 8, h: 8 });
+    }
+    let hidden = 0;
+    for (const p of view.places) {
+      const tw = p.width;
+      const spots = [[6, -7], [-6 - tw, -7], [-tw / 2, -20], [-tw / 2, 6]];
+      const boxes = spots.map(([dx, dy]) => ({ x: p.x + dx, y: p.y + dy, w: tw, h: 14, dx, dy }));
+      const onScreen = p.x >= 0 && p.x <= width && p.y >= 0 && p.y <= height;
+      const fits = (b) => b.x >= 0 && b.y >= 0 && b.x + b.w <= width && b.y + b.h <= height && !overlaps(b);
+      const box = onScreen ? boxes.find(fits) : null;
+      if (box) {
+        placed.push(box);
+        p.label.setAttribute("visibility", "visible");
+        p.label.setAttribute("transform", `translate(${box.dx.toFixed(1)} ${box.dy.toFixed(1)})`);
+      } else {
+        p.label.setAttribute("visibility", "hidden");
+        if (onScreen) hidden++;
+      }
+    }
+    view.svg.dataset.hiddenLabels = String(hidden);
+    const hint = hidden ? `${hidden} ${hidden === 1 ? "name" : "names"} hidden, zoom in` : "";
+    if ($("map-hint").textContent !== hint) $("map-hint").textContent = hint;
   }
 
   // --- event log ---------------------------------------------------------------------------------
+
+  const isIdleDecision = (r) => r.type === "motivator" && !r.event;
+  const reasonKey = (r) => String(r.reason || "").replace(/-?\d+(\.\d+)?/g, "#");
+
+  // The rule the motivator ranks eligible candidates (reward > cost) by: the record's, else the config's.
+  function motivatorRule(r) {
+    return r.rule || r.selection || (dash.health && dash.health.motivator && dash.health.motivator.selection) || null;
+  }
 
   function logText(r) {
     switch (r.type) {
@@ -683,29 +833,61 @@
       case "heard": return `“${r.text}”`;
       case "emotion": return `${r.emotion}  P ${signed(r.pleasure)} A ${signed(r.arousal)} D ${signed(r.dominance)}`;
       case "pose": return `x ${r.x.toFixed(2)} y ${r.y.toFixed(2)} heading ${((r.theta * 180) / Math.PI).toFixed(0)}°`;
-      case "motivator": return `${r.event ? `chose ${r.event}` : "chose nothing"}${r.reason ? ` — ${r.reason}` : ""}`;
+      case "motivator":
+        if (r.event) return `chose ${r.event}${r.reason ? ` — ${r.reason}` : ""}`;
+        return `nothing chosen: ${r.reason || "no reason given"}`;
       default: return JSON.stringify(r);
     }
+  }
+
+  function candidateChips(r) {
+    const rule = motivatorRule(r);
+    const key = rule === "net" ? "net" : "reward";
+    const candidates = [...(Array.isArray(r.candidates) ? r.candidates : [])];
+    candidates.sort((x, y) => (y.event === r.event) - (x.event === r.event) || (Number(y[key]) || 0) - (Number(x[key]) || 0));
+    const list = el("div", "cands");
+    const heading = el("span", "rule", rule ? `by ${rule}, among reward > cost:` : "candidates:");
+    heading.title = rule === "net"
+      ? "the eligible candidate (reward > cost) with the largest reward - cost wins"
+      : rule ? `the eligible candidate (reward > cost) with the largest ${rule} wins` : "";
+    list.append(heading);
+    for (const c of candidates) {
+      const chosen = r.event != null && c.event === r.event;
+      const eligible = c.eligible !== undefined ? c.eligible !== false : Number(c.reward) > Number(c.cost);
+      const chip = el("span", `cand${chosen ? " chosen" : ""}${eligible ? "" : " ineligible"}`);
+      chip.dataset.event = c.event;
+      if (chosen) chip.append(el("span", "mark", "✓ "));
+      if (!eligible) chip.append(el("span", "why", "✗ "));
+      chip.append(el("b", "", c.event));
+      chip.append(` reward ${num(c.reward)} · cost ${num(c.cost)} · net ${num(c.net)}`);
+      chip.title = `${c.event}: reward ${num(c.reward, 5)} · cost ${num(c.cost, 5)} · net ${num(c.net, 5)}` +
+        (chosen ? " · chosen" : eligible ? "" : " · not eligible: its cost is not below its reward");
+      list.append(chip);
+    }
+    return list;
   }
 
   function logRow(r) {
     const row = el("li");
     row.dataset.type = r.type;
     row.dataset.seq = r.seq;
-    row.append(el("span", "t", fmtClock(r.t)));
+    const t = el("span", "t", fmtClock(r.t));
+    row.append(t);
     row.append(el("span", "kind", r.type));
-    const text = el("span", "text", logText(r));
-    if (r.type === "motivator" && r.candidates && r.candidates.length) {
-      const list = el("div", "cands");
-      for (const c of r.candidates) {
-        const classes = ["cand"];
-        if (c.event === r.event) classes.push("chosen");
-        if (c.eligible === false) classes.push("ineligible");
-        const chip = el("span", classes.join(" "), `${c.event} ${Number(c.net).toFixed(3)}`);
-        chip.title = `reward ${Number(c.reward).toFixed(3)} · cost ${Number(c.cost).toFixed(3)} · net ${Number(c.net).toFixed(3)}${c.eligible === false ? " · not eligible" : ""}`;
-        list.append(chip);
+    const text = el("span", "text");
+    const withChips = r.type === "motivator" && Array.isArray(r.candidates) && r.candidates.length > 0;
+    // A choice shows its candidates as chips; its reason says the same in words, so it goes to the tooltip.
+    const line = el("span", "line", withChips && r.event ? `chose ${r.event}` : logText(r));
+    line.title = logText(r);
+    text.append(line);
+    if (r.type === "motivator") {
+      row.dataset.chosen = r.event ? "yes" : "no";
+      if (r.repeats > 1) {
+        const times = el("span", "repeats", `×${r.repeats}`);
+        times.title = `${r.repeats} decisions like this from ${fmtClock(r.first_t)} to ${fmtClock(r.t)}`;
+        t.append(times);
       }
-      text.append(list);
+      if (withChips) text.append(candidateChips(r));
     }
     row.append(text);
     return row;
@@ -729,7 +911,35 @@
     $("log-count").textContent = `${rows.length} shown of ${dash.records.length}`;
   }
 
+  // The motivator decides every few seconds; a run of "nothing chosen" for the same reason (numbers
+  // aside) is one row that counts its repeats, until anything but an emotion or pose comes between.
+  function foldDecision(r) {
+    const last = dash.lastDecision;
+    if (!isIdleDecision(r)) {
+      if (r.type !== "emotion" && r.type !== "pose") dash.lastDecision = null;
+      return false;
+    }
+    if (!last || reasonKey(last) !== reasonKey(r)) {
+      dash.lastDecision = r;
+      return false;
+    }
+    const oldSeq = last.seq;
+    last.repeats = (last.repeats || 1) + 1;
+    if (last.first_t == null) last.first_t = last.t;
+    Object.assign(last, { t: r.t, seq: r.seq, reason: r.reason, candidates: r.candidates });
+    const index = dash.records.lastIndexOf(last);
+    if (index >= 0) dash.records.splice(index, 1);
+    dash.records.push(last);
+    if (!dash.syncing) {
+      const old = $("log").querySelector(`li[data-seq="${oldSeq}"]`);
+      if (old) old.remove();
+      if (logFilter()(last)) $("log").prepend(logRow(last));
+    }
+    return true;
+  }
+
   function logRecord(r) {
+    if (foldDecision(r)) return;
     dash.records.push(r);
     if (dash.records.length > LOG_KEEP) dash.records.splice(0, dash.records.length - LOG_KEEP);
     if (dash.syncing) return; // drawn in one go once the backlog is in
@@ -800,7 +1010,10 @@
   }
 
   async function onHello(status) {
-    applyStatus(status);
+    const { emotion, pleasure, arousal, dominance, ...rest } = status;
+    applyStatus(rest);
+    // The emotion as it was when the socket opened; the emotion records after it take over from here.
+    if (emotion != null) applyEmotion({ emotion, pleasure, arousal, dominance });
     try {
       const backlog = await getJSON(`/api/records?since=${dash.lastSeq}`);
       backlog.forEach(handleRecord);
@@ -848,11 +1061,11 @@
         say(`not switched: ${error.message}`, true);
       }
     });
-    document.querySelectorAll(".log-filters input").forEach((input) => input.addEventListener("input", renderLog));
-    window.addEventListener("resize", () => {
-      scheduleDraw();
-      if (dash.map) loadMapImage().catch(() => {});
+    $("graph-follow").addEventListener("change", (event) => {
+      if (event.target.checked) followActive();
     });
+    document.querySelectorAll(".log-filters input").forEach((input) => input.addEventListener("input", renderLog));
+    window.addEventListener("resize", scheduleDraw);
   }
 
   async function start() {
