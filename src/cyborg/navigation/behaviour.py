@@ -16,6 +16,7 @@ from cyborg.navigation.database import Location, Response, ResponseType
 HAPPY = frozenset({"happy", "loved", "dignified"})
 WANDERING_MOODS = frozenset({"bored", "curious", "unconcerned"})
 ANGRY = "angry"
+NEUTRAL = "neutral"
 
 
 class Origin(enum.Enum):
@@ -123,11 +124,14 @@ def plan(
 def should_stop_wandering(emotion: str) -> bool:
     """Wandering ends once the robot is no longer bored, unconcerned or curious (issue; thesis 11.3.1).
 
-    Any other emotion ends it, ``neutral`` included. The module waits for the
-    emotion to hold for a moment (``WANDER_DEBOUNCE``) so that one flicker of the
-    label does not end it.
+    It ends when the robot feels something else: happy, angry, surprised, ... ``neutral`` does
+    not end it: it is no emotion of its own but the region near no prototype (the threshold of
+    docs/emotion-threshold.md), which the PAD values cross on their way from unconcerned to happy;
+    the thesis's table, without that region, still called the robot unconcerned there and
+    wandered on for about 120 s until it was elated (10.2.1). The module waits for the emotion
+    to hold for a moment (``WANDER_DEBOUNCE``) so that one flicker of the label does not end it.
     """
-    return emotion not in WANDERING_MOODS
+    return emotion not in WANDERING_MOODS and emotion != NEUTRAL
 
 
 class TalkKind(enum.Enum):
