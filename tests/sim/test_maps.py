@@ -360,3 +360,30 @@ def test_segment_through_a_corner_counts_the_cells_it_grazes() -> None:
     assert set(zip(rows.tolist(), cols.tolist(), strict=True)) == {(0, 0), (0, 1), (1, 0), (1, 1)}
     rows, cols = segment_cells((0.5, 1.0), (2.5, 1.0))  # along a border: both rows
     assert set(zip(rows.tolist(), cols.tolist(), strict=True)) == {(r, c) for r in (0, 1) for c in (0, 1, 2)}
+
+
+def test_a_map_without_goals_leaves_the_last_maps_places_behind(tmp_path: Path) -> None:
+    """The same data folder, first the campus map, then Willow (no goals): no campus place is a target."""
+    import random
+
+    from cyborg.controller.config import load_config
+    from cyborg.interfaces.cli import packaged_config
+    from cyborg.navigation.database import NavigationDatabase
+    from cyborg.sim.robot import build_robot
+    from cyborg.transport.clock import VirtualClock
+    from cyborg.transport.embedded import EmbeddedTransport
+
+    config = load_config(packaged_config("cyborg.yaml"))
+    for map_path in (None, WILLOW):
+        clock = VirtualClock()
+        try:
+            build_robot(
+                config, EmbeddedTransport(clock), data_dir=tmp_path, rng=random.Random(0), map_path=map_path
+            )
+        finally:
+            clock.close()
+        db = NavigationDatabase(tmp_path / "navigation.db")
+        on_map = {place.name for place in db.locations_on_map()}
+        if map_path is None:
+            assert "cafeteria" in on_map
+    assert db.current_map() == "willow" and on_map == set()

@@ -98,7 +98,9 @@ class NavigationSettings(KindSettings):
 class BaseSettings(KindSettings):
     speed: float = Field(0.6, gt=0, description="driving speed in m/s")
     robot_radius: float = Field(0.35, ge=0)
-    start: str | None = Field(None, description="named pose to start at (default: RobotHome)")
+    start: str | None = Field(
+        None, description="named pose to start at (default: the information desk, else RobotHome or Dock)"
+    )
 
 
 @dataclass(frozen=True)
@@ -128,9 +130,11 @@ def _navigation(node: Node, s: NavigationSettings, robot: BuildContext) -> objec
 
     db = NavigationDatabase(Path(s.db) if s.db else robot.data_dir / "navigation.db")
     occupancy = robot.occupancy_map()
+    map_name = Path(occupancy.source).stem if occupancy.source else "map"
+    db.use_map(map_name)  # also for a map without goals: the last map's places are not on this one
     goals = [p for p in occupancy.poses if p.kind in ("Goal", "GoalWithHeading")]
     for goal in goals:
-        db.import_pose(goal, Path(occupancy.source).stem if occupancy.source else "map")
+        db.import_pose(goal, map_name)
 
     def add_calendar_entry(entry: Any) -> None:
         from datetime import UTC
