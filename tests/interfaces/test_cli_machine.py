@@ -36,6 +36,25 @@ def test_validate_invalid_file_exits_nonzero_with_problems(tmp_path: Path) -> No
     )
 
 
+def test_validate_wrong_type_says_where_what_and_how_to_fix(tmp_path: Path) -> None:
+    path = tmp_path / "bad.yaml"
+    path.write_text(GOOD.replace("{play: music, aborted: idle}", "[music]"))
+    result = CliRunner().invoke(cli, ["validate", str(path)])
+    assert result.exit_code == 1
+    assert f"{path}: state 'idle' > transitions: must be a mapping (key: value), not a list" in result.output
+    assert "fix: write transitions as a mapping event: target, e.g. {succeeded: idle" in result.output
+
+
+def test_validate_same_event_twice_gets_event_advice(tmp_path: Path) -> None:
+    path = tmp_path / "twice.yaml"
+    path.write_text(GOOD.replace("{play: music, aborted: idle}", "{play: music, aborted: idle, play: idle}"))
+    result = CliRunner().invoke(cli, ["validate", str(path)])
+    assert result.exit_code == 1
+    assert f"{path}: line 3: state 'idle' > transitions: duplicate key 'play'" in result.output
+    assert "fix: an event leads to exactly one target" in result.output
+    assert "unique name" not in result.output
+
+
 def test_validate_packaged_demo() -> None:
     result = CliRunner().invoke(cli, ["validate", str(packaged_config("demo.yaml"))])
     assert result.exit_code == 0, result.output
