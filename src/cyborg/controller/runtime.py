@@ -7,7 +7,9 @@ the preempt timeout), then enters the next state: it sets ``/state_resources``,
 publishes the change on ``/cyborg_controller/state_change`` and sends the goal
 to the next module. Only then is another event looked at, so two modules are
 never in control at once. A module's result becomes the event ``succeeded`` or
-``aborted``. Everything is driven by messages; nothing polls.
+``aborted``. A result that leads back into the same state re-enters it at most
+once per connect timeout, so a module that rejects every goal does not get a
+flood of them. Everything is driven by messages; nothing polls.
 """
 
 from __future__ import annotations
@@ -64,6 +66,7 @@ class ControllerStats:
     preempt_timeouts: int = 0
     connect_failures: int = 0
     succeeded_fallbacks: int = 0
+    retries_delayed: int = 0
 
 
 @dataclass(frozen=True)
@@ -93,6 +96,7 @@ class Controller:
         ] = {}
         self._goal: _Handle | None = None
         self._goal_seq = 0
+        self._goal_sent_at = 0.0
         self._task: asyncio.Task[None] | None = None
         self._state_pub = node.publisher(topics.STATE_CHANGE, SystemState, latch=True)
         self._listeners: list[Callable[[SystemState], None]] = []
@@ -204,7 +208,43 @@ class Controller:
             return
         if event.source is EventSource.TOPIC:
             await self._preempt_active()
+        elif target == self.active_state and await self._hold_retry(target, name):
+            return  # an event came in while waiting to re-enter: it decides where to go
         await self._enter(target, name)
+
+    async def _hold_retry(self, state: str, event: str) -> bool:
+        """A module's result leads back into its own state: re-enter at most once per connect timeout.
+
+        Without this, a module that rejects or aborts every goal at once would be sent goal
+        after goal as fast as the transport carries them. Returns True if a valid event
+        arrived while waiting; that event is then handled instead of re-entering.
+        """
+        assert self._wakeup is not None
+        clock = self.node.clock
+        deadline = self._goal_sent_at + self.machine.timeouts.connect
+        if deadline <= clock.monotonic():
+            return False
+        self.stats.retries_delayed += 1
+        log.warning(
+            "module of %s ended (%r) %.2f s after its goal; re-entering %s in %.2f s unless an event comes first",
+            state,
+            event,
+            clock.monotonic() - self._goal_sent_at,
+            state,
+            deadline - clock.monotonic(),
+        )
+        self.phase = Phase.ENTERING
+        while not any(
+            e.source is EventSource.TOPIC and self.machine.lookup(state, e.name) is not None
+            for e in self._queue
+        ):
+            remaining = deadline - clock.monotonic()
+            if remaining <= 0:
+                return False
+            self._wakeup.clear()
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(self._wakeup.wait(), remaining)
+        return True
 
     async def _preempt_active(self) -> None:
         goal = self._goal
@@ -271,4 +311,5 @@ class Controller:
         handle = client.send_goal(goal)
         handle.add_done_callback(lambda h: self._on_goal_done(h, seq))
         self._goal = handle
+        self._goal_sent_at = self.node.clock.monotonic()
         return True
