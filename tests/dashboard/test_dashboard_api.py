@@ -24,6 +24,7 @@ from cyborg.interfaces.dashboard import (
     route_points,
 )
 from cyborg.interfaces.remote import remote_robot
+from cyborg.modules.helper import HEARTBEAT_SECONDS
 from cyborg.sim.maps import Cell, KeepOutZone, NamedPose, OccupancyMap
 from cyborg.sim.robot import Robot, build_robot
 from cyborg.transport import topics
@@ -257,7 +258,9 @@ def test_health_shows_the_motivator_rule_and_feedback_ages_where_known(tmp_path:
             "rate_seconds": settings.rate_seconds,
         }
         modules = {m["name"]: m for m in health["modules"]}
-        assert "seconds_since_feedback" not in modules["cyborg_idle"], "nothing knows it: no field"
+        assert "seconds_since_feedback" not in modules["cyborg_music"], "never ran: no field"
+        # The running module's goal sends a heartbeat, which the controller notes.
+        assert 0.0 <= modules["cyborg_idle"]["seconds_since_feedback"] <= HEARTBEAT_SECONDS
 
         now = robot.controller.node.clock.now()
         # As the controller may report it (by module or by action name) ...

@@ -99,6 +99,7 @@ class Controller:
         self._goal_sent_at = 0.0
         self._task: asyncio.Task[None] | None = None
         self._state_pub = node.publisher(topics.STATE_CHANGE, SystemState, latch=True)
+        self.last_feedback_at: dict[str, float] = {}  # action server -> clock.now() of its last feedback
         self._listeners: list[Callable[[SystemState], None]] = []
         node.subscribe(topics.REGISTER_EVENT, String, self._on_event_message, queue_size=event_queue_size)
 
@@ -290,6 +291,9 @@ class Controller:
                 # Retrying the same missing server: wait a bit instead of spinning.
                 await self.node.clock.sleep(self.machine.timeouts.connect)
 
+    def _on_feedback(self, action: str) -> None:
+        self.last_feedback_at[action.lstrip("/")] = self.node.clock.now()
+
     async def _send_goal(self, state: str, event: str, previous: str) -> bool:
         action = self.machine.states[state].action
         assert action is not None
@@ -308,7 +312,7 @@ class Controller:
                 return False
         seq = self._goal_seq
         goal = StateMachineGoal(previous_state=previous, event=event, current_state=state)
-        handle = client.send_goal(goal)
+        handle = client.send_goal(goal, on_feedback=lambda feedback: self._on_feedback(action))
         handle.add_done_callback(lambda h: self._on_goal_done(h, seq))
         self._goal = handle
         self._goal_sent_at = self.node.clock.monotonic()

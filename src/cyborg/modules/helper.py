@@ -42,6 +42,7 @@ from cyborg.transport.messages import (
 )
 
 log = logging.getLogger(__name__)
+HEARTBEAT_SECONDS = 5.0  # a running goal sends feedback this often (the dashboard shows its age)
 
 _GoalHandle = ServerGoalHandle[StateMachineGoal, StateMachineResult, StateMachineFeedback]
 
@@ -134,8 +135,23 @@ class StateServer:
         elif not handle.status.is_terminal:
             handle.canceled()
 
+    async def _heartbeat(self, ctx: GoalContext) -> None:
+        """Feedback while the goal runs, so the controller and the dashboard see the module alive."""
+        while not ctx.handle.status.is_terminal:
+            ctx.feedback("active")
+            await ctx.sleep(HEARTBEAT_SECONDS)
+
     async def _run(self, handle: _GoalHandle) -> None:
         ctx = GoalContext(self.module, handle)
+        heartbeat = self.module.node.clock.loop.create_task(
+            self._heartbeat(ctx), name=f"{self.name} heartbeat"
+        )
+        try:
+            await self._execute_goal(ctx, handle)
+        finally:
+            heartbeat.cancel()
+
+    async def _execute_goal(self, ctx: GoalContext, handle: _GoalHandle) -> None:
         try:
             outcome = await self._execute(ctx)
         except asyncio.CancelledError:
