@@ -14,7 +14,7 @@ from pathlib import Path
 import click
 
 from cyborg.controller.config import LoadedConfig, load_config
-from cyborg.errors import CyborgError
+from cyborg.errors import ConfigError, CyborgError
 
 DEFAULT_CONFIG = "cyborg.yaml"
 
@@ -36,8 +36,14 @@ def check_modules(loaded: LoadedConfig) -> None:
     """Validate the ``modules:`` section against the known module kinds."""
     from cyborg.sim.kinds import MODULE_KINDS, parse_module_settings
 
+    problems: list[str] = []
     for name, raw in loaded.model.modules.items():
-        parse_module_settings(name, raw, MODULE_KINDS, loaded.source)
+        try:
+            parse_module_settings(name, raw, MODULE_KINDS, loaded.source)
+        except ConfigError as exc:
+            problems.extend(exc.problems)
+    if problems:
+        raise ConfigError(problems, source=loaded.source)
 
 
 def _fail(exc: CyborgError) -> None:

@@ -211,9 +211,34 @@ def parse_module_settings(
     try:
         return kind, kind.settings.model_validate(raw)
     except ValidationError as exc:
-        problems = [
-            f"module {node_name!r} > {'.'.join(str(p) for p in e['loc'])}: {e['msg']}"
-            + ("; fix: remove it or check its spelling" if e["type"] == "extra_forbidden" else "")
-            for e in exc.errors()
-        ]
+        problems = [_module_problem(node_name, kind.settings, e) for e in exc.errors()]
         raise ConfigError(problems, source=source) from exc
+
+
+def _module_problem(node_name: str, settings: type[BaseModel], error: Any) -> str:
+    """One settings error of module ``node_name``: where, what is wrong and the fix."""
+    loc = [str(p) for p in error["loc"]]
+    where = f"module {node_name!r} > {'.'.join(loc)}"
+    if error["type"] == "extra_forbidden":
+        known = ", ".join(name for name in settings.model_fields if name != "kind")
+        return f"{where}: unknown setting; fix: remove it or use one of {known}"
+    field = settings.model_fields.get(loc[0]) if loc else None
+    meaning = f" ({field.description})" if field is not None and field.description else ""
+    message = str(error["msg"]).removeprefix("Value error, ")
+    if field is None:
+        return f"{where}: {message}"
+    expected = _READABLE_TYPES.get(str(error["type"]).split("_")[0], "value of the right type")
+    value = error.get("input")
+    return f"{where}: {message} (got {value!r}); fix: give {expected}{meaning}"
+
+
+_READABLE_TYPES = {
+    "float": "a number, e.g. 2.5",
+    "int": "a whole number, e.g. 3",
+    "bool": "true or false",
+    "string": "text in quotes",
+    "greater": "a larger number",
+    "less": "a smaller number",
+    "list": "a list, e.g. [a, b]",
+    "dict": "a mapping, e.g. {key: value}",
+}
