@@ -8,7 +8,9 @@ import math
 import pytest
 from pydantic import ValidationError
 
+from cyborg.controller.config import load_config
 from cyborg.emotion.model import PAD
+from cyborg.interfaces.cli import packaged_config
 from cyborg.motivator.logic import (
     DecisionStatus,
     MotivationalEvent,
@@ -20,7 +22,9 @@ from cyborg.motivator.logic import (
     event_cost,
     event_reward,
     is_ready,
+    not_ready,
     should_reset,
+    waiting_for_handover,
 )
 
 
@@ -63,12 +67,13 @@ A = ev("a_many", 0.1, 0.1, 0.1)  # R at neutral = 0.875 * 0.15 = 0.13125
 B = ev("b_pleasure", 0.2, 0.0, 0.0)  # R at neutral = 0.875 * 0.10 = 0.0875
 
 
-def test_net_rule_prefers_the_fresh_event() -> None:
-    # A: saturation 0.343, cbrt = 0.7, cost = 0.7 * 0.15 = 0.105, net = 0.02625
-    # B: saturation 0, cost 0, net = 0.0875
+def test_by_default_the_largest_reward_above_its_cost_wins() -> None:
+    # Thesis 6.3/8.3: "selects the action that gives the largest reward" among reward > cost.
+    # A: saturation 0.343, cbrt = 0.7, cost = 0.7 * 0.15 = 0.105 < R = 0.13125, net = 0.02625
+    # B: saturation 0, cost 0, R = net = 0.0875 < 0.13125
     decision = choose(PAD(), [A, B], {"a_many": 0.343}, state="idle")
     assert decision.status is DecisionStatus.CHOSEN
-    assert decision.chosen == B
+    assert decision.chosen == A
     by_name = {c.event.event: c for c in decision.candidates}
     assert by_name["a_many"].reward == pytest.approx(0.13125)
     assert by_name["a_many"].cost == pytest.approx(0.105)
@@ -76,9 +81,9 @@ def test_net_rule_prefers_the_fresh_event() -> None:
     assert all(c.eligible for c in decision.candidates)
 
 
-def test_reward_rule_prefers_the_larger_reward() -> None:
-    decision = choose(PAD(), [A, B], {"a_many": 0.343}, rule=SelectionRule.REWARD)
-    assert decision.chosen == A
+def test_net_rule_prefers_the_fresh_event() -> None:
+    decision = choose(PAD(), [A, B], {"a_many": 0.343}, rule=SelectionRule.NET)
+    assert decision.chosen == B
 
 
 def test_event_whose_cost_reaches_its_reward_is_not_eligible() -> None:
@@ -90,9 +95,13 @@ def test_event_whose_cost_reaches_its_reward_is_not_eligible() -> None:
     assert "reward <= cost" in decision.reason and "a_many" in decision.reason
 
 
-def test_negative_reward_is_never_chosen() -> None:
-    decision = choose(PAD(), [ev("sulk", -0.1, -0.1, -0.1)], {})
+@pytest.mark.parametrize("saturation", [0.0, 0.5, 1.0])
+def test_negative_reward_is_never_chosen(saturation: float) -> None:
+    # sulk: R = 0.875 * -0.15 = -0.13125; at saturation 1 its cost is -0.15 < R, yet it must not pay
+    decision = choose(PAD(), [ev("sulk", -0.1, -0.1, -0.1)], {"sulk": saturation})
     assert decision.chosen is None
+    assert decision.status is DecisionStatus.NOT_WORTH_IT
+    assert "reward <= 0" in decision.reason
 
 
 def test_no_events_names_the_state() -> None:
@@ -112,26 +121,58 @@ def test_ties_go_to_the_alphabetically_first_event() -> None:
     assert decision.chosen is not None and decision.chosen.event == "apple"
 
 
-def test_questions_rotate_with_the_net_rule_but_repeat_with_the_reward_rule() -> None:
-    # Scenario D: several equally rewarding questions must not be asked twice in a row.
-    settings = MotivatorSettings()
+def ask_ten_times(questions: list[MotivationalEvent], settings: MotivatorSettings) -> list[str]:
+    saturations: dict[str, float] = {}
+    asked = []
+    for _ in range(10):
+        decision = choose(PAD(), questions, saturations, rule=settings.selection)
+        if decision.chosen is None:
+            asked.append("-")
+            continue
+        asked.append(decision.chosen.event)
+        saturations = apply_choice(saturations, decision.chosen, questions, settings)
+    return asked
+
+
+def test_the_reward_rule_repeats_a_question_until_its_cost_catches_up() -> None:
+    # Four equally rewarding questions, event_cost 0.33: at a neutral mood R = 0.875 * sum(d), so a
+    # question stays eligible while cbrt(saturation) < 0.875, i.e. saturation < 0.67: asked 2-3 times.
     questions = [ev(name, 0.02, 0.02) for name in ("joke", "selfie", "simon", "weather")]
+    assert ask_ten_times(questions, MotivatorSettings())[:2] == ["joke", "joke"]
+    rotating = ask_ten_times(questions, MotivatorSettings(selection=SelectionRule.NET))
+    assert all(x != y for x, y in itertools.pairwise(rotating))
+    assert set(rotating) == {"joke", "selfie", "simon", "weather"}
 
-    def run(rule: SelectionRule) -> list[str]:
-        saturations: dict[str, float] = {}
-        asked = []
-        for _ in range(10):
-            decision = choose(PAD(), questions, saturations, rule=rule)
-            assert decision.chosen is not None
-            asked.append(decision.chosen.event)
-            saturations = apply_choice(saturations, decision.chosen, questions, settings)
-        return asked
 
-    net = run(SelectionRule.NET)
-    assert all(x != y for x, y in itertools.pairwise(net))
-    assert set(net) == {"joke", "selfie", "simon", "weather"}
-    reward = run(SelectionRule.REWARD)
-    assert reward[:2] == ["joke", "joke"]
+def test_a_high_event_cost_makes_questions_rotate_with_the_reward_rule() -> None:
+    # event_cost 1 saturates a question at once (cost = sum(d) > R); relief 0.15 per other choice
+    # brings it back below 0.67 after three others: 1 - 3 * 0.15 = 0.55.
+    settings = MotivatorSettings(saturation_relief=0.15)
+    questions = [ev(name, 0.02, 0.02, event_cost=1.0) for name in ("joke", "selfie", "simon", "weather")]
+    asked = ask_ten_times(questions, settings)
+    assert "-" not in asked
+    assert all(x != y for x, y in itertools.pairwise(asked))
+    assert set(asked) == {"joke", "selfie", "simon", "weather"}
+
+
+def test_the_default_robot_rotates_its_questions() -> None:
+    # cyborg.yaml's conversation questions (thesis 10.2.4, scenario D) at a neutral mood.
+    settings = load_config(packaged_config("cyborg.yaml")).model.motivator
+    questions = [e for e in settings.events if e.state == "conversation"]
+    assert settings.selection is SelectionRule.REWARD and len(questions) == 5
+    asked = ask_ten_times(questions, settings)
+    assert "-" not in asked, asked
+    assert all(x != y for x, y in itertools.pairwise(asked)), asked
+    assert len(set(asked)) >= 4, asked
+
+
+def test_not_ready_and_handover_decisions_say_why_nothing_was_chosen() -> None:
+    decision = not_ready("idle", 3.25, MotivatorSettings(min_seconds_in_state=10))
+    assert (decision.status, decision.chosen, decision.candidates) == (DecisionStatus.NOT_READY, None, ())
+    assert decision.reason == "3.2 s of 10 s in state 'idle': waiting before choosing (min_seconds_in_state)"
+    decision = waiting_for_handover("idle", "event 'go' from cyborg_x")
+    assert decision.status is DecisionStatus.HANDOVER and decision.chosen is None
+    assert "'idle'" in decision.reason and "event 'go' from cyborg_x" in decision.reason
 
 
 # --- saturation updates ---------------------------------------------------------------------
@@ -178,7 +219,7 @@ def test_readiness_and_reset() -> None:
 def test_default_settings() -> None:
     s = MotivatorSettings()
     assert (s.rate_seconds, s.saturation_increment, s.saturation_relief) == (2.0, 0.33, 0.05)
-    assert s.selection is SelectionRule.NET
+    assert s.selection is SelectionRule.REWARD
     assert s.increment_for(NAVIGATION) == 0.33
 
 

@@ -1,11 +1,14 @@
 """The motivator component (thesis 6.3, 8.3): picks events when nothing else happens.
 
 Every ``rate_seconds`` it weighs the motivational events registered for the
-active state (those that are transitions of it), publishes the decision with
-every candidate on ``/cyborg_controller/motivator_decision`` (JSON), and, when
-an event is worth it, publishes the event on ``register_event`` and its reward
-as emotional feedback, like any module. It waits while a handover is in
-progress (from sending an event until the state changes).
+active state (those that are transitions of it) and publishes the decision on
+``/cyborg_controller/motivator_decision`` (JSON: status, reason and every
+candidate's reward, cost and net), also when nothing is chosen. When an event
+is worth it, it publishes the event on ``register_event`` and its reward as
+emotional feedback, like any module. It does not decide while a handover is in
+progress: from any event that is a transition of the active state (its own or
+another module's, seen on ``register_event``) until the state changes, and
+while the in-process controller, if given, is not simply running a module.
 """
 
 from __future__ import annotations
@@ -13,19 +16,25 @@ from __future__ import annotations
 import json
 import logging
 from collections import Counter
+from collections.abc import Callable
+from dataclasses import dataclass
 
 from cyborg.controller.machine import MachineSpec
+from cyborg.controller.runtime import Controller, Phase
 from cyborg.emotion.model import PAD
 from cyborg.emotion.store import ControllerStore
 from cyborg.motivator.logic import (
     Decision,
+    DecisionStatus,
     MotivationalEvent,
     MotivatorSettings,
     apply_choice,
     choose,
     decline,
     is_ready,
+    not_ready,
     should_reset,
+    waiting_for_handover,
 )
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Node
@@ -33,7 +42,8 @@ from cyborg.transport.messages import EmotionalFeedback, EmotionalState, String,
 
 log = logging.getLogger(__name__)
 
-HANDOVER_PATIENCE = 5.0
+HANDOVER_MARGIN = 1.0
+"""Seconds beyond the controller's preempt and connect timeouts before a handover counts as lost."""
 
 
 def decision_json(decision: Decision, state: str | None) -> str:
@@ -57,29 +67,64 @@ def decision_json(decision: Decision, state: str | None) -> str:
     )
 
 
+def controller_busy(controller: Controller) -> Callable[[], bool]:
+    """A check for :class:`Motivator`: true unless ``controller`` is running a module that has not finished.
+
+    It covers what the event topic does not show: the cancel wait, entering a state, and a
+    module's result (succeeded / aborted) that is about to become a handover.
+    """
+
+    def busy() -> bool:
+        status = controller.goal_status
+        return controller.phase is not Phase.ACTIVE or (status is not None and status.is_terminal)
+
+    return busy
+
+
+@dataclass(frozen=True)
+class _Handover:
+    event: str
+    sender: str
+    since: float
+
+
 class Motivator:
-    """Chooses motivational events on a timer; counts what it chose."""
+    """Chooses motivational events on a timer; counts what it chose.
+
+    ``controller_busy`` (see :func:`controller_busy`) lets a motivator in the controller's
+    process also wait for handovers it cannot see on the topics.
+    """
 
     def __init__(
-        self, node: Node, settings: MotivatorSettings, machine: MachineSpec, store: ControllerStore
+        self,
+        node: Node,
+        settings: MotivatorSettings,
+        machine: MachineSpec,
+        store: ControllerStore,
+        *,
+        controller_busy: Callable[[], bool] | None = None,
     ) -> None:
         self.node = node
         self.settings = settings
         self.machine = machine
         self.store = store
+        self.controller_busy = controller_busy
         self.state: str | None = None
         self.entered_at = node.clock.monotonic()
         self.pad = PAD(0.0, 0.0, 0.0)
         self.saturations = store.get_saturations()
         self.chosen = Counter[str]()
         self.last_decision: Decision | None = None
-        self._awaiting_handover_until: float | None = None
+        self.handover_patience = machine.timeouts.preempt + machine.timeouts.connect + HANDOVER_MARGIN
+        self._handover: _Handover | None = None
+        self._last_logged: tuple[DecisionStatus, str] | None = None
         self._last_tick = node.clock.monotonic()
         self._events = node.publisher(topics.REGISTER_EVENT, String)
         self._feedback = node.publisher(topics.EMOTIONAL_FEEDBACK, EmotionalFeedback)
         self._decisions = node.publisher(topics.MOTIVATOR_DECISION, String)
         node.subscribe(topics.STATE_CHANGE, SystemState, self._on_state)
         node.subscribe(topics.EMOTIONAL_STATE, EmotionalState, self._on_emotion)
+        node.subscribe(topics.REGISTER_EVENT, String, self._on_event, queue_size=100)
         node.clock.call_later(settings.rate_seconds, self._tick)
 
     def events_for(self, state: str) -> list[MotivationalEvent]:
@@ -90,10 +135,18 @@ class Motivator:
     def _on_state(self, message: SystemState, info: MessageInfo) -> None:
         self.state = message.to_system_state
         self.entered_at = self.node.clock.monotonic()
-        self._awaiting_handover_until = None
+        self._handover = None
 
     def _on_emotion(self, message: EmotionalState, info: MessageInfo) -> None:
         self.pad = PAD(message.current_pleasure, message.current_arousal, message.current_dominance)
+
+    def _on_event(self, message: String, info: MessageInfo) -> None:
+        name = message.data.strip()
+        state = self.state
+        if state is None or state not in self.machine.states or self.machine.lookup(state, name) is None:
+            return  # the controller drops it; no handover follows
+        if self._handover is None:
+            self._handover = _Handover(name, info.sender, self.node.clock.monotonic())
 
     def _tick(self) -> None:
         try:
@@ -103,40 +156,67 @@ class Motivator:
         finally:
             self.node.clock.call_later(self.settings.rate_seconds, self._tick)
 
+    def _handover_in_progress(self, now: float) -> str | None:
+        """What the motivator waits for, or None when it may decide."""
+        handover = self._handover
+        if handover is not None:
+            if now - handover.since < self.handover_patience:
+                return f"event {handover.event!r} from {handover.sender}"
+            log.warning(
+                "no state change %.1f s after event %r from %s in %s; deciding again",
+                now - handover.since,
+                handover.event,
+                handover.sender,
+                self.state,
+            )
+            self._handover = None
+        if self.controller_busy is not None and self.controller_busy():
+            return "the controller is not running a module"
+        return None
+
     def _decide(self) -> None:
         now = self.node.clock.monotonic()
         elapsed, self._last_tick = now - self._last_tick, now
         self.saturations = decline(self.saturations, elapsed, self.settings.saturation_decline_per_second)
-        if self.state is None:
-            return
-        if self._awaiting_handover_until is not None and now < self._awaiting_handover_until:
-            return  # a handover we asked for is still in progress
+        state = self.state
+        if state is None:
+            return  # the controller has not entered its first state yet
         in_state = now - self.entered_at
         if should_reset(in_state, self.settings) and any(self.saturations.values()):
-            log.info("%.0f s in %s: resetting the motivator's saturations", in_state, self.state)
+            log.info("%.0f s in %s: resetting the motivator's saturations", in_state, state)
             self.saturations = dict.fromkeys(self.saturations, 0.0)
-        if not is_ready(in_state, self.settings):
-            return
-        decision = choose(
-            self.pad,
-            self.events_for(self.state),
-            self.saturations,
-            state=self.state,
-            rule=self.settings.selection,
-        )
+        waiting_for = self._handover_in_progress(now)
+        if waiting_for is not None:
+            decision = waiting_for_handover(state, waiting_for)
+        elif not is_ready(in_state, self.settings):
+            decision = not_ready(state, in_state, self.settings)
+        else:
+            decision = choose(
+                self.pad, self.events_for(state), self.saturations, state=state, rule=self.settings.selection
+            )
+        self._publish(decision, state)
+        if decision.chosen is not None:
+            self._send(decision.chosen, now)
+
+    def _publish(self, decision: Decision, state: str) -> None:
+        """Publish every decision; log choices and changed reasons at INFO, repeated ones at DEBUG."""
         self.last_decision = decision
-        if decision.candidates:
-            self._decisions.publish(String(data=decision_json(decision, self.state)))
-        if decision.chosen is None:
-            log.debug("motivator in %s chose nothing: %s", self.state, decision.reason)
+        self._decisions.publish(String(data=decision_json(decision, state)))
+        if decision.chosen is not None:
+            log.info("motivator chose %s in %s: %s", decision.chosen.event, state, decision.reason)
+            self._last_logged = None
             return
-        chosen = decision.chosen
-        log.info("motivator chose %s in %s: %s", chosen.event, self.state, decision.reason)
+        key = (decision.status, state)
+        level = logging.DEBUG if key == self._last_logged else logging.INFO
+        self._last_logged = key
+        log.log(level, "motivator chose nothing in %s: %s", state, decision.reason)
+
+    def _send(self, chosen: MotivationalEvent, now: float) -> None:
         self.chosen[chosen.event] += 1
+        self._handover = _Handover(chosen.event, self.node.name, now)
         self._events.publish(String(data=chosen.event))
         self._feedback.publish(
             EmotionalFeedback(chosen.reward_pleasure, chosen.reward_arousal, chosen.reward_dominance)
         )
         self.saturations = apply_choice(self.saturations, chosen, self.store.list_events(), self.settings)
         self.store.save_saturations(self.saturations)
-        self._awaiting_handover_until = now + HANDOVER_PATIENCE

@@ -5,7 +5,8 @@ and priority p_i = 1 - sigma_i^3. A motivational event promises a PAD reward;
 on the drive scale that is a change d_i = reward_i / 2, so the event's reward is
 R = sum_i p_i * d_i. Each event also carries a social saturation sigma_e in
 [0, 1] that rises when it is chosen and falls otherwise; its cost is
-c_e = cbrt(sigma_e) * sum_i d_i. Only events with R > c_e are eligible.
+c_e = cbrt(sigma_e) * sum_i d_i. Only events with R > c_e and R > 0 are
+eligible (a negative reward has a negative cost, which must not make it pay).
 
 No I/O, no clocks: the caller passes the current PAD point, the saturations and
 elapsed seconds, and publishes whatever :func:`choose` decides.
@@ -24,18 +25,23 @@ from cyborg.emotion.model import PAD
 
 
 class SelectionRule(enum.StrEnum):
-    """Which eligible event wins."""
+    """Which eligible event (reward > cost, reward > 0) wins; ties go to the first name."""
 
-    NET = "net"
-    """Largest reward - cost: a just-used event loses to a fresh one (questions rotate)."""
     REWARD = "reward"
-    """Largest reward alone (eq. 2.2 read literally): an event repeats until its cost catches up."""
+    """Largest reward (thesis 2.6, 6.3, 8.3; the default): an event is chosen again while it stays
+    eligible, so its ``event_cost`` must push its cost above its reward for it to make way."""
+    NET = "net"
+    """Largest reward - cost: a just-used event loses to a fresh one even at small costs."""
 
 
 class DecisionStatus(enum.StrEnum):
+    """What came of one decision; every status but ``chosen`` means nothing was sent."""
+
     CHOSEN = "chosen"
     NO_EVENTS = "no_events"
     NOT_WORTH_IT = "not_worth_it"
+    NOT_READY = "not_ready"
+    HANDOVER = "handover"
 
 
 class MotivationalEvent(BaseModel):
@@ -44,7 +50,10 @@ class MotivationalEvent(BaseModel):
     ``event_cost`` is the amount added to this event's social saturation each
     time the motivator chooses it (the spec's add_event argument of the same
     name; 0.33 in the reference system, so about three uses in a row saturate
-    it). ``None`` means "use ``MotivatorSettings.saturation_increment``".
+    it). ``None`` means "use ``MotivatorSettings.saturation_increment``". With the
+    default selection rule an event is chosen again while it stays eligible; to
+    give way after one use its saturation must pass (R / sum d)^3, about 0.67 at a
+    neutral mood, so an event that must not repeat needs an ``event_cost`` near 1.
     """
 
     model_config = ConfigDict(extra="forbid", frozen=True)
@@ -91,7 +100,10 @@ class MotivatorSettings(BaseModel):
     idle_reset_seconds: float | None = Field(
         None, gt=0.0, description="after this long in one state all saturations reset to 0"
     )
-    selection: SelectionRule = SelectionRule.NET
+    selection: SelectionRule = Field(
+        SelectionRule.REWARD,
+        description="reward: the largest reward wins (thesis); net: the largest reward - cost wins",
+    )
     events: list[MotivationalEvent] = Field(default_factory=list)
 
     @model_validator(mode="after")
@@ -164,8 +176,11 @@ def event_cost(saturation: float, event: MotivationalEvent) -> float:
 def weigh(pad: PAD, event: MotivationalEvent, saturation: float) -> Candidate:
     reward = event_reward(pad, event)
     cost = event_cost(saturation, event)
-    eligible = reward > cost
-    verdict = "reward > cost" if eligible else "reward <= cost"
+    eligible = reward > max(cost, 0.0)
+    if reward <= 0.0:
+        verdict = "reward <= 0: it would not make the Cyborg happier"
+    else:
+        verdict = "reward > cost" if eligible else "reward <= cost"
     return Candidate(
         event=event,
         reward=reward,
@@ -183,9 +198,9 @@ def choose(
     saturations: Mapping[str, float],
     *,
     state: str | None = None,
-    rule: SelectionRule = SelectionRule.NET,
+    rule: SelectionRule = SelectionRule.REWARD,
 ) -> Decision:
-    """Pick the eligible event (reward > cost) that ``rule`` ranks highest.
+    """Pick the eligible event (reward > cost, reward > 0) that ``rule`` ranks highest.
 
     Saturations are keyed by event name (a missing name counts as 0). When
     ``state`` is given, events of other states are ignored. Ties are broken by
@@ -203,7 +218,7 @@ def choose(
             DecisionStatus.NOT_WORTH_IT,
             None,
             candidates,
-            f"all candidates' reward <= cost in {where}: {details}",
+            f"no candidate's reward exceeds its cost and 0 in {where}: {details}",
         )
 
     def rank(c: Candidate) -> tuple[float, str]:
@@ -212,6 +227,27 @@ def choose(
 
     best = min(eligible, key=rank)
     return Decision(DecisionStatus.CHOSEN, best.event, candidates, best.reason)
+
+
+def not_ready(state: str, seconds_in_state: float, settings: MotivatorSettings) -> Decision:
+    """The decision while the controller has not been ``min_seconds_in_state`` in ``state``."""
+    return Decision(
+        DecisionStatus.NOT_READY,
+        None,
+        (),
+        f"{seconds_in_state:.1f} s of {settings.min_seconds_in_state:g} s in state {state!r}: "
+        "waiting before choosing (min_seconds_in_state)",
+    )
+
+
+def waiting_for_handover(state: str, what: str) -> Decision:
+    """The decision while a handover is in progress: an event now could reach the next state."""
+    return Decision(
+        DecisionStatus.HANDOVER,
+        None,
+        (),
+        f"a handover from state {state!r} is in progress ({what}): waiting for the state change",
+    )
 
 
 def apply_choice(
