@@ -421,13 +421,16 @@ def test_motivator_decisions_show_reward_cost_and_the_choice(browser: Browser, s
                     "type": "motivator",
                     "event": None,
                     "candidates": [],
-                    "reason": f"{t - 50:.1f} s of 10 s in state 'idle': waiting before choosing",
+                    "reason": f"{t - 50:.1f} s of 10 s in state 'lobby': waiting before choosing",
                 },
             )
-        waiting = page.locator('#log li[data-type="motivator"][data-chosen="no"]')
+        # (the page's history holds the live robot's own decisions too: count only these)
+        waiting = page.locator('#log li[data-type="motivator"][data-chosen="no"]').filter(
+            has_text="in state 'lobby': waiting"
+        )
         expect(waiting).to_have_count(1)  # three alike: one row that counts them
         expect(waiting.locator(".line")).to_have_text(
-            "nothing chosen: 6.0 s of 10 s in state 'idle': waiting before choosing"
+            "nothing chosen: 6.0 s of 10 s in state 'lobby': waiting before choosing"
         )
         expect(waiting.locator(".repeats")).to_have_text("\u00d73")
         fake.send(page, {"seq": seq + 4, "t": 58.0, "type": "motivator", "event": None, "reason": ""})
@@ -439,14 +442,14 @@ def test_motivator_decisions_show_reward_cost_and_the_choice(browser: Browser, s
                 "type": "motivator",
                 "event": None,
                 "candidates": [candidates[2]],
-                "reason": "all candidates' reward <= cost in state 'idle'",
+                "reason": "all candidates' reward <= cost in state 'lobby'",
             },
         )
         lines = page.locator('#log li[data-type="motivator"] .line').all_inner_texts()
         assert lines[:3] == [
-            "nothing chosen: all candidates' reward <= cost in state 'idle'",
+            "nothing chosen: all candidates' reward <= cost in state 'lobby'",
             "nothing chosen: no reason given",
-            "nothing chosen: 6.0 s of 10 s in state 'idle': waiting before choosing",
+            "nothing chosen: 6.0 s of 10 s in state 'lobby': waiting before choosing",
         ], lines
         rule = page.request.get(sim + "/api/health").json()["motivator"]["selection"]
         latest = page.locator(f'#log li[data-seq="{seq + 5}"]')

@@ -21,7 +21,7 @@ from cyborg.emotion.store import ControllerStore
 from cyborg.emotion.system import EmotionSystem
 from cyborg.errors import ConfigError
 from cyborg.modules.gatekeeper import Gatekeeper
-from cyborg.motivator.component import Motivator
+from cyborg.motivator.component import Motivator, controller_busy
 from cyborg.sim.kinds import MODULE_KINDS, parse_module_settings
 from cyborg.transport.base import Transport
 
@@ -72,7 +72,13 @@ def build_part(name: str, config: LoadedConfig, transport: Transport, context: N
             store.add_event(entry)
         controller = Controller(transport.node(CONTROLLER), config.machine)
         emotion = EmotionSystem(transport.node("cyborg_emotion"), model.emotion, store)
-        motivator = Motivator(transport.node("cyborg_motivator"), model.motivator, config.machine, store)
+        motivator = Motivator(
+            transport.node("cyborg_motivator"),
+            model.motivator,
+            config.machine,
+            store,
+            controller_busy=controller_busy(controller),
+        )
         return Part(name, [controller, emotion, motivator], controller=controller)
     if name in model.modules:
         kind, settings = parse_module_settings(name, model.modules[name], MODULE_KINDS, config.source)

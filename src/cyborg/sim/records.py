@@ -110,4 +110,6 @@ class RecordStream:
             event=decision.get("event"),
             candidates=decision.get("candidates", []),
             reason=decision.get("reason", ""),
+            status=decision.get("status"),
+            state=decision.get("state"),
         )

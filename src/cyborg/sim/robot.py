@@ -19,7 +19,7 @@ from cyborg.controller.runtime import Controller
 from cyborg.emotion.store import ControllerStore
 from cyborg.emotion.system import EmotionSystem
 from cyborg.modules.gatekeeper import Gatekeeper
-from cyborg.motivator.component import Motivator
+from cyborg.motivator.component import Motivator, controller_busy
 from cyborg.sim.kinds import MODULE_KINDS, ModuleKind, parse_module_settings
 from cyborg.transport.base import Transport
 
@@ -77,7 +77,13 @@ def build_robot(
         store.add_event(entry)  # the YAML is the source; entries added to the database stay too
     controller = Controller(transport.node("cyborg_controller"), config.machine)
     emotion = EmotionSystem(transport.node("cyborg_emotion"), settings.emotion, store)
-    motivator = Motivator(transport.node("cyborg_motivator"), settings.motivator, config.machine, store)
+    motivator = Motivator(
+        transport.node("cyborg_motivator"),
+        settings.motivator,
+        config.machine,
+        store,
+        controller_busy=controller_busy(controller),
+    )
     robot = Robot(
         transport=transport,
         config=config,

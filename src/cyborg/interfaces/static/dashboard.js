@@ -821,7 +821,7 @@
   const isIdleDecision = (r) => r.type === "motivator" && !r.event;
   const reasonKey = (r) => String(r.reason || "").replace(/-?\d+(\.\d+)?/g, "#");
 
-  // The rule the motivator ranks eligible candidates (reward > cost) by: the record's, else the config's.
+  // The rule the motivator ranks eligible candidates (reward > cost and > 0) by: the record's, else the config's.
   function motivatorRule(r) {
     return r.rule || r.selection || (dash.health && dash.health.motivator && dash.health.motivator.selection) || null;
   }
@@ -846,10 +846,10 @@
     const candidates = [...(Array.isArray(r.candidates) ? r.candidates : [])];
     candidates.sort((x, y) => (y.event === r.event) - (x.event === r.event) || (Number(y[key]) || 0) - (Number(x[key]) || 0));
     const list = el("div", "cands");
-    const heading = el("span", "rule", rule ? `by ${rule}, among reward > cost:` : "candidates:");
+    const heading = el("span", "rule", rule ? `by ${rule}, among reward > cost, > 0:` : "candidates:");
     heading.title = rule === "net"
-      ? "the eligible candidate (reward > cost) with the largest reward - cost wins"
-      : rule ? `the eligible candidate (reward > cost) with the largest ${rule} wins` : "";
+      ? "the eligible candidate (reward > cost and > 0) with the largest reward - cost wins"
+      : rule ? `the eligible candidate (reward > cost and > 0) with the largest ${rule} wins` : "";
     list.append(heading);
     for (const c of candidates) {
       const chosen = r.event != null && c.event === r.event;
