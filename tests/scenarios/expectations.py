@@ -89,7 +89,9 @@ def check_scenario_a(records: list[Record]) -> None:
     }
     greeted = next(r["t"] for r in records if r["type"] == "heard" and r["text"] == "hello")
     before_user = [
-        s for s, r in zip(states, [r for r in records if r["type"] == "state"], strict=True) if r["t"] < greeted
+        s
+        for s, r in zip(states, [r for r in records if r["type"] == "state"], strict=True)
+        if r["t"] < greeted
     ]
     # observation 1 and 2: it wanders on its own, then plays music
     assert contains_in_order(
