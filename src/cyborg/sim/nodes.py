@@ -17,12 +17,10 @@ from typing import Any
 
 from cyborg.controller.config import LoadedConfig
 from cyborg.controller.runtime import Controller
-from cyborg.emotion.store import ControllerStore
-from cyborg.emotion.system import EmotionSystem
 from cyborg.errors import ConfigError
 from cyborg.modules.gatekeeper import Gatekeeper
-from cyborg.motivator.component import Motivator, controller_busy
 from cyborg.sim.kinds import MODULE_KINDS, parse_module_settings
+from cyborg.sim.robot import build_controller
 from cyborg.transport.base import Transport
 
 log = logging.getLogger(__name__)
@@ -66,19 +64,7 @@ def build_part(name: str, config: LoadedConfig, transport: Transport, context: N
     """Build the components of part ``name`` on ``transport`` (not started)."""
     model = config.model
     if name == CONTROLLER:
-        context.data_dir.mkdir(parents=True, exist_ok=True)
-        store = ControllerStore(context.data_dir / "controller.db", seed_events=model.motivator.events)
-        for entry in model.motivator.events:
-            store.add_event(entry)
-        controller = Controller(transport.node(CONTROLLER), config.machine)
-        emotion = EmotionSystem(transport.node("cyborg_emotion"), model.emotion, store)
-        motivator = Motivator(
-            transport.node("cyborg_motivator"),
-            model.motivator,
-            config.machine,
-            store,
-            controller_busy=controller_busy(controller),
-        )
+        _, controller, emotion, motivator = build_controller(config, transport, context.data_dir)
         return Part(name, [controller, emotion, motivator], controller=controller)
     if name in model.modules:
         kind, settings = parse_module_settings(name, model.modules[name], MODULE_KINDS, config.source)

@@ -56,20 +56,10 @@ class Robot:
         self.controller.start()
 
 
-def build_robot(
-    config: LoadedConfig,
-    transport: Transport,
-    *,
-    data_dir: Path,
-    rng: random.Random | None = None,
-    map_path: Path | None = None,
-    kinds: dict[str, ModuleKind] | None = None,
-) -> Robot:
-    """Create the controller (state machine, emotion system, motivator) and the configured modules.
-
-    ``data_dir`` holds the databases (created on first use). Nothing runs until ``start()``.
-    """
-    factories = {**MODULE_KINDS, **(kinds or {})}
+def build_controller(
+    config: LoadedConfig, transport: Transport, data_dir: Path
+) -> tuple[ControllerStore, Controller, EmotionSystem, Motivator]:
+    """The thesis's ``cyborg_controller``: state machine, emotion system and motivator, with their store."""
     data_dir.mkdir(parents=True, exist_ok=True)
     settings = config.model
     store = ControllerStore(data_dir / "controller.db", seed_events=settings.motivator.events)
@@ -84,6 +74,25 @@ def build_robot(
         store,
         controller_busy=controller_busy(controller),
     )
+    return store, controller, emotion, motivator
+
+
+def build_robot(
+    config: LoadedConfig,
+    transport: Transport,
+    *,
+    data_dir: Path,
+    rng: random.Random | None = None,
+    map_path: Path | None = None,
+    kinds: dict[str, ModuleKind] | None = None,
+) -> Robot:
+    """Create the controller (state machine, emotion system, motivator) and the configured modules.
+
+    ``data_dir`` holds the databases (created on first use). Nothing runs until ``start()``.
+    """
+    factories = {**MODULE_KINDS, **(kinds or {})}
+    settings = config.model
+    store, controller, emotion, motivator = build_controller(config, transport, data_dir)
     robot = Robot(
         transport=transport,
         config=config,
