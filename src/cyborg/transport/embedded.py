@@ -82,6 +82,28 @@ class EmbeddedTransport(Transport):
         self._params: dict[str, Any] = {}
         self._nodes: dict[str, EmbeddedNode] = {}
         self._goal_ids = itertools.count(1)
+        self._offer_waiters: set[asyncio.Future[None]] = set()  # woken when a service or action appears
+
+    async def _wait_for_offer(self, is_offered: Callable[[], bool], timeout: float) -> bool:
+        """Wait until ``is_offered()`` or ``timeout`` clock seconds pass; no polling."""
+        loop = self.clock.loop
+        deadline = loop.time() + timeout
+        while not is_offered():
+            remaining = deadline - loop.time()
+            if remaining <= 0:
+                return False
+            offered = loop.create_future()
+            self._offer_waiters.add(offered)
+            try:
+                await asyncio.wait({offered}, timeout=remaining)
+            finally:
+                self._offer_waiters.discard(offered)
+        return True
+
+    def _offers_changed(self) -> None:
+        for waiter in list(self._offer_waiters):
+            if not waiter.done():
+                waiter.set_result(None)
 
     # --- nodes ---------------------------------------------------------------
 
@@ -209,6 +231,7 @@ class EmbeddedNode(Node):
             )
         server: _EmbeddedServiceServer[Req, Resp] = _EmbeddedServiceServer(self, full, srv_type, handler)
         self.transport._services[full] = server
+        self.transport._offers_changed()
         self._services.append(server)
         return server
 
@@ -232,6 +255,7 @@ class EmbeddedNode(Node):
         server = _EmbeddedActionServer(self, full, action_type, on_goal, on_cancel)
         self.transport._action_servers[full] = server
         self._action_servers.append(server)
+        self.transport._offers_changed()
         return server
 
     def action_client(self, name: str, action_type: ActionType[G, R, F]) -> ActionClient[G, R, F]:
@@ -351,12 +375,7 @@ class _EmbeddedServiceProxy(ServiceProxy[Req, Resp]):
         return self._server() is not None
 
     async def wait_for_service(self, timeout: float) -> bool:
-        deadline = self._node.clock.monotonic() + timeout
-        while not self.available():
-            if self._node.clock.monotonic() >= deadline:
-                return False
-            await self._node.clock.sleep(min(0.01, timeout))
-        return True
+        return await self._node.transport._wait_for_offer(self.available, timeout)
 
     async def call(self, request: Req | None = None, *, timeout: float = 5.0) -> Resp:
         server = self._server()
@@ -629,14 +648,7 @@ class _EmbeddedActionClient(ActionClient[G, R, F]):
         return self._server() is not None
 
     async def wait_for_server(self, timeout: float) -> bool:
-        clock = self._node.clock
-        deadline = clock.monotonic() + timeout
-        while not self.server_available():
-            remaining = deadline - clock.monotonic()
-            if remaining <= 0:
-                return False
-            await clock.sleep(min(0.05, remaining))
-        return True
+        return await self._node.transport._wait_for_offer(self.server_available, timeout)
 
     def send_goal(
         self,
