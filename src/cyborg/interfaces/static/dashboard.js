@@ -335,8 +335,9 @@
       events_received: "events", events_invalid: "invalid", events_overflow: "overflow",
       handovers: "handovers", preempt_timeouts: "preempt timeouts",
       connect_failures: "connect failures", succeeded_fallbacks: "fallbacks",
+      retries_delayed: "retries paused",
     };
-    const bad = new Set(["events_overflow", "preempt_timeouts", "connect_failures"]);
+    const bad = new Set(["events_overflow", "preempt_timeouts", "connect_failures", "retries_delayed"]);
     for (const [key, value] of Object.entries(health.stats)) {
       const chip = el("span", `stat${bad.has(key) && value ? " bad" : ""}`, `${labels[key] || key} `);
       chip.append(el("b", "", String(value)));
