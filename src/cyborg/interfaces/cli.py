@@ -238,7 +238,7 @@ def _sim_over_ros(
     transcript_path: Path | None,
     map_path: Path | None,
 ) -> None:
-    from cyborg.interfaces.ros_commands import all_parts, launch, run_scenario_ros
+    from cyborg.interfaces.ros_launch import all_parts, launch, run_scenario_ros
     from cyborg.sim.runner import default_data_dir
 
     factor = _ros_speed(speed)
@@ -446,7 +446,8 @@ def launch_command(
     With --speed N every node runs in virtual time at N times real time from one shared origin,
     /use_sim_time is set and the simulated base publishes /clock.
     """
-    from cyborg.interfaces.ros_commands import all_parts, launch, parse_start, roslaunch_xml
+    from cyborg.interfaces.ros_commands import parse_start
+    from cyborg.interfaces.ros_launch import all_parts, launch, roslaunch_xml
     from cyborg.sim.runner import default_data_dir
 
     if speed is not None and speed <= 0:

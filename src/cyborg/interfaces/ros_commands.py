@@ -1,4 +1,4 @@
-"""``cyborg node NAME``, ``cyborg launch`` and ``cyborg sim --ros``: the robot as ROS 1 nodes.
+"""``cyborg node NAME``: one part of the robot as a ROS 1 node, and what launches share with it.
 
 Needs ROS 1 (scripts/install-ros) and a master (``roscore``; ``cyborg launch`` starts one when
 none answers at ``ROS_MASTER_URI``).
@@ -26,16 +26,10 @@ import math
 import os
 import random
 import signal
-import subprocess
-import sys
-import tempfile
 import time
-import urllib.parse
-import uuid
-import xml.sax.saxutils
 import xmlrpc.client
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Sequence
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import IO, Any
@@ -44,8 +38,7 @@ import click
 
 from cyborg.controller.config import LoadedConfig
 from cyborg.errors import CyborgError
-from cyborg.sim.nodes import API, CONTROLLER, NodeContext, Part, build_part, part_names
-from cyborg.sim.script import Script
+from cyborg.sim.nodes import API, CONTROLLER, NodeContext, Part, build_part
 from cyborg.transport.base import Node, Publisher
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, Clock, RealClock, VirtualClock
 from cyborg.transport.messages import Clock as ClockMessage
@@ -253,7 +246,7 @@ def run_node(
     if name == SCENARIO:
         if scenario is None:
             raise CyborgError(f"{SCENARIO} plays a script; fix: give it --script FILE")
-        driver = _scenario_driver(transport.node(SCENARIO), scenario)
+        driver = _ScenarioNode(transport.node(SCENARIO), scenario)
         part = Part(name, [driver])
     else:
         part = build_part(name, config, transport, context)
@@ -366,301 +359,3 @@ class _ScenarioNode:
         finally:
             if self._out is not None:
                 self._out.close()
-
-
-def _scenario_driver(node: Node, files: ScenarioFiles) -> _ScenarioNode:
-    return _ScenarioNode(node, files)
-
-
-# --- a whole robot ------------------------------------------------------------------------
-
-
-def start_master(port: int, log_dir: Path) -> subprocess.Popen[bytes]:
-    log_dir.mkdir(parents=True, exist_ok=True)
-    env = {**os.environ, "ROS_HOME": str(log_dir)}
-    process = subprocess.Popen(
-        ["roscore", "-p", str(port)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env
-    )
-    uri = f"http://localhost:{port}"
-    deadline = time.monotonic() + 20
-    while not master_running(uri):
-        if process.poll() is not None or time.monotonic() > deadline:
-            process.send_signal(signal.SIGINT)
-            raise CyborgError("roscore did not start; fix: check that ROS is installed (scripts/install-ros)")
-        time.sleep(0.1)
-    return process
-
-
-@dataclass
-class Launch:
-    """A master if none runs, then every part as its own ``cyborg node`` process.
-
-    With ``speed``: /use_sim_time is set (and put back afterwards), the parts share one origin
-    of virtual time (fixed once all are ready) and the clock publisher starts first.
-    """
-
-    config_path: Path
-    config: LoadedConfig
-    parts: list[str]
-    data_dir: Path
-    map_path: Path | None = None
-    port: int = 8642
-    echo: bool = True
-    speed: float | None = None
-    start: datetime = DEFAULT_VIRTUAL_START
-    seed: int = 0
-    extra_args: dict[str, list[str]] = field(default_factory=dict)
-    say: Callable[[str], None] = click.echo
-    master: subprocess.Popen[bytes] | None = None
-    processes: dict[str, subprocess.Popen[bytes]] = field(default_factory=dict)
-    _namespace: str | None = None
-    _saved_sim_time: Any = None
-    _touched_sim_time: bool = False
-
-    def command(self, name: str, clock_owner: str | None) -> list[str]:
-        command = [
-            sys.executable,
-            "-m",
-            "cyborg.interfaces.cli",
-            "node",
-            name,
-            "--config",
-            str(self.config_path),
-            "--db",
-            str(self.data_dir),
-            "--seed",
-            str(self.seed),
-        ]
-        if self.map_path is not None:
-            command += ["--map", str(self.map_path)]
-        if name == API:
-            command += ["--port", str(self.port)]
-        if self.speed is not None:
-            assert self._namespace is not None
-            command += [
-                "--speed",
-                repr(self.speed),
-                "--epoch",
-                EPOCH_PARAM_PREFIX + self._namespace,
-                "--start",
-                self.start.isoformat(),
-                "--publish-clock" if name == clock_owner else "--no-publish-clock",
-            ]
-        return command + self.extra_args.get(name, [])
-
-    def start_all(self) -> None:
-        require_ros()
-        if not master_running():
-            parsed = urllib.parse.urlparse(master_uri())
-            self.master = start_master(parsed.port or 11311, self.data_dir / "ros")
-            self.say(f"started roscore at {master_uri()}")
-        master = Master()
-        self._saved_sim_time = master.get(USE_SIM_TIME) if master.has(USE_SIM_TIME) else None
-        clock_owner = None
-        if self.speed is not None:
-            self._namespace = f"{SIM_PARAMS}/run_{uuid.uuid4().hex[:12]}"
-            clock_owner = clock_owner_of(self.config, self.parts)
-            self.parts.sort(key=lambda name: name != clock_owner)  # /clock first: the others wait for it
-            master.set(USE_SIM_TIME, True)
-            self._touched_sim_time = True
-        elif self._saved_sim_time:
-            master.set(USE_SIM_TIME, False)  # left over from a simulated run: nodes would wait for /clock
-            self._touched_sim_time = True
-        for name in self.parts:
-            self.processes[name] = subprocess.Popen(
-                self.command(name, clock_owner), stdout=None if self.echo else subprocess.DEVNULL
-            )
-        self.say(f"launched {len(self.processes)} nodes: {', '.join(self.parts)}")
-        if self.speed is not None:
-            self._start_virtual_time(master)
-
-    def _start_virtual_time(self, master: Master) -> None:
-        assert self._namespace is not None
-        deadline = time.monotonic() + READY_TIMEOUT
-        while True:
-            ready = master.get(f"{self._namespace}/ready", {})
-            waiting = [name for name in self.parts if not (isinstance(ready, dict) and ready.get(name))]
-            if not waiting:
-                break
-            self.check_alive()
-            if time.monotonic() > deadline:
-                raise CyborgError(
-                    f"node(s) not ready within {READY_TIMEOUT:.0f} s: {', '.join(waiting)}; "
-                    "fix: check their output above"
-                )
-            time.sleep(0.05)
-        epoch = time.time() + EPOCH_MARGIN
-        master.set(f"{self._namespace}/epoch", epoch)
-        self.say(
-            f"virtual time: {self.start.isoformat()} at speed {self.speed:g}, "
-            f"starting at {datetime.fromtimestamp(epoch, UTC):%H:%M:%S.%f} UTC"
-        )
-
-    def check_alive(self, ignore: Sequence[str] = ()) -> None:
-        failed = [n for n, p in self.processes.items() if n not in ignore and p.poll() is not None]
-        if failed:
-            raise CyborgError(f"node(s) stopped: {', '.join(failed)}; the whole robot is stopped too")
-
-    def wait(self, *, until: str | None = None, timeout: float | None = None) -> int | None:
-        """Until a node stops (an error), node ``until`` ends (its exit code) or ``timeout`` real seconds pass."""
-        deadline = None if timeout is None else time.monotonic() + timeout
-        while True:
-            if until is not None and self.processes[until].poll() is not None:
-                return self.processes[until].returncode
-            self.check_alive(ignore=[until] if until else [])
-            if deadline is not None and time.monotonic() > deadline:
-                return None
-            time.sleep(0.1)
-
-    def stop_all(self) -> None:
-        try:
-            for process in self.processes.values():
-                if process.poll() is None:
-                    process.send_signal(signal.SIGINT)
-            for process in self.processes.values():
-                with contextlib.suppress(subprocess.TimeoutExpired):
-                    process.wait(timeout=10)
-                if process.poll() is None:
-                    process.kill()
-                    process.wait(timeout=5)
-            if self.master is None and master_running():
-                master = Master()
-                if self._namespace is not None:
-                    master.delete(self._namespace)
-                if self._touched_sim_time:
-                    if self._saved_sim_time is None:
-                        master.delete(USE_SIM_TIME)
-                    else:
-                        master.set(USE_SIM_TIME, self._saved_sim_time)
-        finally:
-            if self.master is not None:
-                self.master.send_signal(signal.SIGINT)
-                try:
-                    self.master.wait(timeout=10)
-                except subprocess.TimeoutExpired:
-                    self.master.kill()
-                    self.master.wait(timeout=5)
-
-
-def launch(
-    config_path: Path,
-    config: LoadedConfig,
-    parts: list[str],
-    data_dir: Path,
-    map_path: Path | None,
-    port: int,
-    echo: bool,
-    *,
-    speed: float | None = None,
-    start: datetime = DEFAULT_VIRTUAL_START,
-    duration: float | None = None,
-) -> None:
-    """Start a master if needed, then every part as its own `cyborg node` process, until stopped.
-
-    ``duration``: stop after that many seconds (virtual with a speed).
-    """
-
-    def stop_on_term(signum: int, frame: object) -> None:
-        raise KeyboardInterrupt
-
-    signal.signal(signal.SIGTERM, stop_on_term)  # `kill` and `timeout` stop the nodes too
-    robot = Launch(config_path, config, list(parts), data_dir, map_path, port, echo, speed=speed, start=start)
-    try:
-        robot.start_all()
-        real_duration = None if duration is None else duration / (speed or 1.0)
-        robot.wait(timeout=real_duration)
-    except KeyboardInterrupt:
-        click.echo("stopping")
-    finally:
-        robot.stop_all()
-
-
-def prepare_calendar(config: LoadedConfig, data_dir: Path, map_path: Path | None, script: Script) -> None:
-    """Put a script's calendar entries into the navigation module's database before its node starts."""
-    if not script.calendar:
-        return
-    from cyborg.sim.scenario import add_calendar
-    from cyborg.transport.embedded import EmbeddedTransport
-
-    context = NodeContext(data_dir=data_dir, rng=random.Random(0), map_path=map_path)
-    clock = VirtualClock()
-    transport = EmbeddedTransport(clock)
-    try:
-        for name, raw in config.model.modules.items():
-            if isinstance(raw, dict) and raw.get("kind") == "navigation":
-                build_part(name, config, transport, context)  # what the node will open
-                break
-        add_calendar(context.calendar, script)
-    finally:
-        transport.shutdown()
-        clock.close()
-
-
-def run_scenario_ros(
-    config_path: Path,
-    config: LoadedConfig,
-    script_path: Path,
-    *,
-    transcript_path: Path | None,
-    speed: float,
-    data_dir: Path | None,
-    map_path: Path | None,
-    echo: bool = False,
-    say: Callable[[str], None] = click.echo,
-) -> list[dict[str, Any]]:
-    """Run a scenario over ROS: the robot's nodes (no API) plus ``cyborg_scenario``; return the records."""
-    from cyborg.sim.scenario import check_script, script_start
-    from cyborg.sim.script import load_script
-
-    script = load_script(script_path)
-    check_script(script, config)
-    with contextlib.ExitStack() as stack:
-        if data_dir is None:
-            data_dir = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="cyborg-scenario-")))
-        if transcript_path is None:
-            transcript_path = data_dir / "transcript.jsonl"
-        prepare_calendar(config, data_dir, map_path, script)
-        parts = [name for name in part_names(config) if name != API] + [SCENARIO]
-        robot = Launch(
-            config_path,
-            config,
-            parts,
-            data_dir,
-            map_path,
-            echo=echo,
-            speed=speed,
-            start=script_start(script),
-            seed=script.seed,
-            extra_args={
-                SCENARIO: ["--script", str(script_path.resolve()), "--transcript", str(transcript_path)]
-            },
-            say=say,
-        )
-        try:
-            robot.start_all()
-            code = robot.wait(until=SCENARIO)
-        finally:
-            robot.stop_all()
-        if code != 0:
-            raise CyborgError(f"{SCENARIO} ended with exit code {code}; see its output above")
-        return [json.loads(line) for line in transcript_path.read_text(encoding="utf-8").splitlines()]
-
-
-def roslaunch_xml(config_path: Path, parts: list[str], data_dir: Path) -> str:
-    """A roslaunch file starting the same nodes (for people who prefer roslaunch)."""
-    lines = [
-        "<launch>",
-        "  <!-- written by cyborg launch (write option): one node per part; the roslaunch node name is",
-        "       the part's, since roslaunch renames the node it starts and gatekeepers go by names -->",
-    ]
-    for name in parts:
-        args = xml.sax.saxutils.quoteattr(f"node {name} --config {config_path} --db {data_dir}")
-        lines.append(
-            f'  <node name="{name}" pkg="cyborg_controller" type="cyborg" args={args} required="true" output="screen"/>'
-        )
-    lines.append("</launch>")
-    return "\n".join(lines) + "\n"
-
-
-def all_parts(config: LoadedConfig) -> list[str]:
-    return part_names(config)

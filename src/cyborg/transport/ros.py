@@ -79,6 +79,16 @@ def _ask_for_tcp_nodelay() -> None:
 
 _ask_for_tcp_nodelay()
 
+
+def listed_subscribers(topic: str) -> list[str]:
+    """The nodes the master lists as subscribers of ``topic`` (empty if it does not answer)."""
+    try:
+        _, subscribers, _ = rosgraph.Master(rospy.get_name()).getSystemState()
+    except Exception:
+        return []
+    return [normalize_node_name(n) for name, nodes in subscribers if name == topic for n in nodes]
+
+
 _UNKNOWN = object()
 FRESH_PUBLISHER_WAIT = 1.0  # seconds a new publisher's messages may wait for known subscribers
 SERVER_SILENCE_LIMIT = 1.0  # seconds without a status message before an action server counts as gone
@@ -219,11 +229,7 @@ class RosTransport(Transport):
 
     def subscribers_of(self, topic: str) -> list[str]:
         """The nodes the master lists as subscribers of ``topic`` (empty if it does not answer)."""
-        try:
-            _, subscribers, _ = rosgraph.Master(rospy.get_name()).getSystemState()
-        except Exception:
-            return []
-        return [normalize_node_name(n) for name, nodes in subscribers if name == topic for n in nodes]
+        return listed_subscribers(topic)
 
     def _forget_node(self, node: RosNode) -> None:
         if self._nodes.get(node.name) is node:
@@ -392,12 +398,7 @@ class _RosPublisher(Publisher[M]):
 
     def _missing_subscribers(self) -> bool:
         if self._expected is None:
-            try:
-                _, subscribers, _ = rosgraph.Master(rospy.get_name()).getSystemState()
-            except Exception:
-                self._expected = 0
-            else:
-                self._expected = sum(len(nodes) for topic, nodes in subscribers if topic == self.topic)
+            self._expected = len(listed_subscribers(self.topic))
         return int(self._pub.get_num_connections()) < self._expected
 
     def _flush_when_connected(self) -> None:
