@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Generate the Python modules of this tree's ROS 1 messages without catkin.
 
-Usage:  python ros/generate.py PREFIX [--source DIR]
+Usage:  python ros/generate.py PREFIX [--source DIR] [--flavour thesis|public]
 
 PREFIX gets a layout like a catkin devel space:
 
@@ -16,6 +16,14 @@ action/X.action is expanded into the seven messages XAction, XActionGoal,
 XActionResult, XActionFeedback, XGoal, XResult and XFeedback, as ROS's own
 action generator does, so their MD5 sums match those of the original nodes.
 
+--flavour chooses which definitions of cyborg_controller are generated:
+  thesis  (default) the thesis's, as under ros/cyborg_controller/
+  public  those of the NTNU Cyborg's published cyborg_controller package, which its
+          later modules were built against: the files under flavours/public/<pkg>/
+          replace the same files of <pkg> (StateMachine.action with a fourth goal
+          field `string order`, EmotionalStateService.srv with `string nothing` as
+          its request). A module built against that package then connects unchanged.
+
 Needs Debian's python3-genmsg and python3-genpy (and the .msg definitions of
 std_msgs and actionlib_msgs under /usr/share), so run it with /usr/bin/python3
 or with a venv wired up by scripts/install-ros.  It rewrites only the
@@ -29,6 +37,7 @@ import os
 import shutil
 import sys
 import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 from pathlib import Path
 
 try:
@@ -46,6 +55,13 @@ HERE = Path(__file__).resolve().parent
 # Where Debian installs the definitions of its message packages (std_msgs/msg/Header.msg, ...).
 SYSTEM_SHARE = Path("/usr/share")
 SHIM_MARKER = ".cyborg-generate-stand-in"
+# --flavour NAME: files under SOURCE/flavours/NAME/<pkg>/{msg,srv,action}/ replace those of <pkg>.
+FLAVOURS = {
+    "thesis": "the thesis's definitions (the default)",
+    "public": "the published cyborg_controller package's definitions (goal field 'order', request 'nothing')",
+}
+DEFAULT_FLAVOUR = "thesis"
+KINDS = (("msg", ".msg"), ("srv", ".srv"), ("action", ".action"))
 
 
 def package_name(pkg_dir: Path) -> str:
@@ -91,18 +107,36 @@ def expand_action(name: str, text: str, path: Path) -> dict[str, str]:
     }
 
 
-def stage_share(pkg_dir: Path, share_pkg: Path) -> None:
-    """Copy a package's definitions into PREFIX/share/<pkg>, expanding its actions."""
+def flavour_files(overlay: Path, pkgs: dict[str, Path]) -> dict[str, list[Path]]:
+    """The replacement definitions under a flavour's directory, by package; each must replace a file."""
+    found: dict[str, list[Path]] = {}
+    for kind, ext in KINDS:
+        for f in sorted(overlay.glob(f"*/{kind}/*{ext}")):
+            pkg = f.parent.parent.name
+            if pkg not in pkgs or not (pkgs[pkg] / kind / f.name).is_file():
+                raise SystemExit(
+                    f"error: {f} replaces nothing: there is no {pkg}/{kind}/{f.name} under "
+                    f"{pkgs[pkg].parent if pkg in pkgs else 'the source'}; fix: name a file of a package there"
+                )
+            found.setdefault(pkg, []).append(f)
+    return found
+
+
+def stage_share(pkg_dir: Path, share_pkg: Path, replacements: Sequence[Path] = ()) -> None:
+    """Copy a package's definitions into PREFIX/share/<pkg> (``replacements``: a flavour's
+    files, which take the place of the same-named ones), expanding its actions."""
     if share_pkg.exists():
         shutil.rmtree(share_pkg)
     share_pkg.mkdir(parents=True)
     shutil.copy2(pkg_dir / "package.xml", share_pkg / "package.xml")
-    for kind, ext in (("msg", ".msg"), ("srv", ".srv"), ("action", ".action")):
+    for kind, ext in KINDS:
         files = sorted((pkg_dir / kind).glob("*" + ext)) if (pkg_dir / kind).is_dir() else []
         if files:
             (share_pkg / kind).mkdir(exist_ok=True)
         for f in files:
             shutil.copy2(f, share_pkg / kind / f.name)
+    for f in replacements:
+        shutil.copy2(f, share_pkg / f.parent.name / f.name)
     for action in sorted((share_pkg / "action").glob("*.action")) if (share_pkg / "action").is_dir() else []:
         (share_pkg / "msg").mkdir(exist_ok=True)
         for stem, body in expand_action(action.stem, action.read_text(), action).items():
@@ -162,7 +196,7 @@ def search_path(share: Path, ours: list[str]) -> dict[str, list[str]]:
     return paths
 
 
-def generate(prefix: Path, source: Path) -> list[str]:
+def generate(prefix: Path, source: Path, flavour: str = DEFAULT_FLAVOUR) -> list[str]:
     share = prefix / "share"
     pylib = prefix / "lib" / "python"
     pkgs = {}
@@ -170,9 +204,17 @@ def generate(prefix: Path, source: Path) -> list[str]:
         pkgs[package_name(xml.parent)] = xml.parent
     if not pkgs:
         raise SystemExit(f"error: no */package.xml under {source}")
+    if flavour not in FLAVOURS:
+        raise SystemExit(f"error: unknown flavour {flavour!r}; fix: use one of {', '.join(FLAVOURS)}")
+    replaced: dict[str, list[Path]] = {}
+    if flavour != DEFAULT_FLAVOUR:
+        overlay = source / "flavours" / flavour
+        if not overlay.is_dir():
+            raise SystemExit(f"error: flavour {flavour!r} needs the directory {overlay}, which is missing")
+        replaced = flavour_files(overlay, pkgs)
 
     for name, pkg_dir in pkgs.items():
-        stage_share(pkg_dir, share / name)
+        stage_share(pkg_dir, share / name, replaced.get(name, []))
     shims = stage_system_shims(share, list(pkgs))
     paths = search_path(share, list(pkgs))
 
@@ -205,7 +247,9 @@ def generate(prefix: Path, source: Path) -> list[str]:
             genpy.generate_initpy.write_modules(str(out_pkg / sub))
         # A message-only package: catkin writes an empty top-level __init__.py too.
         (out_pkg / "__init__.py").write_text("")
-        generated.append(f"{name}: {len(msgs)} msg, {len(srvs)} srv")
+        swapped = ", ".join(f"{f.parent.name}/{f.name}" for f in replaced.get(name, []))
+        note = f" ({flavour} flavour: {swapped})" if swapped else ""
+        generated.append(f"{name}: {len(msgs)} msg, {len(srvs)} srv{note}")
     if shims:
         generated.append(f"package.xml stand-ins for Debian's {', '.join(shims)}")
     return generated
@@ -217,9 +261,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--source", type=Path, default=HERE, help="directory holding the ROS packages (default: %(default)s)"
     )
+    parser.add_argument(
+        "--flavour",
+        choices=sorted(FLAVOURS),
+        default=DEFAULT_FLAVOUR,
+        help="which definitions of cyborg_controller: "
+        + "; ".join(f"{k}: {v}" for k, v in FLAVOURS.items())
+        + " (default: %(default)s)",
+    )
     parser.add_argument("-q", "--quiet", action="store_true")
     args = parser.parse_args(argv)
-    done = generate(args.prefix.resolve(), args.source.resolve())
+    done = generate(args.prefix.resolve(), args.source.resolve(), args.flavour)
     if not args.quiet:
         prefix = args.prefix.resolve()
         for line in done:
