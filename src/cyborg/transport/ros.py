@@ -555,6 +555,21 @@ def _action_classes(action_type: ActionType[Any, Any, Any]) -> Any:
     return ros_class(action_type.ros_type)
 
 
+# The published cyborg_controller package (scripts/install-ros --flavour public) has a fourth goal
+# field, ``string order``, which its controller always sets to EXECUTE: a goal sent with those
+# definitions installed carries it, so a module built against that package sees what it expects.
+ORDER_FIELD = "order"
+ORDER_EXECUTE = "EXECUTE"
+
+
+def goal_order(goal_cls: Any, goal_type: type[Message]) -> str | None:
+    """EXECUTE when the installed goal class has a string ``order`` field that ``goal_type`` lacks."""
+    slots = dict(zip(getattr(goal_cls, "__slots__", ()), getattr(goal_cls, "_slot_types", ()), strict=False))
+    if slots.get(ORDER_FIELD) != "string" or ORDER_FIELD in {f.name for f in dataclasses.fields(goal_type)}:
+        return None
+    return ORDER_EXECUTE
+
+
 class _RosServerGoalHandle(ServerGoalHandle[G, R, F]):
     def __init__(self, server: _RosActionServer[G, R, F], ros_handle: Any) -> None:
         self._server = server
@@ -741,6 +756,7 @@ class _RosActionClient(ActionClient[G, R, F]):
         self.transport = transport
         self.action_type = action_type
         self._goal_cls = ros_class(action_type.goal.ros_type)
+        self._order = goal_order(self._goal_cls, action_type.goal)  # the public package's 'order'
         self._client = _WatchedActionClient(name, _action_classes(action_type))
         self._active: set[_RosClientGoalHandle[G, R, F]] = set()
         self._watchdog: asyncio.TimerHandle | None = None
@@ -804,7 +820,10 @@ class _RosActionClient(ActionClient[G, R, F]):
                 handle._update, GoalStatus.LOST, None, f"no action server at {self.name}"
             )
             return handle
-        handle._ros = self._client.send_goal(to_ros(goal, self._goal_cls), transition, feedback)
+        ros_goal = to_ros(goal, self._goal_cls)
+        if self._order is not None:
+            setattr(ros_goal, ORDER_FIELD, self._order)
+        handle._ros = self._client.send_goal(ros_goal, transition, feedback)
         self._active.add(handle)
         self._arm_watchdog()
         return handle
