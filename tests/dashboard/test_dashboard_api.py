@@ -13,6 +13,8 @@ import pytest
 from aiohttp import ClientSession
 
 from cyborg.controller.config import load_config
+from cyborg.emotion.model import EmotionSettings
+from cyborg.emotion.system import EmotionSystem
 from cyborg.interfaces.api import RobotAPI
 from cyborg.interfaces.dashboard import (
     MAP_COLOURS,
@@ -275,8 +277,9 @@ def test_health_shows_the_motivator_rule_and_feedback_ages_where_known(tmp_path:
     serve(tmp_path, None, check)
 
 
-def test_under_ros_the_emotion_switch_is_followed_from_its_topic(tmp_path: Path) -> None:
-    """`cyborg node cyborg_api` has no emotion system in process: it follows emotional_controller."""
+def test_under_ros_the_emotion_switch_is_read_from_the_emotion_systems_parameter(tmp_path: Path) -> None:
+    """`cyborg node cyborg_api` has no emotion system in process: it reads the switch the emotion
+    system keeps in the parameter /cyborg_controller/emotion_enabled (another node's, as under ROS)."""
     config_path = tmp_path / "machine.yaml"
     config_path.write_text(MACHINE)
     config = load_config(config_path)
@@ -301,7 +304,9 @@ def test_under_ros_the_emotion_switch_is_followed_from_its_topic(tmp_path: Path)
                         await clock.sleep(0.02)
                     raise AssertionError(f"emotion_enabled is {health['emotion_enabled']}, not {expected}")
 
-                await enabled(None)  # nothing seen yet: not known (the emotion system keeps its switch)
+                await enabled(None)  # no emotion system has started: not known
+                EmotionSystem(transport.node("cyborg_controller"), EmotionSettings())
+                await enabled(True)  # a fresh start is on
                 switch.publish(String(data="off"))
                 await enabled(False)
                 switch.publish(String(data="louder"))  # not a switch: the emotion system ignores it too

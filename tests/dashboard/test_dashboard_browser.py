@@ -225,9 +225,9 @@ def test_chat_leads_to_speech_in_the_log(page: Page) -> None:
 
 
 def test_emotion_set_and_switch(page: Page, sim: str) -> None:
-    page.select_option("#emotion-select", "happy")
+    page.select_option("#emotion-select", "elated")
     page.click("#emotion-set")
-    expect(page.locator("#emotion-name")).to_have_text("happy")
+    expect(page.locator("#emotion-name")).to_have_text("elated")
     expect(page.locator("#val-p")).to_have_text("+0.50")
     page.locator("#emotion-switch").uncheck()
     expect(page.locator("#emotion-switch-state")).to_have_text("switched off")
@@ -330,7 +330,7 @@ def test_the_emotion_shown_survives_state_changes(page: Page, sim: str) -> None:
     page.request.post(sim + "/api/emotion/switch", data={"on": False})  # no decay or feedback meanwhile
     try:
         loaded_with = page.locator("#emotion-name").inner_text()
-        wanted = "sad" if loaded_with != "sad" else "angry"
+        wanted = "inhibited" if loaded_with != "inhibited" else "angry"
         pleasure = page.request.get(sim + "/api/emotions").json()["prototypes"][wanted][0]
         page.select_option("#emotion-select", wanted)
         page.click("#emotion-set")

@@ -53,7 +53,7 @@ def test_scenario_a1_unconcerned_planner_then_elated_after_120_seconds_of_wander
     assert seen[:3] == ["unconcerned"] * 3
     # wander steps 1-7 cross the neutral gap, step 8 (120 s) is elated
     assert seen[3:10] == [NEUTRAL] * 7
-    assert seen[10] == "happy"
+    assert seen[10] == "elated"
     assert pad.as_tuple() == pytest.approx((0.11, 0.386, 0.198), abs=0.001)
 
 
@@ -64,7 +64,7 @@ def test_scenario_a1_needs_the_hysteresis_to_stay_unconcerned_for_the_planner() 
 
 
 def test_scenario_a3_being_bossed_around_makes_the_elated_cyborg_curious() -> None:
-    seen, _ = labels([COMMANDED, MOVE, MOVE], start=PAD(0.11, 0.386, 0.198), current="happy")
+    seen, _ = labels([COMMANDED, MOVE, MOVE], start=PAD(0.11, 0.386, 0.198), current="elated")
     assert seen == ["curious"] * 3
 
 
@@ -82,4 +82,4 @@ def test_the_table_threshold_of_0_1_would_never_leave_neutral_while_idle() -> No
 def test_a_long_idle_spell_goes_unconcerned_then_sad_then_bored() -> None:
     seen, _ = labels([IDLE] * 12)
     order = [name for i, name in enumerate(seen) if i == 0 or seen[i - 1] != name]
-    assert order == ["unconcerned", "sad", "bored"]
+    assert order == ["unconcerned", "inhibited", "bored"]

@@ -66,8 +66,8 @@ def test_command_tool_drives_a_robot_of_ros_nodes(
     result = tool("status")
     assert "emotion angry (P -0.50 A +0.60 D +0.20)" in result.stdout, result.stdout
 
-    assert tool("emotion", "set", "happy").returncode == 0
-    emotions.wait_for(lambda h: h.message.to_emotional_state == "happy", after=mark, what="happy")
+    assert tool("emotion", "set", "elated").returncode == 0
+    emotions.wait_for(lambda h: h.message.to_emotional_state == "elated", after=mark, what="elated")
 
     heard.wait_connected(0)
     # /text_from_speech needs a listener in the graph: this process's recorder is one

@@ -39,3 +39,22 @@ def test_same_script_same_transcript(tmp_path: Path) -> None:
     (tmp_path / "1").mkdir()
     (tmp_path / "2").mkdir()
     assert run("scenario_d", tmp_path / "1") == run("scenario_d", tmp_path / "2")
+
+
+def test_a_script_run_starts_fresh_whatever_its_data_folder_holds(tmp_path: Path) -> None:
+    """Observation 0 of every scenario: neutral, with the emotion system on (it was left angry and off)."""
+    from cyborg.emotion.model import PAD
+    from cyborg.emotion.store import ControllerStore
+
+    store = ControllerStore(tmp_path / "controller.db")
+    store.save_emotion(PAD(-0.51, 0.59, 0.25), 0.0)
+    store.set_emotion_enabled(False)
+    store.save_saturations({"navigation_emotional": 1.0, "music_play": 1.0})
+    store.close()
+    script = load_script(HERE / "scenario_d.yaml").model_copy(update={"until": 12.0, "steps": []})
+    records = run_scenario(load_config(packaged_config("cyborg.yaml")), script, data_dir=tmp_path)
+    emotions = [r for r in records if r["type"] == "emotion"]
+    assert (emotions[0]["t"], emotions[0]["emotion"], emotions[0]["pleasure"]) == (0.0, "neutral", 0.0)
+    assert emotions[-1]["emotion"] == "unconcerned", "the idle module's boredom counts: the system is on"
+    chosen = [r["event"] for r in records if r["type"] == "motivator" and r["status"] == "chosen"]
+    assert chosen == ["navigation_emotional"], "saturations start at 0 too"

@@ -99,7 +99,7 @@ def test_cli_refuses_events_and_emotions_the_robot_does_not_know(
     result = CliRunner().invoke(cli, ["sim", "--script", str(script), "--speed", "max"])
     assert result.exit_code == 1, result.output
     assert f"typo.yaml: {expected}" in result.output
-    assert "music_play" in result.output or "happy" in result.output  # the fix lists the known names
+    assert "music_play" in result.output or "elated" in result.output  # the fix lists the known names
 
 
 def test_calendar_entry_at_an_unknown_place_names_its_line(tmp_path: Path) -> None:

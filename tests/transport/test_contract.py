@@ -254,12 +254,12 @@ def test_service_call_and_sender(graph: Graph) -> None:
 
     def handler(req: Any, info: MessageInfo) -> EmotionalStateServiceResponse:
         callers.append(info.sender)
-        return EmotionalStateServiceResponse("happy", 0.5, 0.4, 0.2)
+        return EmotionalStateServiceResponse("elated", 0.5, 0.4, 0.2)
 
     server.advertise_service(graph.name("/get"), EmotionalStateService, handler)
     proxy = client.service_proxy(graph.name("/get"), EmotionalStateService)
     answer = graph.run(proxy.call(timeout=graph.timeout(1.0)))
-    assert answer.emotional_state == "happy"  # the PAD values are float32 on the wire
+    assert answer.emotional_state == "elated"  # the PAD values are float32 on the wire
     assert (answer.current_pleasure, answer.current_arousal, answer.current_dominance) == pytest.approx(
         (0.5, 0.4, 0.2), abs=1e-6
     )

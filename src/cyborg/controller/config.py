@@ -40,6 +40,7 @@ from pydantic_core import ErrorDetails, PydanticUndefined
 from cyborg.controller.machine import ABORTED, MachineSpec, StateSpec, Timeouts
 from cyborg.emotion.model import EmotionSettings
 from cyborg.errors import ConfigError
+from cyborg.limits import MAX_YAML_BYTES, MAX_YAML_DEPTH, MAX_YAML_NODES
 from cyborg.motivator.logic import MotivatorSettings
 
 # --- YAML with duplicate-key detection -------------------------------------------
@@ -52,12 +53,27 @@ def load_yaml(text: str, source: str) -> Any:
     whose advice fits where it is (two states of one name, one event twice in a state's
     transitions, one resource granted twice, a section written twice).
     """
+    size = len(text.encode("utf-8", errors="surrogateescape"))
+    if size > MAX_YAML_BYTES:
+        raise ConfigError(
+            f"the file is {size:,} bytes, over the limit of {MAX_YAML_BYTES:,}; fix: check that this is the "
+            "right file, and split a long scenario into several scripts",
+            source=source,
+        )
     loader = yaml.SafeLoader(text)
     loader.name = source  # syntax errors then say 'in "machine.yaml", line 3'
     try:
-        root = loader.get_single_node()
+        try:
+            root = loader.get_single_node()
+        except RecursionError:
+            raise ConfigError(
+                f"the values are nested too deeply (over {MAX_YAML_DEPTH} levels of mappings and lists); "
+                "fix: flatten the structure",
+                source=source,
+            ) from None
         if root is None:
             return None
+        _check_shape(root, source)
         duplicates: list[str] = []
         _find_duplicates(loader, root, [], duplicates, set())
         if duplicates:
@@ -74,6 +90,58 @@ def load_yaml(text: str, source: str) -> Any:
 
 
 _MERGE_TAG = "tag:yaml.org,2002:merge"
+
+
+def _check_shape(root: yaml.Node, source: str) -> None:
+    """Refuse a document that expands to too many values, nests too deeply or refers to itself.
+
+    Aliases (``*name``) repeat a node without copying it, so a few hundred bytes can stand for
+    billions of values ("billion laughs"); the expanded count is summed over the node graph
+    (each node once) before anything is constructed.
+    """
+    expanded: dict[int, int] = {}
+    on_path: set[int] = set()
+    stack: list[tuple[yaml.Node, int, bool]] = [(root, 1, False)]
+    while stack:
+        node, depth, done = stack.pop()
+        key = id(node)
+        if done:
+            on_path.discard(key)
+            total = 1 + sum(expanded[id(child)] for child in _children(node))
+            if total > MAX_YAML_NODES:
+                raise ConfigError(
+                    f"line {node.start_mark.line + 1}: the YAML expands to over {MAX_YAML_NODES:,} values "
+                    "(aliases '*name' repeat what they name); fix: write the values out or use fewer "
+                    "aliases",
+                    source=source,
+                )
+            expanded[key] = total
+            continue
+        if key in expanded:
+            continue
+        if key in on_path:
+            raise ConfigError(
+                f"line {node.start_mark.line + 1}: an alias refers to the mapping or list that contains it, "
+                "which never ends; fix: remove that alias",
+                source=source,
+            )
+        if depth > MAX_YAML_DEPTH:
+            raise ConfigError(
+                f"line {node.start_mark.line + 1}: the values are nested over {MAX_YAML_DEPTH} levels deep; "
+                "fix: flatten the structure",
+                source=source,
+            )
+        on_path.add(key)
+        stack.append((node, depth, True))
+        stack.extend((child, depth + 1, False) for child in _children(node) if id(child) not in expanded)
+
+
+def _children(node: yaml.Node) -> list[yaml.Node]:
+    if isinstance(node, yaml.SequenceNode):
+        return list(node.value)
+    if isinstance(node, yaml.MappingNode):
+        return [part for pair in node.value for part in pair]
+    return []
 
 
 def _find_duplicates(
@@ -253,11 +321,11 @@ _TYPE_FIXES: dict[tuple[str, ...], str] = {
     ("timeouts",): "write timeouts as a mapping, e.g. timeouts: {connect: 2.0, preempt: 2.0}",
     ("emotion",): "write emotion as a mapping of settings, e.g. emotion: {decay_rate: 0.15}",
     ("emotion", "prototypes"): "write prototypes as a mapping name: [pleasure, arousal, dominance], "
-    "e.g. {happy: [0.5, 0.42, 0.23]}",
+    "e.g. {elated: [0.5, 0.42, 0.23]}",
     ("emotion", "prototypes", "*"): "give three numbers in [-1, 1], [pleasure, arousal, dominance], "
-    "e.g. happy: [0.5, 0.42, 0.23]",
+    "e.g. elated: [0.5, 0.42, 0.23]",
     ("emotion", "prototypes", "*", "*"): "give three numbers in [-1, 1], [pleasure, arousal, dominance], "
-    "e.g. happy: [0.5, 0.42, 0.23]",
+    "e.g. elated: [0.5, 0.42, 0.23]",
     ("emotion", "time_decay_half_lives"): "write half-lives as a mapping of seconds, e.g. "
     "{pleasure: 600, arousal: 300}",
     ("motivator",): "write motivator as a mapping of settings, e.g. motivator: {rate_seconds: 2, events: []}",
@@ -474,12 +542,33 @@ def load_config(path: str | Path) -> LoadedConfig:
     """Read, parse and validate a state machine file; raises ConfigError listing every problem."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = read_text_file(path)
     except OSError as exc:
         raise ConfigError(
             f"cannot read the file: {exc.strerror}; fix: check the path", source=str(path)
         ) from exc
     return parse_config(text, source=str(path))
+
+
+def read_text_file(path: Path) -> str:
+    """The UTF-8 text of a YAML file; ConfigError if it is too large or not UTF-8 (OSError passes)."""
+    with path.open("rb") as handle:
+        data = handle.read(MAX_YAML_BYTES + 1)
+    if len(data) > MAX_YAML_BYTES:
+        raise ConfigError(
+            f"the file is over the limit of {MAX_YAML_BYTES:,} bytes; fix: check that this is the right file, "
+            "and split a long scenario into several scripts",
+            source=str(path),
+        )
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data[: exc.start].count(b"\n") + 1
+        raise ConfigError(
+            f"line {line}: the file is not UTF-8 text (byte {data[exc.start]:#04x} at offset {exc.start}); "
+            "fix: save it as UTF-8 in your editor (e.g. `iconv -f latin1 -t utf-8`)",
+            source=str(path),
+        ) from None
 
 
 def parse_config(text: str, source: str = "<config>") -> LoadedConfig:

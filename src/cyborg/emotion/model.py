@@ -16,7 +16,7 @@ import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from cyborg.errors import CyborgError
 
@@ -28,6 +28,10 @@ DIMENSIONS = ("pleasure", "arousal", "dominance")
 
 class InvalidFeedback(CyborgError):
     """A PAD change from a module was NaN, infinite or larger than allowed."""
+
+
+class UnknownEmotion(CyborgError, ValueError):
+    """A typed emotion name is neither an emotion nor an alias of one."""
 
 
 @dataclass(frozen=True)
@@ -59,18 +63,26 @@ class EmotionPrototype:
     pad: PAD
 
 
-# Table 2.2 of the spec (Mehrabian's values), with the names modules key on.
+# Table 2.2 of the spec (Mehrabian's values) under the table's names, which go on every wire.
 TABLE_2_2: dict[str, tuple[float, float, float]] = {
     "angry": (-0.51, 0.59, 0.25),
     "bored": (-0.65, -0.62, -0.33),
     "curious": (0.22, 0.62, -0.10),
     "dignified": (0.55, 0.22, 0.61),
-    "happy": (0.50, 0.42, 0.23),  # "elated" in the table
-    "sad": (-0.54, -0.04, -0.33),  # "inhibited"
-    "surprised": (-0.41, 0.48, -0.33),  # "puzzled"
+    "elated": (0.50, 0.42, 0.23),
+    "inhibited": (-0.54, -0.04, -0.33),
+    "puzzled": (-0.41, 0.48, -0.33),
     "loved": (0.89, 0.54, -0.18),
     "unconcerned": (-0.13, -0.41, 0.08),
 }
+
+TABLE_2_2_ALIASES: dict[str, str] = {
+    "happy": "elated",
+    "sad": "inhibited",
+    "sadness": "inhibited",
+    "surprised": "puzzled",
+}
+"""The table's bracketed words: accepted wherever a person types an emotion, never published."""
 
 
 class HalfLives(BaseModel):
@@ -99,9 +111,19 @@ class EmotionSettings(BaseModel):
         0.05, ge=0.0, description="how much closer a rival prototype must be to take over"
     )
     prototypes: dict[str, tuple[float, float, float]] = Field(default_factory=lambda: dict(TABLE_2_2))
+    aliases: dict[str, str] = Field(
+        default_factory=lambda: dict(TABLE_2_2_ALIASES),
+        description="other words a person may type for an emotion (alias: name)",
+    )
     time_decay_half_lives: HalfLives | None = None
     max_feedback_magnitude: float = Field(
         2.0, gt=0.0, description="largest |change| accepted per dimension in one feedback"
+    )
+    resume_within_seconds: float = Field(
+        300.0,
+        ge=0.0,
+        description="a controller restarted on its own (cyborg node cyborg_controller) resumes the stored "
+        "emotion if it was stored at most this long ago; 0 never resumes. Every fresh start is neutral.",
     )
 
     @field_validator("prototypes")
@@ -110,10 +132,10 @@ class EmotionSettings(BaseModel):
         cls, value: dict[str, tuple[float, float, float]]
     ) -> dict[str, tuple[float, float, float]]:
         if not value:
-            raise ValueError("prototypes is empty: list at least one emotion, e.g. happy: [0.5, 0.42, 0.23]")
+            raise ValueError("prototypes is empty: list at least one emotion, e.g. elated: [0.5, 0.42, 0.23]")
         for name, point in value.items():
             if not name.strip() or name != name.strip():
-                raise ValueError(f"prototype name {name!r} is blank or padded: use e.g. 'happy'")
+                raise ValueError(f"prototype name {name!r} is blank or padded: use e.g. 'elated'")
             if name == NEUTRAL:
                 raise ValueError(
                     f"prototype {NEUTRAL!r} is reserved for 'no emotion within threshold': remove it"
@@ -122,6 +144,44 @@ class EmotionSettings(BaseModel):
                 if not (math.isfinite(x) and -1.0 <= x <= 1.0):
                     raise ValueError(f"prototype {name!r} has {dim} = {x}: PAD values must lie in [-1, 1]")
         return value
+
+    @model_validator(mode="after")
+    def _check_aliases(self) -> EmotionSettings:
+        if "aliases" not in self.model_fields_set:
+            return self  # the table's defaults; those naming no configured prototype are unused
+        for alias, name in self.aliases.items():
+            if name != NEUTRAL and name not in self.prototypes:
+                known = ", ".join([NEUTRAL, *self.prototypes])
+                raise ValueError(f"alias {alias!r} names {name!r}, which is no emotion: use one of {known}")
+            if alias in self.prototypes:
+                raise ValueError(f"alias {alias!r} is also a prototype's name: remove the alias")
+        return self
+
+    def resolve(self, name: str) -> str:
+        """The emotion a typed ``name`` means (case and spaces ignored, aliases followed).
+
+        Raises :class:`UnknownEmotion` listing the names and aliases a person may use.
+        """
+        key = "_".join(name.strip().lower().split())
+        if key not in self.prototypes:
+            key = self.usable_aliases().get(key, key)
+        if key == NEUTRAL or key in self.prototypes:
+            return key
+        aliases = self.usable_aliases()
+        also = f" (or {', '.join(f'{a} for {n}' for a, n in sorted(aliases.items()))})" if aliases else ""
+        raise UnknownEmotion(f"unknown emotion {name!r}; use one of {', '.join(self.known_names())}{also}")
+
+    def known_names(self) -> list[str]:
+        """neutral and every prototype's name, as published."""
+        return [NEUTRAL, *sorted(self.prototypes)]
+
+    def usable_aliases(self) -> dict[str, str]:
+        """The aliases that name a configured emotion and are no emotion's own name."""
+        return {
+            alias: name
+            for alias, name in self.aliases.items()
+            if alias not in self.prototypes and (name == NEUTRAL or name in self.prototypes)
+        }
 
     @property
     def emotion_prototypes(self) -> list[EmotionPrototype]:

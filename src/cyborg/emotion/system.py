@@ -4,8 +4,12 @@ Modules send ΔPAD on ``/cyborg_controller/emotional_feedback``; every update is
 published on ``/cyborg_controller/emotional_state`` and the service
 ``/cyborg_controller/get_emotional_state`` answers the current emotion. The
 command tool can set the emotion by name or by values and switch the system
-on or off (while off, feedback is ignored). The state survives restarts in the
-:class:`ControllerStore`.
+on or off (while off, feedback is ignored).
+
+Every fresh start is neutral with the system on (thesis 8.2). The state is kept
+in the :class:`ControllerStore` so that a controller brought back after a crash
+while the rest of the robot runs on (``resume=True``) can resume it, if it was
+stored within ``resume_within_seconds``.
 """
 
 from __future__ import annotations
@@ -52,7 +56,14 @@ class EmotionStats:
 class EmotionSystem:
     """Holds the PAD point and the named emotion; publishes every change."""
 
-    def __init__(self, node: Node, settings: EmotionSettings, store: ControllerStore | None = None) -> None:
+    def __init__(
+        self,
+        node: Node,
+        settings: EmotionSettings,
+        store: ControllerStore | None = None,
+        *,
+        resume: bool = False,
+    ) -> None:
         self.node = node
         self.settings = settings
         self.store = store
@@ -60,15 +71,20 @@ class EmotionSystem:
         self._prototypes = settings.emotion_prototypes
         self.pad = PAD(0.0, 0.0, 0.0)
         self.enabled = True
+        self.resumed = False
+        """True when this start took over the stored emotion (a restart after a crash)."""
         self._last_decay = node.clock.now()
         if store is not None:
-            stored = store.get_emotion()
-            self.pad, self.enabled = stored.pad, stored.enabled
-            if stored.updated_at is not None and settings.time_decay_half_lives is not None:
-                offline = max(0.0, node.clock.now() - stored.updated_at)
-                self.pad = time_decay(self.pad, offline, settings.time_decay_half_lives)
-                log.info("decayed the emotion for %.0f s the robot was off", offline)
+            self._start_from(store, resume)
         self.emotion = self._name(None)
+        if self.resumed:
+            log.warning(
+                "resumed the stored emotion %s (P %+.2f A %+.2f D %+.2f), emotion system %s",
+                self.emotion,
+                *self.pad.as_tuple(),
+                "on" if self.enabled else "OFF",
+            )
+        self._share_switch()
         self._publisher = node.publisher(topics.EMOTIONAL_STATE, EmotionalState, latch=True)
         node.subscribe(topics.EMOTIONAL_FEEDBACK, EmotionalFeedback, self._on_feedback, queue_size=1000)
         node.subscribe(topics.SET_EMOTIONAL_STATE, String, self._on_set_name)
@@ -78,6 +94,36 @@ class EmotionSystem:
         if settings.time_decay_half_lives is not None:
             node.clock.call_later(TIME_DECAY_TICK, self._tick)
         self._publish(self.emotion)
+
+    def _start_from(self, store: ControllerStore, resume: bool) -> None:
+        """Take over the stored emotion on a resume within the window; otherwise store a neutral start."""
+        stored = store.get_emotion()
+        now = self.node.clock.now()
+        age = None if stored.updated_at is None else now - stored.updated_at
+        window = self.settings.resume_within_seconds
+        if resume and age is not None and 0.0 <= age <= window:
+            self.pad, self.enabled, self.resumed = stored.pad, stored.enabled, True
+            if self.settings.time_decay_half_lives is not None:
+                self.pad = time_decay(self.pad, age, self.settings.time_decay_half_lives)
+            return
+        if not resume:
+            why = "a fresh start"
+        elif window == 0.0:
+            why = "resuming is off (resume_within_seconds: 0)"
+        elif age is None:
+            why = "no emotion was stored"
+        else:
+            why = f"the stored emotion is {age:.0f} s old, more than resume_within_seconds ({window:g} s)"
+        log.info("the emotion system starts neutral and on: %s", why)
+        store.save_emotion(self.pad, now)
+        store.set_emotion_enabled(True)
+
+    def _share_switch(self) -> None:
+        """Keep the on/off switch in a parameter, where status tools over ROS read it."""
+        try:
+            self.node.set_param(topics.EMOTION_ENABLED_PARAM, self.enabled)
+        except Exception as exc:  # a ROS master that does not answer must not stop the switch
+            log.warning("could not set %s: %s", topics.EMOTION_ENABLED_PARAM, exc)
 
     def _name(self, current: str | None) -> str:
         return nearest_emotion(
@@ -127,15 +173,12 @@ class EmotionSystem:
         self._changed()
 
     def set_named(self, name: str) -> None:
-        """Jump to the prototype ``name`` (or the origin for neutral); ValueError if unknown."""
-        name = name.strip().lower()
-        if name == NEUTRAL:
-            self.pad = PAD(0.0, 0.0, 0.0)
-        elif name in self.settings.prototypes:
-            self.pad = PAD.of(self.settings.prototypes[name])
-        else:
-            known = ", ".join([NEUTRAL, *sorted(self.settings.prototypes)])
-            raise ValueError(f"unknown emotion {name!r}; use one of {known}")
+        """Jump to the prototype ``name`` or an alias of it (the origin for neutral).
+
+        Raises :class:`UnknownEmotion` (a ValueError) naming the known names if there is none.
+        """
+        name = self.settings.resolve(name)
+        self.pad = PAD(0.0, 0.0, 0.0) if name == NEUTRAL else PAD.of(self.settings.prototypes[name])
         self._last_decay = self.node.clock.now()
         self._changed()
 
@@ -168,6 +211,7 @@ class EmotionSystem:
         self._last_decay = self.node.clock.now()
         if self.store is not None:
             self.store.set_emotion_enabled(self.enabled)
+        self._share_switch()
         log.info("emotion system switched %s by %s", word, info.sender)
 
     def _on_get(

@@ -46,10 +46,12 @@ class RobotAPI:
         machine: MachineSpec | None = None,
         extra_status: Callable[[], dict[str, Any]] | None = None,
         emotions: dict[str, tuple[float, float, float]] | None = None,
+        emotion_aliases: dict[str, str] | None = None,
     ) -> None:
         self.node = node
         self.machine = machine
         self.emotions = emotions or {}
+        self.emotion_aliases = emotion_aliases or {}
         self._graph_svg: bytes | None = None
         self.extra_status = extra_status
         self.records: deque[Record] = deque(maxlen=RECORD_BUFFER)
@@ -223,7 +225,9 @@ class RobotAPI:
         return web.Response(body=self._graph_svg, content_type="image/svg+xml")
 
     async def get_emotions(self, request: web.Request) -> web.Response:
-        return web.json_response({"prototypes": {k: list(v) for k, v in self.emotions.items()}})
+        return web.json_response(
+            {"prototypes": {k: list(v) for k, v in self.emotions.items()}, "aliases": self.emotion_aliases}
+        )
 
     async def get_openapi(self, request: web.Request) -> web.Response:
         from cyborg.interfaces.openapi import OPENAPI

@@ -360,6 +360,13 @@ _speed_help = "virtual time at this factor of real time (all nodes share one clo
     type=click.Path(path_type=Path),
     help="cyborg_scenario: write records here",
 )
+@click.option(
+    "--fresh",
+    is_flag=True,
+    help="cyborg_controller: start neutral with the emotion system on (as `cyborg launch` does); "
+    "without it a controller restarted after a crash resumes an emotion stored within "
+    "resume_within_seconds",
+)
 def node(
     name: str,
     config_path: Path | None,
@@ -374,6 +381,7 @@ def node(
     publish_clock: bool | None,
     script_path: Path | None,
     transcript_path: Path | None,
+    fresh: bool,
 ) -> None:
     """Run one part of the robot as the ROS 1 node NAME (cyborg_controller, a module, a gatekeeper,
     cyborg_api, or cyborg_scenario with --script)."""
@@ -398,6 +406,7 @@ def node(
             sim_time=sim_time,
             publish_clock_too=publish_clock,
             scenario=scenario,
+            resume=not fresh,
         )
     except CyborgError as exc:
         _fail(exc)

@@ -138,10 +138,13 @@ def link_options(command: Callable[..., None]) -> Callable[..., None]:
 
 
 def format_status(status: dict[str, Any]) -> str:
+    enabled = status.get("emotion_enabled")
+    switch = "unknown" if enabled is None else "on" if enabled else "OFF (feedback is ignored)"
     return (
         f"{status.get('previous_state') or '-'} --{status.get('event') or '-'}--> {status.get('state') or '-'}   "
         f"emotion {status.get('emotion')} (P {status.get('pleasure', 0):+.2f} "
-        f"A {status.get('arousal', 0):+.2f} D {status.get('dominance', 0):+.2f})"
+        f"A {status.get('arousal', 0):+.2f} D {status.get('dominance', 0):+.2f})   "
+        f"emotion system {switch}"
     )
 
 

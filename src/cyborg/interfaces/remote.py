@@ -51,20 +51,18 @@ class ControllerMirror:
 
 
 class EmotionSwitchMirror:
-    """Follows ``emotional_controller``: the last valid "on"/"off" anyone sent the emotion system.
+    """Whether the emotion system is on: the parameter it keeps (``emotion_enabled``).
 
-    ``enabled`` is None until such a message is seen: the topic is not latched and the emotion
-    system keeps its switch across restarts, so before that the API node cannot tell.
+    ``enabled`` is None while no emotion system has set the parameter (none has started yet).
     """
 
     def __init__(self, node: Node) -> None:
-        self.enabled: bool | None = None
-        node.subscribe(topics.EMOTIONAL_CONTROLLER, String, self._on_switch, queue_size=10)
+        self.node = node
 
-    def _on_switch(self, message: String, info: MessageInfo) -> None:
-        word = message.data.strip().lower()
-        if word in ("on", "off"):  # the emotion system ignores anything else too
-            self.enabled = word == "on"
+    @property
+    def enabled(self) -> bool | None:
+        value = self.node.get_param(topics.EMOTION_ENABLED_PARAM, None)
+        return value if isinstance(value, bool) else None
 
 
 class BaseMirror:

@@ -225,8 +225,11 @@ def run_node(
     sim_time: SimTime | None = None,
     publish_clock_too: bool | None = None,
     scenario: ScenarioFiles | None = None,
+    resume: bool = True,
 ) -> None:
     """Run part ``name`` as the ROS node of the same name until SIGINT/SIGTERM.
+
+    ``resume``: the controller may take over a recently stored emotion (see ``build_controller``).
 
     ``publish_clock_too``: publish /clock (with a speed only); None: when the part is a simulated base.
     ``cyborg_scenario`` (with ``scenario``) plays its script and stops at the script's end.
@@ -241,7 +244,7 @@ def run_node(
     sim_time = sim_time or SimTime()
     clock = sim_time.make_clock()
     transport = RosTransport(clock, process_name=name)
-    context = NodeContext(data_dir=data_dir, rng=random.Random(seed), map_path=map_path)
+    context = NodeContext(data_dir=data_dir, rng=random.Random(seed), map_path=map_path, resume=resume)
     driver = None
     if name == SCENARIO:
         if scenario is None:
@@ -286,12 +289,18 @@ def run_node(
             from cyborg.interfaces.remote import remote_robot
 
             api_node = transport.node(API)
-            api = RobotAPI(api_node, machine=config.machine, emotions=dict(config.model.emotion.prototypes))
+            api = RobotAPI(
+                api_node,
+                machine=config.machine,
+                emotions=dict(config.model.emotion.prototypes),
+                emotion_aliases=config.model.emotion.usable_aliases(),
+            )
             has_base = any(
                 isinstance(m, dict) and m.get("kind") == "simulated_base"
                 for m in config.model.modules.values()
             )
             mirror = remote_robot(api_node, config, context.occupancy_map() if has_base else None)
+            api.extra_status = lambda: {"emotion_enabled": mirror.emotion.enabled}
             dashboard.register(api, mirror)  # type: ignore[arg-type]
             url = await api.start(host, port)
             click.echo(f"API: {url}", err=True)

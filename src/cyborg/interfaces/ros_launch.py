@@ -43,7 +43,7 @@ from cyborg.interfaces.ros_commands import (
     master_uri,
     require_ros,
 )
-from cyborg.sim.nodes import API, NodeContext, build_part, part_names
+from cyborg.sim.nodes import API, CONTROLLER, NodeContext, build_part, part_names
 from cyborg.sim.script import Script
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, VirtualClock
 
@@ -108,6 +108,8 @@ class Launch:
             command += ["--map", str(self.map_path)]
         if name == API:
             command += ["--port", str(self.port)]
+        if name == CONTROLLER:
+            command += ["--fresh"]  # a launch is a fresh start: neutral, emotion system on
         if self.speed is not None:
             assert self._namespace is not None
             command += [
@@ -327,7 +329,8 @@ def roslaunch_xml(config_path: Path, parts: list[str], data_dir: Path) -> str:
         "       the part's, since roslaunch renames the node it starts and gatekeepers go by names -->",
     ]
     for name in parts:
-        args = xml.sax.saxutils.quoteattr(f"node {name} --config {config_path} --db {data_dir}")
+        fresh = " --fresh" if name == CONTROLLER else ""
+        args = xml.sax.saxutils.quoteattr(f"node {name} --config {config_path} --db {data_dir}{fresh}")
         lines.append(
             f'  <node name="{name}" pkg="cyborg_controller" type="cyborg" args={args} required="true" output="screen"/>'
         )

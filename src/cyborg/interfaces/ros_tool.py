@@ -117,6 +117,8 @@ class RosLink:
                 arousal=answer.current_arousal,
                 dominance=answer.current_dominance,
             )
+            enabled = self._node.get_param(topics.EMOTION_ENABLED_PARAM, None)
+            status["emotion_enabled"] = enabled if isinstance(enabled, bool) else None
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(changed.wait(), CONNECT_TIMEOUT)  # latched: arrives at once
         finally:

@@ -27,7 +27,11 @@ def serve_api(host: str, port: int, say: Callable[..., Any]) -> Callable[[Transp
             transport.node("cyborg_api"),
             machine=robot.config.machine,
             emotions=dict(robot.config.model.emotion.prototypes),
-            extra_status=lambda: {"gatekeepers": {name: g.report() for name, g in gatekeepers.items()}},
+            emotion_aliases=robot.config.model.emotion.usable_aliases(),
+            extra_status=lambda: {
+                "gatekeepers": {name: g.report() for name, g in gatekeepers.items()},
+                "emotion_enabled": robot.emotion.enabled,
+            },
         )
         for extend in EXTENSIONS:
             extend(api, robot)

@@ -37,6 +37,8 @@ class NodeContext:
     rng: random.Random
     map_path: Path | None = None
     calendar: Callable[[Any], None] | None = None
+    resume: bool = True
+    """The controller takes over an emotion stored recently (``cyborg node`` without ``--fresh``)."""
     _map: Any = field(default=None, repr=False)
 
     def occupancy_map(self) -> Any:
@@ -64,7 +66,9 @@ def build_part(name: str, config: LoadedConfig, transport: Transport, context: N
     """Build the components of part ``name`` on ``transport`` (not started)."""
     model = config.model
     if name == CONTROLLER:
-        _, controller, emotion, motivator = build_controller(config, transport, context.data_dir)
+        _, controller, emotion, motivator = build_controller(
+            config, transport, context.data_dir, resume=context.resume
+        )
         return Part(name, [controller, emotion, motivator], controller=controller)
     if name in model.modules:
         kind, settings = parse_module_settings(name, model.modules[name], MODULE_KINDS, config.source)

@@ -57,16 +57,24 @@ class Robot:
 
 
 def build_controller(
-    config: LoadedConfig, transport: Transport, data_dir: Path
+    config: LoadedConfig, transport: Transport, data_dir: Path, *, resume: bool = False
 ) -> tuple[ControllerStore, Controller, EmotionSystem, Motivator]:
-    """The thesis's ``cyborg_controller``: state machine, emotion system and motivator, with their store."""
+    """The thesis's ``cyborg_controller``: state machine, emotion system and motivator, with their store.
+
+    A fresh start (the default) is neutral with the emotion system on and the motivator's
+    saturations at 0, whatever ``data_dir`` holds. ``resume`` (a controller brought back after
+    a crash while the rest of the robot runs on) takes over the stored emotion, switch and
+    saturations if they were stored within the emotion's ``resume_within_seconds``.
+    """
     data_dir.mkdir(parents=True, exist_ok=True)
     settings = config.model
     store = ControllerStore(data_dir / "controller.db", seed_events=settings.motivator.events)
     for entry in settings.motivator.events:
         store.add_event(entry)  # the YAML is the source; entries added to the database stay too
     controller = Controller(transport.node("cyborg_controller"), config.machine)
-    emotion = EmotionSystem(transport.node("cyborg_emotion"), settings.emotion, store)
+    emotion = EmotionSystem(transport.node("cyborg_emotion"), settings.emotion, store, resume=resume)
+    if not emotion.resumed:
+        store.save_saturations({})
     motivator = Motivator(
         transport.node("cyborg_motivator"),
         settings.motivator,

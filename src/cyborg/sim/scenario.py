@@ -22,7 +22,7 @@ from cyborg.controller.config import LoadedConfig
 from cyborg.errors import ConfigError, CyborgError
 from cyborg.sim.records import Record, RecordStream
 from cyborg.sim.robot import Robot, build_robot
-from cyborg.sim.script import CalendarEntry, Script, Step, check_against
+from cyborg.sim.script import CalendarEntry, Match, Script, Step, check_against
 from cyborg.transport import topics
 from cyborg.transport.base import Node
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, VirtualClock
@@ -33,20 +33,25 @@ log = logging.getLogger(__name__)
 
 
 class ScenarioDriver:
-    """Plays a script's steps through ``node`` and keeps the run's records.
+    """Plays a script's steps through ``node`` and passes the run's records to its listeners.
 
     Works on any transport: in ``cyborg sim --script`` beside an embedded robot, and as the ROS
     node ``cyborg_scenario`` beside a robot of ROS nodes. Times are the node's clock's loop
     time (``at: 300`` fires when it reads 300), so every process must share the clock's origin.
+    ``records`` keeps every record unless ``keep_records`` is false (then memory stays flat
+    however long the script runs: listeners, e.g. a transcript file, see each record once).
     """
 
-    def __init__(self, node: Node, script: Script, *, origin: float = 0.0) -> None:
+    def __init__(self, node: Node, script: Script, *, origin: float = 0.0, keep_records: bool = True) -> None:
         self.node = node
         self.clock = node.clock
         self.script = script
         self.records: list[Record] = []
+        self.keep_records = keep_records
+        self.count = 0
         self.listeners: list[Callable[[Record], None]] = []
-        self._new_record = asyncio.Event()
+        self._waiting_for: Match | None = None  # the 'when' of the step being waited for
+        self._matched = asyncio.Event()
         self.stream = RecordStream(node, origin=origin)
         self.stream.listeners.append(self._on_record)
         self.say = node.publisher(topics.TEXT_FROM_SPEECH, String)
@@ -54,36 +59,43 @@ class ScenarioDriver:
         self.set_emotion = node.publisher(topics.SET_EMOTIONAL_STATE, String)
 
     def _on_record(self, record: Record) -> None:
-        self.records.append(record)
-        self._new_record.set()
+        self.count += 1
+        if self.keep_records:
+            self.records.append(record)
+        if self._waiting_for is not None and self._waiting_for.matches(record):
+            self._matched.set()
         for listener in self.listeners:
             listener(record)
 
-    async def _wait_for(self, step: Step, after: int) -> bool:
-        """Wait until a record after index ``after`` matches ``step.when``; False at the end of the run."""
-        assert step.when is not None
-        while True:
-            if any(step.when.matches(record) for record in self.records[after:]):
-                return True
-            after = len(self.records)
-            remaining = self.script.until - self.clock.monotonic()
-            if remaining <= 0:
-                return False
-            self._new_record.clear()
-            try:
-                await asyncio.wait_for(self._new_record.wait(), remaining)
-            except TimeoutError:
-                return False
+    def _watch(self, step: Step | None) -> None:
+        """From now on, look for records matching ``step.when`` (if it waits for one)."""
+        self._waiting_for = step.when if step is not None else None
+        self._matched.clear()
+
+    async def _wait_for(self) -> bool:
+        """Wait until a record since the previous step's action matched; False at the end of the run."""
+        if self._matched.is_set():
+            return True
+        remaining = self.script.until - self.clock.monotonic()
+        if remaining <= 0:
+            return False
+        try:
+            await asyncio.wait_for(self._matched.wait(), remaining)
+        except TimeoutError:
+            return False
+        return True
 
     async def drive(self) -> None:
         """Play the steps in order (returns after the last one, or when one cannot happen)."""
-        mark = 0
-        for step in self.script.steps:
+        steps = self.script.steps
+        self._watch(steps[0] if steps else None)
+        for index, step in enumerate(steps):
             if step.at is not None:
                 await self.clock.sleep(step.at - self.clock.monotonic())
-            elif not await self._wait_for(step, mark):
+            elif not await self._wait_for():
                 log.warning("line %d: nothing matched %s before the end", step.line, step.when)
                 return
+            self._watch(None)
             await self.clock.sleep(step.delay)
             if step.say is not None:
                 self.say.publish(String(step.say))
@@ -91,7 +103,7 @@ class ScenarioDriver:
                 self.event.publish(String(step.event))
             elif step.emotion is not None:
                 self.set_emotion.publish(String(step.emotion))
-            mark = len(self.records)
+            self._watch(steps[index + 1] if index + 1 < len(steps) else None)
 
     async def run(self) -> list[Record]:
         """Play the script until its ``until`` time; return the records."""
@@ -114,6 +126,7 @@ class ScenarioRun:
         data_dir: Path,
         speed: float | None = None,
         map_path: Path | None = None,
+        keep_records: bool = True,
     ) -> None:
         check_script(script, config)
         self.script = script
@@ -122,7 +135,9 @@ class ScenarioRun:
         self.robot: Robot = build_robot(
             config, self.transport, data_dir=data_dir, rng=random.Random(script.seed), map_path=map_path
         )
-        self.driver = ScenarioDriver(self.transport.node("cyborg_scenario"), script)
+        self.driver = ScenarioDriver(
+            self.transport.node("cyborg_scenario"), script, keep_records=keep_records
+        )
         self.records = self.driver.records
         self.listeners = self.driver.listeners
         self.stream = self.driver.stream
@@ -153,7 +168,7 @@ class ScenarioRun:
 def check_script(script: Script, config: LoadedConfig) -> None:
     """Refuse events and emotions in ``script`` that the robot of ``config`` does not know."""
     events = {event for state in config.machine.states.values() for event in state.transitions}
-    emotions = {"neutral", *config.model.emotion.prototypes}
+    emotions = {"neutral", *config.model.emotion.prototypes, *config.model.emotion.usable_aliases()}
     check_against(script, events, emotions)
 
 
@@ -187,14 +202,29 @@ def run_scenario(
     data_dir: Path | None = None,
     speed: float | None = None,
     map_path: Path | None = None,
+    keep_records: bool = True,
+    on_record: Callable[[Record], None] | None = None,
 ) -> list[Record]:
-    """Run ``script``; write each record to ``transcript`` as a JSON line; return the records."""
+    """Run ``script``; write each record to ``transcript`` as a JSON line; return the records.
+
+    With ``keep_records=False`` the records go only to ``transcript`` and ``on_record`` as they
+    happen and the returned list is empty, so a week-long script runs in flat memory.
+    """
     with tempfile.TemporaryDirectory(prefix="cyborg-scenario-") as scratch:
-        run = ScenarioRun(config, script, data_dir=data_dir or Path(scratch), speed=speed, map_path=map_path)
+        run = ScenarioRun(
+            config,
+            script,
+            data_dir=data_dir or Path(scratch),
+            speed=speed,
+            map_path=map_path,
+            keep_records=keep_records,
+        )
         if transcript is not None:
 
             def write(record: Record) -> None:
                 transcript.write(json.dumps(record) + "\n")
 
             run.listeners.append(write)
+        if on_record is not None:
+            run.listeners.append(on_record)
         return run.run()

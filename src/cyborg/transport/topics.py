@@ -15,6 +15,7 @@ SET_EMOTIONAL_STATE = "/cyborg_controller/set_emotional_state"
 SET_EMOTIONAL_VALUES = "/cyborg_controller/set_emotional_values"
 EMOTIONAL_CONTROLLER = "/cyborg_controller/emotional_controller"
 MOTIVATOR_DECISION = "/cyborg_controller/motivator_decision"
+EMOTION_ENABLED_PARAM = "/cyborg_controller/emotion_enabled"
 
 TEXT_TO_SPEECH = "/text_to_speech"
 TEXT_FROM_SPEECH = "/text_from_speech"

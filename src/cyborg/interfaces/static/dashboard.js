@@ -16,13 +16,13 @@
   const ZOOM_STEP = 1.5; // one click on + or −
   const EMOTION_COLOURS = {
     neutral: "#a0a7b4",
-    happy: "#f5c518",
+    elated: "#f5c518",
     loved: "#ff6fae",
     curious: "#3ec7e0",
     dignified: "#a78bfa",
-    surprised: "#ff9f43",
+    puzzled: "#ff9f43",
     angry: "#e5484d",
-    sad: "#5b7bd5",
+    inhibited: "#5b7bd5",
     bored: "#7d8597",
     unconcerned: "#6cc5b0",
   };
@@ -397,10 +397,10 @@
     const current = { name: r.emotion, p: Number(r.pleasure), a: Number(r.arousal), d: Number(r.dominance) };
     dash.emotion = current;
     const colour = emotionColour(current.name, current.p, current.a);
-    $("top-emotion").textContent = current.name;
+    $("top-emotion").textContent = withAliases(current.name);
     $("top-emotion").style.color = colour;
     const name = $("emotion-name");
-    name.textContent = current.name;
+    name.textContent = withAliases(current.name);
     name.style.borderLeftColor = colour;
     name.style.color = colour;
     for (const [key] of SERIES) {
@@ -548,20 +548,29 @@
     }
   }
 
+  // "elated (happy)": the thesis's name with the words its table gives in brackets (aliases).
+  function withAliases(name) {
+    const aliases = Object.entries(dash.emotionAliases || {}).filter(([, target]) => target === name).map(([alias]) => alias);
+    return aliases.length ? `${name} (${aliases.sort().join(", ")})` : name;
+  }
+
   async function loadEmotions() {
     try {
       const data = await getJSON("/api/emotions");
       dash.prototypes = data.prototypes || {};
+      dash.emotionAliases = data.aliases || {};
     } catch (error) {
       say(`could not read the emotion prototypes: ${error.message}`, true);
     }
     const select = $("emotion-select");
     select.replaceChildren();
     for (const name of ["neutral", ...Object.keys(dash.prototypes).sort()]) {
-      const option = el("option", "", name);
+      const option = el("option", "", withAliases(name));
       option.value = name;
       select.append(option);
     }
+    const e = dash.emotion;  // shown before the aliases were known: show it again with them
+    if (e) applyEmotion({ emotion: e.name, pleasure: e.p, arousal: e.a, dominance: e.d });
     scheduleDraw();
   }
 
