@@ -23,6 +23,7 @@ from cyborg.navigation.behaviour import (
     plan,
     should_stop_wandering,
     talk_kind,
+    trip_goes_on,
 )
 from cyborg.navigation.database import DEFAULT_LOCATIONS, Location
 
@@ -219,6 +220,47 @@ def test_a_requested_place_off_the_loaded_map_is_not_a_target(origin: Origin, em
 def test_asked_where_a_place_off_the_map_is_it_does_not_offer_to_show_it() -> None:
     assert talk_kind("navigation_information", None, asked_on_map=False) is TalkKind.NOT_ON_MAP
     assert talk_kind("navigation_feedback", None, asked_on_map=False) is TalkKind.OPINION
+
+
+@pytest.mark.parametrize("origin", [Origin.COMMAND, Origin.GUIDE])
+@pytest.mark.parametrize("emotion", EMOTIONS)
+def test_a_requested_place_without_a_pose_is_not_a_target(origin: Origin, emotion: str) -> None:
+    """Issue 11.6: a place nobody has placed yet; it is also on no map, but "no pose" is what it says."""
+    chosen = plan(
+        origin,
+        emotion,
+        requested=EL6,
+        scheduled=None,
+        places=[],
+        rng=random.Random(0),
+        off_map={"el6"},
+        no_pose={"el6"},
+    )
+    assert (chosen.kind, chosen.target, chosen.feedback) == (PlanKind.NO_POSE, EL6, (0.0, 0.0, 0.0))
+
+
+def test_asked_where_a_place_without_a_pose_is_it_says_it_does_not_know() -> None:
+    kind = talk_kind("navigation_information", None, asked_on_map=False, asked_has_pose=False)
+    assert kind is TalkKind.NO_POSE
+    opinion = talk_kind("navigation_feedback", None, asked_has_pose=False)
+    assert opinion is TalkKind.OPINION  # it may think something of a place it cannot find
+
+
+@pytest.mark.parametrize(
+    ("event", "previous", "goes_on"),
+    [
+        ("navigation_feedback", "navigation_moving", True),  # asked on the way: answer, then drive on
+        ("navigation_feedback", "conversation", False),
+        ("navigation_feedback", "idle", False),
+        ("succeeded", "navigation_moving", False),  # arrived
+        ("aborted", "navigation_moving", False),  # stuck
+        ("navigation_information", "navigation_moving", False),
+    ],
+)
+def test_a_trip_goes_on_only_after_a_question_asked_on_the_way(
+    event: str, previous: str, goes_on: bool
+) -> None:
+    assert trip_goes_on(event, previous) is goes_on
 
 
 # --- what the talking state says ----------------------------------------------------------

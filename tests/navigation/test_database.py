@@ -60,7 +60,36 @@ def test_new_database_has_the_default_places(db: NavigationDatabase) -> None:
     assert db.get_location("e16").name == "el6"
     assert db.get_location("info").name == "information desk"
     assert db.get_location("entrance2").name == "entrance 2"
-    assert all((loc.x, loc.y) == (0.0, 0.0) for loc in db.list_locations())
+    assert all(loc.position is None for loc in db.list_locations())  # no made-up (0, 0) poses
+
+
+def test_a_fresh_database_has_no_target_until_places_get_a_pose(db: NavigationDatabase) -> None:
+    """Issue 11.6: no map imported yet, "go to the cafeteria" must not mean "go to the map origin"."""
+    assert db.current_map() is None
+    assert db.locations_on_map() == []
+    assert not any(db.is_target(loc) for loc in db.list_locations())
+    assert "'cafeteria' has no pose" in db.no_pose_reason(db.get_location("cafeteria"))
+    assert "cyborg db locations set-pose 'cafeteria' --x X --y Y" in db.no_pose_reason(
+        db.get_location("canteen")
+    )
+    db.set_pose("canteen", 12.0, 3.5)  # by hand, on a base whose map never was imported
+    cafe = db.get_location("cafeteria")
+    assert cafe.position == (12.0, 3.5) and cafe.map == "" and cafe.aliases == ("canteen",)
+    assert [loc.name for loc in db.locations_on_map()] == ["cafeteria"] and db.is_target(cafe)
+    assert db.matcher(on_map=True).names == ["cafeteria"]
+
+
+def test_set_pose_puts_a_place_on_the_map_in_use_and_keeps_the_rest(db: NavigationDatabase) -> None:
+    event = db.add_event(CalendarEvent("el5", at(2024, 3, 20, 15), at(2024, 3, 20, 16)))
+    db.use_map("campus")
+    placed = db.set_pose("el5", 30.0, 43.5, heading=1.5)
+    assert (placed.map, placed.position, placed.heading) == ("campus", (30.0, 43.5), 1.5)
+    assert db.get_location("el5") == placed and db.is_target(placed)
+    assert db.list_events("el5") == [event]
+    assert db.set_pose("el6", 1.0, 2.0, map_name="glassgarden").map == "glassgarden"
+    assert not db.is_target(db.get_location("el6"))  # a pose, but on another map
+    with pytest.raises(DatabaseError, match="unknown location 'gym'"):
+        db.set_pose("gym", 1.0, 2.0)
 
 
 @pytest.mark.parametrize(
@@ -136,6 +165,9 @@ def test_add_update_remove_location(db: NavigationDatabase) -> None:
         (Location("gym", pleasantness=1.5), r"pleasantness=1.5 of 'gym' is outside -1..1"),
         (Location("gym", tolerance=0.0), r"tolerance=0.0 of 'gym' must be > 0"),
         (Location("gym", x=math.nan), r"x=nan of 'gym' is not a finite number"),
+        (Location("gym", x=1.0), r"'gym' has x but no y; give both"),
+        (Location("gym", y=1.0), r"'gym' has y but no x; give both"),
+        (Location("gym", map="campus"), r"'gym' is on map 'campus' but has no x and y"),
     ],
 )
 def test_bad_locations_are_refused(db: NavigationDatabase, location: Location, message: str) -> None:
@@ -514,13 +546,14 @@ def test_the_speech_matcher_of_the_map_finds_the_default_names(db: NavigationDat
 
 def test_only_places_on_the_imported_map_are_on_the_map(db: NavigationDatabase) -> None:
     assert db.current_map() is None
-    assert db.locations_on_map() == db.list_locations()  # before any map: all of them
+    db.add_location(Location("dock", x=0.0, y=0.0))  # a pose given by hand, at the map origin
+    assert [loc.name for loc in db.locations_on_map()] == ["dock"]  # before any map: those with a pose
     for goal in GLASSGARDEN_GOALS:
         db.import_pose(goal, "glassgarden")
     assert db.current_map() == "glassgarden"
     on_map = {loc.name for loc in db.locations_on_map()}
     assert "stairs" in on_map and "waiting area" in on_map
-    assert not on_map & {"cafeteria", "el5", "el6", "entrance"}  # (0, 0) placeholders: never targets
+    assert not on_map & {"cafeteria", "el5", "el6", "entrance", "dock"}  # no pose, or not on this map
     assert not db.on_current_map(db.get_location("cafeteria"))
     db.import_pose(Goal("cafeteria", 66.0, 2.0), "campus")
     assert db.current_map() == "campus"
@@ -540,23 +573,112 @@ def test_the_map_in_use_persists_and_needs_a_name(tmp_path: Path) -> None:
         assert db.current_map() == "campus"
 
 
-def test_a_version_1_file_gains_the_map_setting_and_the_not_on_map_sentence(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def old_file(path: Path, version: int) -> None:
+    """A file as cyborg wrote it at schema ``version`` (1 or 2): default places at (0, 0) on no map."""
+    with sqlite3.connect(path) as raw:
+        for step in database._MIGRATIONS[:version]:
+            for sql in step:
+                raw.execute(sql)
+        for place in database.DEFAULT_LOCATIONS:
+            cursor = raw.execute(
+                "INSERT INTO locations (name, map, x, y, heading, tolerance, crowded, pleasantness) "
+                "VALUES (?, '', 0, 0, 0, ?, ?, ?)",
+                (place.name, place.tolerance, int(place.crowded), place.pleasantness),
+            )
+            raw.executemany(
+                "INSERT INTO location_aliases (alias, location_id) VALUES (?, ?)",
+                [(alias, cursor.lastrowid) for alias in place.aliases],
+            )
+        later = {kind for v, kinds in database.NEW_RESPONSE_TYPES.items() if v > version for kind in kinds}
+        raw.executemany(
+            "INSERT INTO responses (sentence, type, emotion) VALUES (?, ?, ?)",
+            [
+                (r.sentence, r.type.value, r.emotion)
+                for r in database.DEFAULT_RESPONSES
+                if r.type not in later
+            ],
+        )
+        raw.execute(f"PRAGMA user_version = {version}")
+    raw.close()
+
+
+def test_a_version_1_file_gains_the_map_setting_and_the_not_on_map_sentence(tmp_path: Path) -> None:
     path = tmp_path / "nav.db"
-    with monkeypatch.context() as old:
-        old.setattr(database, "_MIGRATIONS", database._MIGRATIONS[:1])
-        old.setattr(database, "SCHEMA_VERSION", 1)
-        old.setattr(database, "_COLUMNS", {k: v for k, v in database._COLUMNS.items() if k != "settings"})
-        with NavigationDatabase(path) as db:
-            db.add_location(Location("gym", map="campus"))
-            for response in db.list_responses(ResponseType.NOT_ON_MAP):  # as a version 1 file had none
-                db.remove_response(response.id or 0)
+    old_file(path, 1)
+    with sqlite3.connect(path) as raw:
+        raw.execute("INSERT INTO locations (name, map, x, y) VALUES ('gym', 'campus', 3, 4)")
+    raw.close()
     with NavigationDatabase(path) as db:
-        assert db.get_location("gym").map == "campus"
+        assert (db.get_location("gym").map, db.get_location("gym").position) == ("campus", (3.0, 4.0))
         assert db.current_map() is None
         assert [r.say("gym") for r in db.responses(ResponseType.NOT_ON_MAP, "happy")] == [
             "I know the gym, but it is not on the map I have here."
         ]
     with sqlite3.connect(path) as raw:
-        assert raw.execute("PRAGMA user_version").fetchone() == (SCHEMA_VERSION,) == (2,)
+        assert raw.execute("PRAGMA user_version").fetchone() == (SCHEMA_VERSION,)
+    raw.close()
+
+
+def test_a_version_2_file_keeps_its_data_and_its_placeholder_poses_become_no_pose(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Issue 11.6: the (0, 0) placeholders of an existing file stop being targets; nothing else changes."""
+    path = tmp_path / "nav.db"
+    old_file(path, 2)
+    with sqlite3.connect(path) as raw:
+        raw.execute("INSERT INTO settings (key, value) VALUES ('current_map', 'campus')")
+        raw.execute("UPDATE locations SET pleasantness = -0.5 WHERE name = 'cafeteria'")  # edited by hand
+        raw.execute("UPDATE locations SET map = 'campus', x = 30, y = 43.5, heading = 1 WHERE name = 'el5'")
+        raw.execute("INSERT INTO locations (name, map, x, y) VALUES ('dock', 'campus', 0, 0)")  # map origin
+        raw.execute("INSERT INTO locations (name, x, y) VALUES ('kiosk', 2.5, -1)")  # by hand, no map
+        raw.execute(
+            "INSERT INTO location_aliases (alias, location_id) SELECT 'bay', id FROM locations WHERE name = 'dock'"
+        )
+        raw.execute(
+            "INSERT INTO events (location_id, start_utc, end_utc, timezone, uid) SELECT id, "
+            "'2024-03-20T14:00:00+00:00', '2024-03-20T15:00:00+00:00', 'Europe/Oslo', 'lunch' "
+            "FROM locations WHERE name = 'cafeteria'"
+        )
+        raw.execute(
+            "INSERT INTO responses (sentence, type, emotion) VALUES ('Yum, LOCATION.', 'opinion', NULL)"
+        )
+        responses_before = raw.execute(
+            "SELECT id, sentence, type, emotion FROM responses ORDER BY id"
+        ).fetchall()
+    raw.close()
+    with caplog.at_level(logging.WARNING), NavigationDatabase(path) as db:
+        places = {loc.name: loc for loc in db.list_locations()}
+        cafe = places["cafeteria"]
+        assert cafe.position is None and cafe.map == "" and not db.is_target(cafe)
+        assert (cafe.aliases, cafe.crowded, cafe.pleasantness) == (("canteen",), True, -0.5)
+        assert [e.uid for e in db.list_events("cafeteria")] == ["lunch"]
+        assert (places["el5"].position, places["el5"].map, places["el5"].heading) == (
+            (30.0, 43.5),
+            "campus",
+            1.0,
+        )
+        assert (places["dock"].position, places["dock"].aliases) == ((0.0, 0.0), ("bay",))
+        assert places["kiosk"].position == (2.5, -1.0)
+        assert len(places) == 8 + 2
+        assert {p.name for p in places.values() if p.position is None} == {
+            p.name for p in database.DEFAULT_LOCATIONS
+        } - {"el5"}
+        assert [loc.name for loc in db.locations_on_map()] == ["dock", "el5"]
+        assert db.current_map() == "campus"
+        with pytest.raises(DatabaseError, match="has calendar events"):
+            db.remove_location("cafeteria")  # the events still point at it
+        assert [r.say("gym") for r in db.responses(ResponseType.NO_POSE, None)] == [
+            "I have heard of the gym, but I do not know where it is."
+        ]
+        assert db.responses(ResponseType.RESUME, None)
+    with sqlite3.connect(path) as raw:
+        assert raw.execute("PRAGMA user_version").fetchone() == (SCHEMA_VERSION,)
+        kept = raw.execute(
+            "SELECT id, sentence, type, emotion FROM responses WHERE type NOT IN ('no_pose', 'resume') ORDER BY id"
+        ).fetchall()
+        assert kept == responses_before
+        assert raw.execute("PRAGMA foreign_key_check").fetchall() == []
+    raw.close()
+    assert "had the (0, 0) placeholder pose and no map" in caplog.text
+    assert "cafeteria, el6, elevator" in caplog.text and "dock" not in caplog.text
+    assert "cyborg db locations set-pose NAME --x X --y Y" in caplog.text

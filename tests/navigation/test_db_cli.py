@@ -33,11 +33,56 @@ def snapshot(db_path: Path) -> tuple[Any, ...]:
 def test_locations_list_shows_the_defaults_as_a_table(db_path: Path) -> None:
     result = run(db_path, "locations", "list")
     assert result.exit_code == 0, result.output
-    header, rule, *rows = result.output.splitlines()
+    header, rule, *rows = result.output.splitlines()[:10]
     assert header.split()[:3] == ["name", "aliases", "map"]
     assert set(rule) <= {"-", " "}
     assert any(row.startswith("el6") and "e16" in row for row in rows)
     assert len(rows) == 8
+
+
+def test_locations_shows_which_places_have_no_pose_and_how_to_give_one(db_path: Path) -> None:
+    """Issue 11.6: `cyborg db locations` on a fresh database, then one place given a pose."""
+    result = run(db_path, "locations")
+    assert result.exit_code == 0, result.output
+    lines = result.output.splitlines()
+    cafe = next(line.split() for line in lines if line.startswith("cafeteria"))
+    assert cafe[:6] == ["cafeteria", "canteen", "-", "-", "-", "-"]  # map, x, y, heading: none
+    assert "no pose: cafeteria, el5, el6, elevator, entrance, entrance 2, information desk, waiting area" in (
+        result.output
+    )
+    assert "cyborg db import-map MAP" in result.output
+    assert "cyborg db locations set-pose NAME --x X --y Y" in result.output
+
+    placed = run(db_path, "locations", "set-pose", "canteen", "--x", "12", "--y", "3.5")
+    assert placed.exit_code == 0, placed.output
+    assert placed.output == "location 'cafeteria' is at (12.00, 3.50)\n"
+    listed = run(db_path, "locations", "list").output
+    cafe = next(line.split() for line in listed.splitlines() if line.startswith("cafeteria"))
+    assert cafe[:6] == ["cafeteria", "canteen", "-", "12.00", "3.50", "0.00"]
+    assert "no pose: el5, el6, elevator" in listed
+    with NavigationDatabase(db_path) as db:
+        assert db.is_target(db.get_location("cafeteria"))
+
+
+def test_set_pose_uses_the_map_in_use_and_refuses_unknown_places(db_path: Path) -> None:
+    with NavigationDatabase(db_path) as db:
+        db.use_map("campus")
+    result = run(db_path, "locations", "set-pose", "el5", "--x", "30", "--y", "43.5", "--heading", "1.57")
+    assert result.output == "location 'el5' is at (30.00, 43.50) on map 'campus'\n"
+    with NavigationDatabase(db_path) as db:
+        el5 = db.get_location("el5")
+        assert (el5.map, el5.position, el5.heading) == ("campus", (30.0, 43.5), 1.57) and db.is_target(el5)
+    missing = run(db_path, "locations", "set-pose", "gym", "--x", "1", "--y", "2")
+    assert missing.exit_code == 2 and "unknown location 'gym'" in missing.output
+    assert run(db_path, "locations", "set-pose", "el6", "--x", "1").exit_code == 2  # --y is required
+
+
+def test_a_location_added_without_coordinates_has_no_pose(db_path: Path) -> None:
+    result = run(db_path, "locations", "add", "library")
+    assert result.output == "added location 'library', no pose yet\n"
+    with NavigationDatabase(db_path) as db:
+        assert db.get_location("library").position is None
+    assert "library" in run(db_path, "locations").output.splitlines()[-2]  # in the "no pose" line
 
 
 def test_locations_add_and_remove(db_path: Path) -> None:
@@ -59,6 +104,8 @@ def test_locations_add_and_remove(db_path: Path) -> None:
     [
         (("locations", "add", "Cafeteria"), "'Cafeteria' is already used by location 'cafeteria'"),
         (("locations", "add", "gym", "--pleasantness", "2"), "pleasantness=2.0 of 'gym' is outside -1..1"),
+        (("locations", "add", "gym", "--x", "1"), "'gym' has x but no y; give both"),
+        (("locations", "add", "gym", "--map", "campus"), "'gym' is on map 'campus' but has no x and y"),
         (("locations", "remove", "gym"), "unknown location 'gym'"),
         (("events", "add", "gym", "2024-03-20T15:00", "2024-03-20T16:00"), "unknown location 'gym'"),
         (("events", "add", "el5", "2024-03-20T16:00", "2024-03-20T15:00"), "is not after start"),

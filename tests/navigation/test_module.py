@@ -26,11 +26,17 @@ import yaml
 from cyborg.controller.config import LoadedConfig, parse_config
 from cyborg.emotion.model import NEUTRAL, TABLE_2_2
 from cyborg.interfaces.cli import packaged_config
-from cyborg.modules.speech import SPOKEN_TOPIC
-from cyborg.navigation.database import DEFAULT_RESPONSES, CalendarEvent, Location, ResponseType
+from cyborg.modules.speech import SPOKEN_TOPIC, estimated_duration
+from cyborg.navigation.database import (
+    DEFAULT_RESPONSES,
+    CalendarEvent,
+    Location,
+    NavigationDatabase,
+    ResponseType,
+)
 from cyborg.navigation.module import WANDER_CHECK, WANDER_DEBOUNCE, NavigationModule
 from cyborg.sim.base import PathState, SimulatedBase
-from cyborg.sim.kinds import BaseSettings, BuildContext, ModuleKind
+from cyborg.sim.kinds import BaseSettings, BuildContext, ModuleKind, NavigationSettings
 from cyborg.sim.maps import Cell, OccupancyMap, Point, default_map_path, load_map
 from cyborg.sim.planner import RoutePlanner
 from cyborg.sim.robot import build_robot
@@ -103,7 +109,13 @@ class Cyborg:
     """The default robot plus a user: hears, speaks, and records what the robot does."""
 
     def __init__(
-        self, clock: VirtualClock, data_dir: Path, *, seed: int = 1, map_path: Path | None = None
+        self,
+        clock: VirtualClock,
+        data_dir: Path,
+        *,
+        seed: int = 1,
+        map_path: Path | None = None,
+        kinds: dict[str, ModuleKind] | None = None,
     ) -> None:
         self.clock = clock
         self.transport = EmbeddedTransport(clock)
@@ -113,7 +125,7 @@ class Cyborg:
             data_dir=data_dir,
             rng=random.Random(seed),
             map_path=map_path,
-            kinds={"simulated_base": ModuleKind(BaseSettings, simulated_base)},
+            kinds={"simulated_base": ModuleKind(BaseSettings, simulated_base), **(kinds or {})},
         )
         self.map: OccupancyMap = self.robot.occupancy_map()
         nav = self.robot.components[NAV]
@@ -371,8 +383,11 @@ def test_where_is_without_an_answer_gives_up_and_stays(clock: VirtualClock, cybo
     assert cyborg.moved_since(0.0) == 0.0 and cyborg.state == "idle"
 
 
-def test_a_question_on_the_way_gets_an_opinion_not_an_arrival(clock: VirtualClock, cyborg: Cyborg) -> None:
-    """Guided towards el6, asked about the cafeteria: it talks about the cafeteria (7.7)."""
+def test_a_question_on_a_guided_trip_is_answered_and_the_trip_goes_on(
+    clock: VirtualClock, cyborg: Cyborg
+) -> None:
+    """Issue 11.7: guided towards el6 and asked about the cafeteria on the way, it talks about the
+    cafeteria (7.7), says it goes on, and brings the person to el6 instead of stopping halfway."""
 
     async def main() -> None:
         await cyborg.settle()
@@ -381,19 +396,84 @@ def test_a_question_on_the_way_gets_an_opinion_not_an_arrival(clock: VirtualCloc
         cyborg.hear("yes")
         await cyborg.until(lambda: cyborg.state == "navigation_moving", 10.0, "moving")
         await clock.sleep(10.0)
+        marks["asked"] = clock.monotonic()
+        halfway.append(cyborg.position)
         cyborg.hear("what do you think of the cafeteria")
-        await cyborg.until(lambda: cyborg.state == "navigation_talking", 5.0, "talking")
-        marks["talking"] = clock.monotonic()
-        await cyborg.until(lambda: cyborg.state == "idle", 30.0, "idle")
-        await clock.sleep(30.0)
+        await cyborg.until(lambda: cyborg.state == "idle", 300.0, "the trip to end")
 
     marks: dict[str, float] = {}
+    halfway: list[Point] = []
     clock.run(main())
-    assert cyborg.sentences() == [OFFER, "At once.", "I am happy about cafeteria"]
-    assert ("navigation_moving", "navigation_feedback", "navigation_talking") in cyborg.transitions()
-    assert cyborg.moved_since(marks["talking"] + 0.5) == 0.0  # it stopped to answer
-    assert cyborg.base.path_state is PathState.STOPPED
-    assert not cyborg.at("el6")
+    assert math.dist(halfway[0], cyborg.map.pose("el6").position) > 10.0  # asked far from el6
+    assert cyborg.at("el6")
+    assert cyborg.sentences() == [
+        OFFER,
+        "At once.",
+        "I am happy about cafeteria",  # the question is answered ...
+        "Now, on to el6.",  # ... the person hears that the trip goes on ...
+        "Human, this is el6",  # ... and is brought where they wanted to go
+    ]
+    assert cyborg.transitions()[1:] == [
+        ("idle", "navigation_information", "navigation_talking"),
+        ("navigation_talking", "navigation_command", "navigation_planning"),
+        ("navigation_planning", "navigation_start_moving", "navigation_moving"),
+        ("navigation_moving", "navigation_feedback", "navigation_talking"),
+        ("navigation_talking", "navigation_command", "navigation_planning"),
+        ("navigation_planning", "navigation_start_moving", "navigation_moving"),
+        ("navigation_moving", "succeeded", "navigation_talking"),
+        ("navigation_talking", "succeeded", "idle"),
+    ]
+    answer, going_on = cyborg.said[2:4]
+    moving_again = [t for t, _, _, b in cyborg.states if b == "navigation_moving"][1]
+    spoken = estimated_duration(answer.text) + estimated_duration(going_on.text)
+    assert moving_again - marks["asked"] <= spoken + 1.0  # it drives on as soon as it has said both
+
+
+def test_asked_on_the_way_an_angry_robot_still_finishes_the_errand(
+    clock: VirtualClock, cyborg: Cyborg
+) -> None:
+    """Told to go to the cafeteria, angry by the time it is asked about el5: it answers angrily
+    and still goes on to the cafeteria; having said yes once, it does not refuse halfway."""
+
+    async def main() -> None:
+        await cyborg.settle()
+        cyborg.hear("go to the cafeteria")
+        await cyborg.until(lambda: cyborg.state == "navigation_moving", 10.0, "moving")
+        await clock.sleep(10.0)
+        cyborg.set_emotion("angry")
+        await cyborg.until(lambda: cyborg.nav.emotion == "angry", 2.0, "angry")
+        cyborg.hear("what do you think of el5")
+        await cyborg.until(lambda: cyborg.state == "idle", 300.0, "the trip to end")
+
+    clock.run(main())
+    assert cyborg.at("cafeteria")
+    confirmation, answer, going_on, arrival = cyborg.said
+    assert confirmation.text == "At once."
+    assert answer.emotion == "angry" and answer.text in opinions("angry", "el5")
+    assert going_on.text == "Now, on to cafeteria."
+    assert arrival.text in opinions(arrival.emotion, "cafeteria")
+    assert cyborg.transitions()[-2:] == [
+        ("navigation_moving", "succeeded", "navigation_talking"),
+        ("navigation_talking", "succeeded", "idle"),
+    ]
+
+
+def test_a_new_command_while_answering_on_the_way_wins(clock: VirtualClock, cyborg: Cyborg) -> None:
+    """Asked about el5 on the way to the cafeteria, then told to go to the elevator: the elevator."""
+
+    async def main() -> None:
+        await cyborg.settle()
+        cyborg.hear("go to the cafeteria")
+        await cyborg.until(lambda: cyborg.state == "navigation_moving", 10.0, "moving")
+        await clock.sleep(10.0)
+        cyborg.hear("what do you think of el5")
+        await cyborg.until(lambda: cyborg.state == "navigation_talking", 5.0, "talking")
+        cyborg.hear("go to the elevator")
+        await cyborg.until(lambda: cyborg.state == "idle", 300.0, "the trip to end")
+
+    clock.run(main())
+    assert cyborg.at("elevator")
+    assert "Now, on to cafeteria." not in cyborg.sentences()
 
 
 def test_after_a_guided_tour_a_command_is_a_command_again(clock: VirtualClock, cyborg: Cyborg) -> None:
@@ -961,3 +1041,94 @@ def test_a_calendar_event_at_a_place_of_another_map_is_ignored(
             cyborg.transport.shutdown()
     assert cyborg.sent("navigation_scheduler") == [] and cyborg.moved_since(0.0) == 0.0
     assert caplog.text.count("calendar: not going there") == 1  # said once, not every 10 s
+
+
+# --- places without a pose (issue 11.6) ------------------------------------------------------
+
+
+def navigation_without_a_map(
+    node: Node, settings: NavigationSettings, robot: BuildContext
+) -> NavigationModule:
+    """The navigation module on a fresh database that no map has placed: as on a ROSARNL base whose
+    map was never imported, the default places are known by name only."""
+    return NavigationModule(node, NavigationDatabase(robot.data_dir / "navigation.db"), rng=robot.rng)
+
+
+@pytest.fixture
+def unplaced(clock: VirtualClock, tmp_path: Path) -> Iterator[Cyborg]:
+    robot = Cyborg(
+        clock, tmp_path, kinds={"navigation": ModuleKind(NavigationSettings, navigation_without_a_map)}
+    )
+    yield robot
+    robot.transport.shutdown()
+
+
+def test_a_place_without_a_pose_is_no_target_and_the_robot_says_so(
+    clock: VirtualClock, unplaced: Cyborg, caplog: pytest.LogCaptureFixture
+) -> None:
+    cyborg = unplaced
+    assert cyborg.nav.db.current_map() is None  # no map imported: only what the database says
+
+    async def main() -> None:
+        await cyborg.settle()
+        cyborg.hear("go to the cafeteria")
+        await cyborg.until(lambda: bool(cyborg.said), 5.0, "an answer")
+        await cyborg.until(lambda: cyborg.state == "idle", 10.0, "idle")
+        cyborg.hear("where is the cafeteria?")
+        await cyborg.until(lambda: len(cyborg.said) == 2, 5.0, "a second answer")
+        await cyborg.until(lambda: cyborg.state == "idle", 10.0, "idle")
+        cyborg.hear("yes")
+        await clock.sleep(30.0)
+
+    with caplog.at_level("WARNING", logger="cyborg.navigation.module"):
+        clock.run(main())
+    dont_know = "I have heard of the cafeteria, but I do not know where it is."
+    assert cyborg.sentences() == [dont_know, dont_know]  # no "At once.", no offer to show the way
+    assert cyborg.moved_since(0.0) == 0.0 and cyborg.base.distance_travelled == 0.0  # not to the origin
+    assert responses(ResponseType.NO_POSE, NEUTRAL, "cafeteria") == {dont_know}  # the database's sentence
+    assert cyborg.transitions()[1:] == [
+        ("idle", "navigation_command", "navigation_planning"),
+        ("navigation_planning", "succeeded", "idle"),
+        ("idle", "navigation_information", "navigation_talking"),
+        ("navigation_talking", "succeeded", "idle"),
+    ]
+    assert "'cafeteria' has no pose" in caplog.text
+    assert "cyborg db locations set-pose 'cafeteria' --x X --y Y" in caplog.text
+
+
+def test_a_calendar_event_at_a_place_without_a_pose_is_ignored(
+    clock: VirtualClock, unplaced: Cyborg, caplog: pytest.LogCaptureFixture
+) -> None:
+    schedule(unplaced, "cafeteria", start=-60, end=3600)
+    with caplog.at_level("WARNING", logger="cyborg.navigation.module"):
+        clock.run(clock.sleep(120.0))
+    assert unplaced.sent("navigation_scheduler") == [] and unplaced.moved_since(0.0) == 0.0
+    assert caplog.text.count("calendar: not going there: location 'cafeteria' has no pose") == 1
+
+
+def test_on_its_own_it_never_drives_to_a_place_without_a_pose(clock: VirtualClock, unplaced: Cyborg) -> None:
+    """A loved robot looks for people at a crowded place: none has a pose but the one given by hand."""
+    x, y = CAMPUS.pose("entrance").position
+    unplaced.nav.db.set_pose("entrance", x, y)
+
+    async def main() -> None:
+        await unplaced.settle("loved")
+        unplaced.send_event("navigation_emotional")
+        await unplaced.trip_done()
+
+    clock.run(main())
+    assert unplaced.at("entrance")
+
+
+def test_given_a_pose_by_hand_a_place_is_a_target(clock: VirtualClock, unplaced: Cyborg) -> None:
+    x, y = CAMPUS.pose("cafeteria").position
+    unplaced.nav.db.set_pose("canteen", x, y)
+
+    async def main() -> None:
+        await unplaced.settle()
+        unplaced.hear("go to the cafeteria")
+        await unplaced.trip_done()
+
+    clock.run(main())
+    assert unplaced.at("cafeteria")
+    assert unplaced.sentences()[0] == "At once."

@@ -33,6 +33,7 @@ class PlanKind(enum.Enum):
     WANDER = "wander"
     REFUSE = "refuse"
     NOT_ON_MAP = "not_on_map"  # asked for a known place that the loaded map does not have
+    NO_POSE = "no_pose"  # asked for a known place whose pose nobody has given yet
     NOTHING = "nothing"
 
 
@@ -42,6 +43,23 @@ class Plan:
     reason: str
     target: Location | None = None
     feedback: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class Trip:
+    """A drive under way: where to, and why (which decides what the robot says on arrival)."""
+
+    origin: Origin | None
+    target: Location
+
+
+def trip_goes_on(event: str, previous_state: str) -> bool:
+    """True if the talking state was entered by a question asked on the way (thesis 7.7).
+
+    Asked what it thinks of a place while driving, the robot answers and then drives on to
+    where it was going: nobody is left halfway.
+    """
+    return event == "navigation_feedback" and previous_state == "navigation_moving"
 
 
 BOSSED_AROUND = (0.0, 0.0, -0.2)
@@ -69,16 +87,20 @@ def plan(
     rng: random.Random,
     here: Location | None = None,
     off_map: Collection[str] = (),
+    no_pose: Collection[str] = (),
 ) -> Plan:
     """Choose the target (or wandering) from why we plan and how the robot feels.
 
-    ``places`` are the places on the loaded map (the only possible targets);
-    ``off_map`` names known places that are not on it: asked for one, the robot
-    says so instead of driving to a pose that belongs to another map.
+    ``places`` are the places with a pose on the loaded map (the only possible
+    targets); ``off_map`` names known places that are not on it and ``no_pose``
+    those with no pose at all: asked for one, the robot says so instead of driving
+    to a pose that belongs to another map or to none.
     """
     if origin in (Origin.COMMAND, Origin.GUIDE):
         if requested is None:
             return Plan(PlanKind.NOTHING, "a command without a known place")
+        if requested.name in no_pose:
+            return Plan(PlanKind.NO_POSE, f"{requested.name} has no pose", requested)
         if requested.name in off_map:
             return Plan(PlanKind.NOT_ON_MAP, f"{requested.name} is not on the loaded map", requested)
         if origin is Origin.COMMAND and emotion == ANGRY:
@@ -140,14 +162,18 @@ class TalkKind(enum.Enum):
     OPINION = "opinion"
     OFFER_GUIDE = "offer_guide"
     NOT_ON_MAP = "not_on_map"
+    NO_POSE = "no_pose"
     NOTHING = "nothing"
 
 
-def talk_kind(event: str, origin: Origin | None, *, asked_on_map: bool = True) -> TalkKind:
+def talk_kind(
+    event: str, origin: Origin | None, *, asked_on_map: bool = True, asked_has_pose: bool = True
+) -> TalkKind:
     """What the talking state says, from the event that led there (7.7).
 
-    Asked where a place is that the loaded map does not have (``asked_on_map``
-    False), it says so instead of offering to show the way.
+    Asked where a place is that has no pose (``asked_has_pose`` False) or that the
+    loaded map does not have (``asked_on_map`` False), it says so instead of
+    offering to show the way.
     """
     if event == "succeeded" and origin is Origin.GUIDE:  # a question on the way still gets an opinion
         return TalkKind.ARRIVED
@@ -156,6 +182,8 @@ def talk_kind(event: str, origin: Origin | None, *, asked_on_map: bool = True) -
     if event == "aborted":
         return TalkKind.STUCK
     if event == "navigation_information":
+        if not asked_has_pose:
+            return TalkKind.NO_POSE
         return TalkKind.OFFER_GUIDE if asked_on_map else TalkKind.NOT_ON_MAP
     return TalkKind.NOTHING
 
@@ -172,4 +200,5 @@ RESPONSE_FOR_TALK = {
     TalkKind.OPINION: ResponseType.OPINION,
     TalkKind.OFFER_GUIDE: ResponseType.OFFER_GUIDE,
     TalkKind.NOT_ON_MAP: ResponseType.NOT_ON_MAP,
+    TalkKind.NO_POSE: ResponseType.NO_POSE,
 }

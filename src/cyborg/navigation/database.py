@@ -4,15 +4,16 @@ Part of the navigation module's pure logic/persistence layer. One SQLite file
 holds three kinds of data:
 
 * locations: a name, aliases (what speech-to-text hears instead), the map they are
-  on, a pose (x, y in m, heading in rad), how close counts as arrived, whether the
-  place is usually crowded and how pleasant the robot finds it (-1..1);
+  on, a pose (x, y in m, heading in rad; no x and y while the pose is not known),
+  how close counts as arrived, whether the place is usually crowded and how
+  pleasant the robot finds it (-1..1);
 * calendar events: be at a location between two times, optionally recurring
   (RFC 5545 RRULE), optionally ignored, with a UID so an .ics import updates;
 * responses: sentences with the placeholder ``LOCATION``, by response type and
   emotion (NULL emotion = fits any emotion).
 * the map in use: the map imported last (``import_pose`` records it). Only
-  places on it are targets; the default places keep (0, 0) placeholders and
-  no map until a map's goal places them.
+  places with a pose on it are targets (any place with a pose before a map was
+  imported); the default places have no pose until a map's goal places them.
 
 A missing file is created with defaults. A file that is not a database, fails
 ``PRAGMA integrity_check`` or holds someone else's tables is moved aside to
@@ -44,6 +45,9 @@ log = logging.getLogger(__name__)
 PLACEHOLDER = "LOCATION"
 """Word in a response sentence that is replaced by the location's name."""
 
+_PLACEHOLDER = "map = '' AND x = 0 AND y = 0 AND heading = 0"
+"""SQL: a row holding the (0, 0) placeholder pose that files before version 3 gave places on no map."""
+
 # Each migration takes the file from version i to i + 1 (index i).
 _MIGRATIONS: tuple[tuple[str, ...], ...] = (
     (
@@ -66,6 +70,23 @@ _MIGRATIONS: tuple[tuple[str, ...], ...] = (
     (
         # Which map the robot uses now (the one imported last): only places on it are targets.
         "CREATE TABLE settings (key TEXT PRIMARY KEY, value TEXT NOT NULL)",
+    ),
+    (
+        # A place may have no pose (x and y NULL): it is no target until a map or `set-pose` gives
+        # it one. SQLite cannot drop NOT NULL in place, so the rows move to a new table; the (0, 0)
+        # placeholders of places on no map lose their made-up pose, everything else is kept.
+        "CREATE TABLE locations_v3 (id INTEGER PRIMARY KEY, name TEXT NOT NULL UNIQUE COLLATE NOCASE, "
+        "map TEXT NOT NULL DEFAULT '', x REAL, y REAL, "
+        "heading REAL NOT NULL DEFAULT 0, tolerance REAL NOT NULL DEFAULT 0.5 CHECK (tolerance > 0), "
+        "crowded INTEGER NOT NULL DEFAULT 0 CHECK (crowded IN (0, 1)), "
+        "pleasantness REAL NOT NULL DEFAULT 0 CHECK (pleasantness BETWEEN -1 AND 1), "
+        "CHECK ((x IS NULL) = (y IS NULL)))",
+        f"INSERT INTO locations_v3 (id, name, map, x, y, heading, tolerance, crowded, pleasantness) "
+        f"SELECT id, name, map, CASE WHEN {_PLACEHOLDER} THEN NULL ELSE x END, "
+        f"CASE WHEN {_PLACEHOLDER} THEN NULL ELSE y END, heading, tolerance, crowded, pleasantness "
+        "FROM locations",
+        "DROP TABLE locations",
+        "ALTER TABLE locations_v3 RENAME TO locations",
     ),
 )
 SCHEMA_VERSION = len(_MIGRATIONS)
@@ -102,6 +123,8 @@ class ResponseType(enum.Enum):
     UNKNOWN_LOCATION = "unknown_location"
     DECLINED = "declined"
     NOT_ON_MAP = "not_on_map"
+    NO_POSE = "no_pose"
+    RESUME = "resume"
 
     @property
     def needs_location(self) -> bool:
@@ -110,10 +133,14 @@ class ResponseType(enum.Enum):
             ResponseType.ARRIVED,
             ResponseType.STUCK,
             ResponseType.NOT_ON_MAP,
+            ResponseType.NO_POSE,
         )
 
 
-NEW_RESPONSE_TYPES: dict[int, tuple[ResponseType, ...]] = {2: (ResponseType.NOT_ON_MAP,)}
+NEW_RESPONSE_TYPES: dict[int, tuple[ResponseType, ...]] = {
+    2: (ResponseType.NOT_ON_MAP,),
+    3: (ResponseType.NO_POSE, ResponseType.RESUME),
+}
 """Response types added by a schema version: migrating an older file adds their default sentences."""
 
 
@@ -123,17 +150,22 @@ EMOTION_SYNONYMS = {"elated": "happy", "inhibited": "sad", "puzzled": "surprised
 
 @dataclass(frozen=True)
 class Location:
-    """A known place on the map."""
+    """A known place; ``x`` and ``y`` are None while its pose is not known (then it is no target)."""
 
     name: str
     aliases: tuple[str, ...] = ()
     map: str = ""
-    x: float = 0.0
-    y: float = 0.0
+    x: float | None = None
+    y: float | None = None
     heading: float = 0.0
     tolerance: float = 0.5
     crowded: bool = False
     pleasantness: float = 0.0
+
+    @property
+    def position(self) -> tuple[float, float] | None:
+        """(x, y) in metres, or None if the place has no pose."""
+        return None if self.x is None or self.y is None else (self.x, self.y)
 
 
 @dataclass(frozen=True)
@@ -183,7 +215,7 @@ DEFAULT_LOCATIONS: tuple[Location, ...] = (
     Location("waiting area", (), crowded=True, pleasantness=0.4),
     Location("elevator", ("lift",), pleasantness=-0.3),
 )
-"""Glassgården, NTNU; poses are 0,0 placeholders until ``cyborg db import-map`` fills them."""
+"""Glassgården, NTNU; no poses: a map's goals (``cyborg db import-map``) or ``set-pose`` give them."""
 
 _R = ResponseType
 DEFAULT_RESPONSES: tuple[Response, ...] = (
@@ -216,6 +248,8 @@ DEFAULT_RESPONSES: tuple[Response, ...] = (
     Response("I am sorry, I do not know that place.", _R.UNKNOWN_LOCATION),
     Response("All right, maybe another time.", _R.DECLINED),
     Response("I know the LOCATION, but it is not on the map I have here.", _R.NOT_ON_MAP),
+    Response("I have heard of the LOCATION, but I do not know where it is.", _R.NO_POSE),
+    Response("Now, on to LOCATION.", _R.RESUME),
 )
 
 
@@ -242,23 +276,57 @@ class NavigationDatabase(SQLiteFile):
             )
         if version == 0 and tables:
             raise Unusable(f"it holds other tables ({', '.join(sorted(tables))}) and no schema version")
-        for step in range(version, SCHEMA_VERSION):
-            try:
-                with transaction(conn):
+        if version < SCHEMA_VERSION:
+            self._migrate(conn, version)
+        self._check_columns(conn)
+
+    def _migrate(self, conn: sqlite3.Connection, version: int) -> None:
+        """Take the file from ``version`` to SCHEMA_VERSION in one transaction (a new file: seed it).
+
+        Foreign keys are off meanwhile (a step may rebuild a table others refer to) and checked
+        before the commit, as SQLite's procedure for changing a table asks.
+        """
+        unplaced: list[str] = []
+        conn.execute("PRAGMA foreign_keys = OFF")
+        try:
+            with transaction(conn):
+                for step in range(version, SCHEMA_VERSION):
+                    if step == 2:  # to version 3: placeholder poses become "no pose"
+                        rows = conn.execute(f"SELECT name FROM locations WHERE {_PLACEHOLDER} ORDER BY name")
+                        unplaced = [str(row[0]) for row in rows]
                     for sql in _MIGRATIONS[step]:
                         conn.execute(sql)
-                    if step == 0:
-                        self._seed(conn)
-                    else:
+                    if version > 0:
                         self._seed_responses(conn, NEW_RESPONSE_TYPES.get(step + 1, ()))
-                    conn.execute(f"PRAGMA user_version = {step + 1}")
-            except sqlite3.Error as exc:
-                raise DatabaseError(
-                    f"could not migrate {self.path} to schema version {step + 1}: {exc}; "
-                    "check the disk, or move the file away to start afresh"
-                ) from exc
-            log.info("navigation database %s migrated to schema version %d", self.path, step + 1)
-        self._check_columns(conn)
+                if version == 0:
+                    self._seed(conn)
+                broken = conn.execute("PRAGMA foreign_key_check").fetchall()
+                if broken:
+                    raise sqlite3.IntegrityError(f"rows refer to missing ones: {broken[:3]}")
+                conn.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
+        except sqlite3.Error as exc:
+            raise DatabaseError(
+                f"could not migrate {self.path} from schema version {version} to {SCHEMA_VERSION}: {exc}; "
+                "check the disk, or move the file away to start afresh"
+            ) from exc
+        finally:
+            if self.foreign_keys:
+                conn.execute("PRAGMA foreign_keys = ON")
+        if version > 0:
+            log.info(
+                "navigation database %s migrated from schema version %d to %d",
+                self.path,
+                version,
+                SCHEMA_VERSION,
+            )
+        if unplaced:
+            log.warning(
+                "navigation database %s: %s had the (0, 0) placeholder pose and no map; they have no pose "
+                "now and are no targets until they get one: `cyborg db import-map MAP` (a map whose goals "
+                "name them) or `cyborg db locations set-pose NAME --x X --y Y`",
+                self.path,
+                ", ".join(unplaced),
+            )
 
     @staticmethod
     def _check_columns(conn: sqlite3.Connection) -> None:
@@ -311,18 +379,34 @@ class NavigationDatabase(SQLiteFile):
         current = self.current_map()
         return current is None or location.map == current
 
+    def is_target(self, location: Location) -> bool:
+        """True if the robot can go to ``location``: it has a pose, and that pose is on the map in use."""
+        return location.position is not None and self.on_current_map(location)
+
     def locations_on_map(self) -> list[Location]:
-        """The places the robot can go to: those on the map in use."""
+        """The places the robot can go to: those with a pose on the map in use (see :meth:`is_target`)."""
         current = self.current_map()
-        return [loc for loc in self.list_locations() if current is None or loc.map == current]
+        return [
+            loc
+            for loc in self.list_locations()
+            if loc.position is not None and (current is None or loc.map == current)
+        ]
+
+    def no_pose_reason(self, location: Location) -> str:
+        """Why ``location`` is no target because it has no pose, and how to give it one (for logs)."""
+        return (
+            f"location {location.name!r} has no pose, so the robot does not know where it is; fix: import "
+            f"a map whose goals name it (`cyborg db import-map MAP`), or give it one with "
+            f"`cyborg db locations set-pose {location.name!r} --x X --y Y`"
+        )
 
     def off_map_reason(self, location: Location) -> str:
         """Why ``location`` is no target, and how to fix it (for logs)."""
         where = f"on map {location.map!r}" if location.map else "not placed on any map"
         return (
             f"location {location.name!r} is {where}, not on the map in use ({self.current_map()!r}); "
-            "fix: import a map that has it (`cyborg db import-map MAP`), or remove it and add it again "
-            f"with --map {self.current_map()} --x X --y Y"
+            "fix: import a map that has it (`cyborg db import-map MAP`), or give it a pose on this map: "
+            f"`cyborg db locations set-pose {location.name!r} --x X --y Y`"
         )
 
     # --- locations ---------------------------------------------------------------------------
@@ -374,6 +458,17 @@ class NavigationDatabase(SQLiteFile):
                 if place is not None and place.map != map_name:
                     return place
         return None
+
+    def set_pose(
+        self, name_or_alias: str, x: float, y: float, heading: float = 0.0, map_name: str | None = None
+    ) -> Location:
+        """Give the place called ``name_or_alias`` a pose on ``map_name`` (default: the map in use).
+
+        Its name, aliases, calendar events and the rest are kept.
+        """
+        place = self.get_location(name_or_alias)
+        on_map = (self.current_map() or "") if map_name is None else map_name
+        return self.update_location(place.name, replace(place, map=on_map, x=x, y=y, heading=heading))
 
     def list_locations(self) -> list[Location]:
         rows = self._read("SELECT * FROM locations ORDER BY name COLLATE NOCASE")
@@ -517,8 +612,8 @@ class NavigationDatabase(SQLiteFile):
             name=str(name),
             aliases=tuple(str(a[0]) for a in aliases),
             map=str(map_name),
-            x=_number(x, f"x of {name}"),
-            y=_number(y, f"y of {name}"),
+            x=None if x is None or y is None else _number(x, f"x of {name}"),
+            y=None if x is None or y is None else _number(y, f"y of {name}"),
             heading=_number(heading, f"heading of {name}"),
             tolerance=_number(tolerance, f"tolerance of {name}", 0.5),
             crowded=bool(crowded),
@@ -799,8 +894,18 @@ def _valid_location(location: Location) -> Location:
             raise DatabaseError(f"alias {alias!r} of {name!r} repeats its name or another alias; remove it")
         spoken.append(normalise(alias))
     for label, value in (("x", location.x), ("y", location.y), ("heading", location.heading)):
-        if not math.isfinite(value):
+        if value is not None and not math.isfinite(value):
             raise DatabaseError(f"{label}={value} of {name!r} is not a finite number; give metres/radians")
+    if (location.x is None) != (location.y is None):
+        given, missing = ("x", "y") if location.y is None else ("y", "x")
+        raise DatabaseError(
+            f"{name!r} has {given} but no {missing}; give both (its pose), or neither while the pose is not known"
+        )
+    if location.x is None and location.map.strip():
+        raise DatabaseError(
+            f"{name!r} is on map {location.map.strip()!r} but has no x and y; give its pose on that map, "
+            "or leave the map out"
+        )
     if not (math.isfinite(location.tolerance) and location.tolerance > 0):
         raise DatabaseError(f"tolerance={location.tolerance} of {name!r} must be > 0 m; e.g. 0.5")
     if not -1.0 <= location.pleasantness <= 1.0:

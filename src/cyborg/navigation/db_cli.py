@@ -91,43 +91,54 @@ def db_group(ctx: click.Context, db_path: Path | None) -> None:
 # --- locations -------------------------------------------------------------------------------
 
 
-@db_group.group("locations")
-def locations() -> None:
-    """Known places: list, add, remove."""
+@db_group.group("locations", invoke_without_command=True)
+@click.pass_context
+def locations(ctx: click.Context) -> None:
+    """Known places: list (also without a subcommand), add, set-pose, remove."""
+    if ctx.invoked_subcommand is None:
+        ctx.invoke(locations_list)
 
 
 @locations.command("list")
 @click.pass_context
 def locations_list(ctx: click.Context) -> None:
-    """Show every location with its aliases and pose."""
+    """Show every location with its aliases and pose ('-': no pose, so no target)."""
     with _open(ctx) as db:
-        rows = [
-            (
-                loc.name,
-                ", ".join(loc.aliases),
-                loc.map,
-                loc.x,
-                loc.y,
-                loc.heading,
-                loc.tolerance,
-                loc.crowded,
-                loc.pleasantness,
-            )
-            for loc in db.list_locations()
-        ]
+        places = db.list_locations()
         current = db.current_map()
+    rows = [
+        (
+            loc.name,
+            ", ".join(loc.aliases),
+            loc.map or None,
+            loc.x,
+            loc.y,
+            loc.heading if loc.position else None,
+            loc.tolerance,
+            loc.crowded,
+            loc.pleasantness,
+        )
+        for loc in places
+    ]
     headers = ("name", "aliases", "map", "x", "y", "heading", "tolerance", "crowded", "pleasant")
     click.echo(_table(headers, rows))
     if current is not None:
         click.echo(f"map in use: {current} (places on other maps are not targets)")
+    unplaced = [loc.name for loc in places if loc.position is None]
+    if unplaced:
+        click.echo(
+            f"no pose: {', '.join(unplaced)} (not targets: asked for one, the robot says it does not know "
+            "where it is)\ngive one a pose: import a map whose goals name it (cyborg db import-map MAP), "
+            "or: cyborg db locations set-pose NAME --x X --y Y [--heading RAD]"
+        )
 
 
 @locations.command("add")
 @click.argument("name")
 @click.option("--alias", "aliases", multiple=True, help="another name STT may hear (repeatable)")
 @click.option("--map", "map_name", default="", help="name of the map the pose is on")
-@click.option("--x", type=float, default=0.0, show_default=True, help="metres")
-@click.option("--y", type=float, default=0.0, show_default=True, help="metres")
+@click.option("--x", type=float, default=None, help="metres (with --y; leave both out if not known yet)")
+@click.option("--y", type=float, default=None, help="metres (with --x)")
 @click.option("--heading", type=float, default=0.0, show_default=True, help="radians")
 @click.option("--tolerance", type=float, default=0.5, show_default=True, help="arrival tolerance, metres")
 @click.option("--crowded/--not-crowded", default=False, show_default=True)
@@ -138,18 +149,36 @@ def locations_add(
     name: str,
     aliases: tuple[str, ...],
     map_name: str,
-    x: float,
-    y: float,
+    x: float | None,
+    y: float | None,
     heading: float,
     tolerance: float,
     crowded: bool,
     pleasantness: float,
 ) -> None:
-    """Add location NAME."""
+    """Add location NAME (without --x and --y it has no pose and is no target until it gets one)."""
     location = Location(name, aliases, map_name, x, y, heading, tolerance, crowded, pleasantness)
     with _open(ctx) as db:
         added = db.add_location(location)
-    click.echo(f"added location {added.name!r}")
+    pose = "no pose yet" if added.position is None else f"at ({added.x:.2f}, {added.y:.2f})"
+    click.echo(f"added location {added.name!r}, {pose}")
+
+
+@locations.command("set-pose")
+@click.argument("name")
+@click.option("--x", type=float, required=True, help="metres")
+@click.option("--y", type=float, required=True, help="metres")
+@click.option("--heading", type=float, default=0.0, show_default=True, help="radians")
+@click.option("--map", "map_name", default=None, help="map the pose is on (default: the map in use)")
+@click.pass_context
+def locations_set_pose(
+    ctx: click.Context, name: str, x: float, y: float, heading: float, map_name: str | None
+) -> None:
+    """Give location NAME (a name or an alias) a pose; its aliases and events are kept."""
+    with _open(ctx) as db:
+        placed = db.set_pose(name, x, y, heading, map_name)
+    where = f" on map {placed.map!r}" if placed.map else ""
+    click.echo(f"location {placed.name!r} is at ({x:.2f}, {y:.2f}){where}")
 
 
 @locations.command("remove")

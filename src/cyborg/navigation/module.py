@@ -24,11 +24,13 @@ from cyborg.navigation.behaviour import (
     Plan,
     PlanKind,
     TalkKind,
+    Trip,
     origin_of,
     plan,
     sentence,
     should_stop_wandering,
     talk_kind,
+    trip_goes_on,
 )
 from cyborg.navigation.database import Location, NavigationDatabase, ResponseType
 from cyborg.navigation.keywords import Intent, detect_answer, detect_navigation
@@ -99,6 +101,8 @@ class NavigationModule(BehaviourModule):
         self.heading_to: Location | None = None
         self.arrived_at: Location | None = None
         self.failed_target: Location | None = None
+        self.trip: Trip | None = None  # the drive under way (kept when a question on the way stops it)
+        self.resume: Trip | None = None  # the drive to go on with after answering that question
         self.last_scheduler_event = -math.inf
         self.system_state = ""
         self.sulking = False
@@ -149,7 +153,7 @@ class NavigationModule(BehaviourModule):
         if location is None:
             return
         if found.intent is Intent.NAVIGATION_COMMAND:
-            self.requested, self.guiding = location, False
+            self.requested, self.guiding, self.resume = location, False, None  # a new errand
         else:
             self.asked = location
         log.info("heard %s about %s in %r", found.intent.value, location.name, text)
@@ -157,12 +161,16 @@ class NavigationModule(BehaviourModule):
 
     def here(self) -> Location | None:
         """The known place on the loaded map the robot is at, if any."""
-        if self.pose is None:
-            return None
         for place in self.db.locations_on_map():
-            if math.dist(self.pose, (place.x, place.y)) <= max(place.tolerance, AT_PLACE_DISTANCE):
+            if self._is_at(place):
                 return place
         return None
+
+    def _is_at(self, place: Location) -> bool:
+        """True if the robot is at ``place`` (False if either pose is unknown)."""
+        if self.pose is None or place.position is None:
+            return False
+        return math.dist(self.pose, place.position) <= max(place.tolerance, AT_PLACE_DISTANCE)
 
     def _scheduler_tick(self) -> None:
         try:
@@ -180,19 +188,18 @@ class NavigationModule(BehaviourModule):
         place = self.db.find_location(ongoing[0].event.location)
         if place is None:
             return
-        if not self.db.on_current_map(place):
+        if not self.db.is_target(place):
             self.scheduled = None
             if place.name not in self._warned_off_map:
                 self._warned_off_map.add(place.name)
-                log.warning("calendar: not going there: %s", self.db.off_map_reason(place))
+                reason = self.db.off_map_reason if place.position else self.db.no_pose_reason
+                log.warning("calendar: not going there: %s", reason(place))
             return
         self.scheduled = place
         if self.sulking and self.emotion == ANGRY:
             return  # it already walked off to be alone; asking again would only make it pace
         self.sulking = False
-        at_place = self.pose is not None and math.dist(self.pose, (place.x, place.y)) <= max(
-            place.tolerance, AT_PLACE_DISTANCE
-        )
+        at_place = self._is_at(place)
         heading_there = self.heading_to is not None and self.heading_to.name == place.name
         busy = self.system_state in OWN_STATES and not self.wandering_now  # never interrupt a user's errand
         now = self.node.clock.monotonic()
@@ -205,8 +212,13 @@ class NavigationModule(BehaviourModule):
     # --- planning ----------------------------------------------------------------------
 
     async def planning(self, ctx: GoalContext) -> None:
+        resume, self.resume, self.trip = self.resume, None, None
+        if resume is not None and ctx.event == "navigation_command":
+            await self._go_on(ctx, resume)
+            return
         origin = origin_of(ctx.event, self.guiding)
         on_map = self.db.locations_on_map()
+        known = self.db.list_locations()
         chosen = plan(
             origin,
             self.emotion,
@@ -215,7 +227,8 @@ class NavigationModule(BehaviourModule):
             places=on_map,
             rng=self.rng,
             here=self.here(),
-            off_map={p.name for p in self.db.list_locations()} - {p.name for p in on_map},
+            off_map={p.name for p in known} - {p.name for p in on_map},
+            no_pose={p.name for p in known if p.position is None},
         )
         log.info("planning (%s, %s): %s", ctx.event, self.emotion, chosen.reason)
         self.origin, self.current_plan = origin, chosen
@@ -230,6 +243,11 @@ class NavigationModule(BehaviourModule):
             log.warning("not going there: %s", self.db.off_map_reason(chosen.target))
             await ctx.sleep(self._say(ResponseType.NOT_ON_MAP, chosen.target.name))
             return
+        if chosen.kind is PlanKind.NO_POSE:
+            assert chosen.target is not None
+            log.warning("not going there: %s", self.db.no_pose_reason(chosen.target))
+            await ctx.sleep(self._say(ResponseType.NO_POSE, chosen.target.name))
+            return
         if chosen.kind is PlanKind.NOTHING:
             raise Abort(chosen.reason)
         if origin is Origin.COMMAND and chosen.target is not None:
@@ -237,6 +255,17 @@ class NavigationModule(BehaviourModule):
         self.publish_event(
             "navigation_start_moving" if chosen.kind is PlanKind.MOVE else "navigation_start_wandering"
         )
+        await ctx.wait_forever()
+
+    async def _go_on(self, ctx: GoalContext, trip: Trip) -> None:
+        """Go on with ``trip`` after answering a question on the way: no new decision, no refusal."""
+        target = self.db.find_location(trip.target.name)
+        if target is None or not self.db.is_target(target):
+            raise Abort(f"cannot go on to {trip.target.name}: it is no target any more")
+        log.info("planning (%s): goes on to %s after answering", ctx.event, target.name)
+        self.origin, self.current_plan = trip.origin, Plan(PlanKind.MOVE, f"goes on to {target.name}", target)
+        await ctx.sleep(self._say(ResponseType.RESUME, target.name))
+        self.publish_event("navigation_start_moving")
         await ctx.wait_forever()
 
     # --- moving ------------------------------------------------------------------------
@@ -253,19 +282,24 @@ class NavigationModule(BehaviourModule):
         await self._move_to(ctx, chosen.target)
 
     async def _move_to(self, ctx: GoalContext, target: Location) -> None:
+        if target.position is None:
+            self.failed_target = target
+            raise Abort(self.db.no_pose_reason(target))
         if not await self.move_base.wait_for_server(2.0):
             self.failed_target = target
             raise Abort("no robot base: /rosarnl_node/move_base is not offered")
+        x, y = target.position
         goal = MoveBaseGoal(
             PoseStamped(
                 Header(stamp=self.node.clock.now(), frame_id="map"),
                 Pose(
-                    Point(target.x, target.y, 0.0),
+                    Point(x, y, 0.0),
                     Quaternion(0.0, 0.0, math.sin(target.heading / 2), math.cos(target.heading / 2)),
                 ),
             )
         )
         self.heading_to = target
+        self.trip = Trip(self.origin, target)
         handle = self.move_base.send_goal(goal)
         try:
             while True:
@@ -278,6 +312,7 @@ class NavigationModule(BehaviourModule):
             self.heading_to = None
             if not handle.status.is_terminal:
                 handle.cancel()
+        self.trip = None  # over; a trip stopped halfway (the state preempted) is kept for going on
         if status is not GoalStatus.SUCCEEDED:
             self.failed_target = target
             raise Abort(f"could not reach {target.name}: {handle.text or status.name}")
@@ -331,21 +366,32 @@ class NavigationModule(BehaviourModule):
 
     async def talking(self, ctx: GoalContext) -> None:
         asked_on_map = self.asked is None or self.db.on_current_map(self.asked)
-        kind = talk_kind(ctx.event, self.origin, asked_on_map=asked_on_map)
+        asked_has_pose = self.asked is None or self.asked.position is not None
+        kind = talk_kind(ctx.event, self.origin, asked_on_map=asked_on_map, asked_has_pose=asked_has_pose)
         place = {
             TalkKind.ARRIVED: self.arrived_at,
             TalkKind.OPINION: self.arrived_at if ctx.event == "succeeded" else self.asked,
             TalkKind.STUCK: self.failed_target,
             TalkKind.OFFER_GUIDE: self.asked,
             TalkKind.NOT_ON_MAP: self.asked,
+            TalkKind.NO_POSE: self.asked,
         }.get(kind)
         if kind is TalkKind.NOT_ON_MAP and place is not None:
             log.warning("cannot show the way: %s", self.db.off_map_reason(place))
+        if kind is TalkKind.NO_POSE and place is not None:
+            log.warning("cannot show the way: %s", self.db.no_pose_reason(place))
+        trip, self.trip = self.trip, None
+        goes_on = trip is not None and trip_goes_on(ctx.event, ctx.previous_state)
         self.origin = None
         if kind is TalkKind.OFFER_GUIDE:
             self._answer = self.node.clock.loop.create_future()  # listen while still speaking
         if kind is not TalkKind.NOTHING:
             await ctx.sleep(self._say(RESPONSE_FOR_TALK[kind], place.name if place else "place"))
+        if goes_on and trip is not None:
+            log.info("answered on the way; going on to %s", trip.target.name)
+            self.resume = trip
+            self.publish_event("navigation_command")  # back through planning to the same place
+            await ctx.wait_forever()
         if kind is TalkKind.OFFER_GUIDE and place is not None:
             answer = await self._await_answer()
             if answer is Intent.YES:
