@@ -120,11 +120,11 @@ def test_schedule_that_is_over_does_nothing(emotion: str) -> None:
 
 
 def expected_motivator_kind(emotion: str) -> str:
-    if emotion in ("happy", "loved", "dignified"):
+    if emotion in ("elated", "loved", "dignified"):
         return "crowded"
     if emotion == "angry":
         return "quiet"
-    if emotion == "sad":
+    if emotion == "inhibited":
         return "pleasant"
     return "wander"
 
@@ -152,32 +152,32 @@ def test_motivator_chooses_by_emotion(emotion: str) -> None:
 def test_the_spec_names_wander_for_bored_curious_unconcerned_and_neutral() -> None:
     for emotion in ("bored", "curious", "unconcerned", NEUTRAL):
         assert plan_for(Origin.MOTIVATOR, emotion).kind is PlanKind.WANDER
-    assert {"happy", "loved", "dignified"} == HAPPY
+    assert {"elated", "loved", "dignified"} == HAPPY
 
 
 def test_motivator_goes_somewhere_else_than_here() -> None:
     for seed in SEEDS:
-        happy = plan_for(Origin.MOTIVATOR, "happy", here=CAFETERIA, seed=seed)
+        happy = plan_for(Origin.MOTIVATOR, "elated", here=CAFETERIA, seed=seed)
         assert happy.target is not None and happy.target.name in CROWDED - {"cafeteria"}
-    sad = plan_for(Origin.MOTIVATOR, "sad", here=CAFETERIA)
+    sad = plan_for(Origin.MOTIVATOR, "inhibited", here=CAFETERIA)
     assert sad.target == PLACES["waiting area"]  # the next most pleasant place
 
 
 def test_happy_without_crowded_places_wanders() -> None:
     quiet = [place for place in PLACES.values() if not place.crowded]
     chosen = plan(
-        Origin.MOTIVATOR, "happy", requested=None, scheduled=None, places=quiet, rng=random.Random(0)
+        Origin.MOTIVATOR, "elated", requested=None, scheduled=None, places=quiet, rng=random.Random(0)
     )
     assert chosen.kind is PlanKind.WANDER
 
 
 def test_motivator_choice_is_deterministic_for_a_seed() -> None:
-    runs = [[plan_for(Origin.MOTIVATOR, "happy", seed=seed).target for seed in SEEDS] for _ in range(2)]
+    runs = [[plan_for(Origin.MOTIVATOR, "elated", seed=seed).target for seed in SEEDS] for _ in range(2)]
     assert runs[0] == runs[1]
 
 
 def test_no_reason_to_plan_does_nothing() -> None:
-    assert plan_for(None, "happy", requested=EL6, scheduled=CAFETERIA).kind is PlanKind.NOTHING
+    assert plan_for(None, "elated", requested=EL6, scheduled=CAFETERIA).kind is PlanKind.NOTHING
 
 
 @pytest.mark.parametrize(

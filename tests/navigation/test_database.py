@@ -99,7 +99,7 @@ def test_set_pose_puts_a_place_on_the_map_in_use_and_keeps_the_rest(db: Navigati
         (ResponseType.OPINION, "curious", "What is this place? A el6 you say?"),
         (ResponseType.ARRIVED, "neutral", "Human, this is cafeteria"),
         (ResponseType.OFFER_GUIDE, "curious", "I think I know where that is, would you like me to show you?"),
-        (ResponseType.CONFIRM, "happy", "At once."),
+        (ResponseType.CONFIRM, "elated", "At once."),
     ],
 )
 def test_default_responses_include_the_spec_scenarios(
@@ -297,8 +297,8 @@ def test_naive_now_is_refused(db: NavigationDatabase) -> None:
 
 
 def test_responses_fall_back_to_any_emotion(db: NavigationDatabase) -> None:
-    db.add_response(Response("I adore the LOCATION", ResponseType.ARRIVED, "happy"))
-    assert [r.sentence for r in db.responses(ResponseType.ARRIVED, "happy")] == ["I adore the LOCATION"]
+    db.add_response(Response("I adore the LOCATION", ResponseType.ARRIVED, "elated"))
+    assert [r.sentence for r in db.responses(ResponseType.ARRIVED, "elated")] == ["I adore the LOCATION"]
     assert [r.sentence for r in db.responses(ResponseType.ARRIVED, "Elated")] == ["I adore the LOCATION"]
     assert [r.sentence for r in db.responses(ResponseType.ARRIVED, "curious")] == ["Human, this is LOCATION"]
     assert [r.sentence for r in db.responses(ResponseType.ARRIVED, None)] == ["Human, this is LOCATION"]
@@ -306,8 +306,8 @@ def test_responses_fall_back_to_any_emotion(db: NavigationDatabase) -> None:
 
 def test_response_synonyms_and_removal(db: NavigationDatabase) -> None:
     added = db.add_response(Response("The LOCATION   is grey.", ResponseType.OPINION, "Inhibited"))
-    assert (added.sentence, added.emotion) == ("The LOCATION is grey.", "sad")
-    assert added in db.list_responses(ResponseType.OPINION, "sad")
+    assert (added.sentence, added.emotion) == ("The LOCATION is grey.", "inhibited")
+    assert added in db.list_responses(ResponseType.OPINION, "inhibited")
     assert db.remove_response(added.id or 0) == added
     assert added not in db.list_responses()
 
@@ -316,7 +316,7 @@ def test_response_synonyms_and_removal(db: NavigationDatabase) -> None:
     ("response", "message"),
     [
         (Response("I like it here", ResponseType.OPINION), "lacks the placeholder LOCATION"),
-        (Response("I am stuck", ResponseType.STUCK, "sad"), "lacks the placeholder LOCATION"),
+        (Response("I am stuck", ResponseType.STUCK, "inhibited"), "lacks the placeholder LOCATION"),
         (Response("   ", ResponseType.CONFIRM), "empty"),
         (Response("At once.", ResponseType.CONFIRM), r"exists already \(id \d+\)"),
         (Response("Fine.", ResponseType.CONFIRM, "very angry!"), "emotion 'very angry!' is not a name"),
@@ -330,8 +330,8 @@ def test_bad_responses_are_refused(db: NavigationDatabase, response: Response, m
 
 
 def test_confirmation_may_omit_the_place(db: NavigationDatabase) -> None:
-    added = db.add_response(Response("Right away!", ResponseType.CONFIRM, "happy"))
-    assert db.responses(ResponseType.CONFIRM, "happy") == [added]
+    added = db.add_response(Response("Right away!", ResponseType.CONFIRM, "elated"))
+    assert db.responses(ResponseType.CONFIRM, "elated") == [added]
     assert added.say("cafeteria") == "Right away!"
 
 
@@ -611,7 +611,7 @@ def test_a_version_1_file_gains_the_map_setting_and_the_not_on_map_sentence(tmp_
     with NavigationDatabase(path) as db:
         assert (db.get_location("gym").map, db.get_location("gym").position) == ("campus", (3.0, 4.0))
         assert db.current_map() is None
-        assert [r.say("gym") for r in db.responses(ResponseType.NOT_ON_MAP, "happy")] == [
+        assert [r.say("gym") for r in db.responses(ResponseType.NOT_ON_MAP, "elated")] == [
             "I know the gym, but it is not on the map I have here."
         ]
     with sqlite3.connect(path) as raw:

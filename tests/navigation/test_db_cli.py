@@ -162,7 +162,7 @@ def test_events_add_list_remove(db_path: Path) -> None:
 def test_responses_add_list_remove(db_path: Path) -> None:
     result = run(db_path, "responses", "add", "opinion", "The LOCATION glows.", "--emotion", "elated")
     assert result.exit_code == 0, result.output
-    listed = run(db_path, "responses", "list", "--type", "opinion", "--emotion", "happy").output
+    listed = run(db_path, "responses", "list", "--type", "opinion", "--emotion", "elated").output
     assert "The LOCATION glows." in listed
     with NavigationDatabase(db_path) as db:
         [added] = [r for r in db.list_responses(ResponseType.OPINION) if r.sentence == "The LOCATION glows."]

@@ -326,7 +326,7 @@ def test_a_command_while_driving_changes_the_destination(clock: VirtualClock, cy
 # --- "where is X?" -------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("emotion", [NEUTRAL, "happy", "curious"])
+@pytest.mark.parametrize("emotion", [NEUTRAL, "elated", "curious"])
 def test_where_is_el6_yes_guides_there(clock: VirtualClock, cyborg: Cyborg, emotion: str) -> None:
     async def main() -> None:
         await cyborg.settle(emotion)
@@ -521,7 +521,7 @@ def test_what_do_you_think_of_the_cafeteria(clock: VirtualClock, cyborg: Cyborg,
 def test_opinions_differ_by_emotion(clock: VirtualClock, tmp_path: Path) -> None:
     """Happy and angry robots do not say the same thing about the same place."""
     heard: dict[str, set[str]] = {}
-    for emotion in ("happy", "angry"):
+    for emotion in ("elated", "angry"):
         for seed in range(3):
             local = VirtualClock()
             try:
@@ -536,7 +536,7 @@ def test_opinions_differ_by_emotion(clock: VirtualClock, tmp_path: Path) -> None
                 heard.setdefault(emotion, set()).add(robot.said[0].text)
             finally:
                 local.close()
-    assert heard["happy"] and heard["angry"] and not heard["happy"] & heard["angry"]
+    assert heard["elated"] and heard["angry"] and not heard["elated"] & heard["angry"]
 
 
 # --- an unreachable place ---------------------------------------------------------------------
@@ -546,7 +546,7 @@ def test_opinions_differ_by_emotion(clock: VirtualClock, tmp_path: Path) -> None
     ("emotion", "sentence"),
     [
         (NEUTRAL, "I am stuck and cannot get to the boiler room."),
-        ("sad", "I tried, but I could not reach the boiler room."),
+        ("inhibited", "I tried, but I could not reach the boiler room."),
     ],
 )
 def test_an_unreachable_place_aborts_and_says_it_is_stuck(
@@ -579,7 +579,7 @@ def test_an_unreachable_place_aborts_and_says_it_is_stuck(
 
 @pytest.mark.parametrize(
     ("emotion", "places"),
-    [("happy", CROWDED), ("loved", CROWDED), ("angry", QUIET), ("sad", {"cafeteria"})],
+    [("elated", CROWDED), ("loved", CROWDED), ("angry", QUIET), ("inhibited", {"cafeteria"})],
 )
 def test_on_its_own_it_goes_where_the_emotion_says(
     clock: VirtualClock, cyborg: Cyborg, emotion: str, places: set[str]
@@ -600,7 +600,7 @@ def test_a_sad_robot_at_the_most_pleasant_place_goes_to_the_next(clock: VirtualC
         await cyborg.settle()
         cyborg.hear("go to the cafeteria")
         await cyborg.trip_done()
-        await cyborg.settle("sad")
+        await cyborg.settle("inhibited")
         cyborg.send_event("navigation_emotional")
         await cyborg.until(lambda: cyborg.state == "navigation_moving", 5.0, "moving")
         await cyborg.until(lambda: cyborg.state == "idle", 300.0, "idle")
@@ -609,7 +609,7 @@ def test_a_sad_robot_at_the_most_pleasant_place_goes_to_the_next(clock: VirtualC
     assert cyborg.at("waiting area")  # the cafeteria is nicer, but it is already there
 
 
-@pytest.mark.parametrize("mood", ["happy", "sad", "angry"])
+@pytest.mark.parametrize("mood", ["elated", "inhibited", "angry"])
 def test_wandering_ends_once_no_longer_bored_and_the_base_stops(
     clock: VirtualClock, cyborg: Cyborg, mood: str
 ) -> None:
@@ -667,7 +667,7 @@ def test_a_moment_of_another_emotion_does_not_end_wandering(clock: VirtualClock,
         cyborg.send_event("navigation_emotional")
         await cyborg.until(lambda: cyborg.base.wandering, 10.0, "wandering")
         await clock.sleep(30.0)
-        cyborg.set_emotion("surprised")
+        cyborg.set_emotion("puzzled")
         await clock.sleep(WANDER_DEBOUNCE / 2)
         cyborg.set_emotion("bored")
         await clock.sleep(30.0)
@@ -718,7 +718,7 @@ def test_an_unpleasant_arrival_lowers_pleasure(clock: VirtualClock, cyborg: Cybo
 
 def test_own_choice_raises_dominance(clock: VirtualClock, cyborg: Cyborg) -> None:
     async def main() -> None:
-        await cyborg.settle("sad")
+        await cyborg.settle("inhibited")
         cyborg.send_event("navigation_emotional")
         await cyborg.until(lambda: cyborg.state == "navigation_moving", 5.0, "moving")
 

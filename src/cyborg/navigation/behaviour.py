@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from cyborg.navigation.database import Location, Response, ResponseType
 
-HAPPY = frozenset({"happy", "loved", "dignified"})
+HAPPY = frozenset({"elated", "loved", "dignified"})
 WANDERING_MOODS = frozenset({"bored", "curious", "unconcerned"})
 ANGRY = "angry"
 NEUTRAL = "neutral"
@@ -136,9 +136,11 @@ def plan(
             if quiet:
                 target = rng.choice(quiet)
                 return Plan(PlanKind.MOVE, f"angry: wants to be alone at {target.name}", target, OWN_CHOICE)
-        if emotion == "sad" and others:
+        if emotion == "inhibited" and others:
             target = max(others, key=lambda p: p.pleasantness)
-            return Plan(PlanKind.MOVE, f"sad: goes somewhere pleasant, {target.name}", target, OWN_CHOICE)
+            return Plan(
+                PlanKind.MOVE, f"inhibited: goes somewhere pleasant, {target.name}", target, OWN_CHOICE
+            )
         return Plan(PlanKind.WANDER, f"{emotion}: wanders around", None, OWN_CHOICE)
     return Plan(PlanKind.NOTHING, "no reason to move")
 
@@ -146,9 +148,9 @@ def plan(
 def should_stop_wandering(emotion: str) -> bool:
     """Wandering ends once the robot is no longer bored, unconcerned or curious (issue; thesis 11.3.1).
 
-    It ends when the robot feels something else: happy, angry, surprised, ... ``neutral`` does
+    It ends when the robot feels something else: elated, angry, puzzled, ... ``neutral`` does
     not end it: it is no emotion of its own but the region near no prototype (the threshold of
-    docs/emotion-threshold.md), which the PAD values cross on their way from unconcerned to happy;
+    docs/emotion-threshold.md), which the PAD values cross on their way from unconcerned to elated;
     the thesis's table, without that region, still called the robot unconcerned there and
     wandered on for about 120 s until it was elated (10.2.1). The module waits for the emotion
     to hold for a moment (``WANDER_DEBOUNCE``) so that one flicker of the label does not end it.

@@ -35,6 +35,7 @@ from datetime import UTC, datetime, timedelta, timezone, tzinfo
 from typing import Any
 from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
+from cyborg.emotion.model import TABLE_2_2_ALIASES
 from cyborg.errors import CyborgError, DatabaseError
 from cyborg.navigation.calendar import normalise_recurrence, occurrences_between
 from cyborg.navigation.keywords import LocationMatcher, normalise
@@ -144,10 +145,6 @@ NEW_RESPONSE_TYPES: dict[int, tuple[ResponseType, ...]] = {
 """Response types added by a schema version: migrating an older file adds their default sentences."""
 
 
-EMOTION_SYNONYMS = {"elated": "happy", "inhibited": "sad", "puzzled": "surprised"}
-"""Names from the spec's Table 2.2 mapped to the names the emotion system uses."""
-
-
 @dataclass(frozen=True)
 class Location:
     """A known place; ``x`` and ``y`` are None while its pose is not known (then it is no target)."""
@@ -221,24 +218,24 @@ _R = ResponseType
 DEFAULT_RESPONSES: tuple[Response, ...] = (
     Response("I like the LOCATION.", _R.OPINION),
     Response("I am happy about LOCATION", _R.OPINION, "neutral"),
-    Response("I love the LOCATION, it is one of my favourite places!", _R.OPINION, "happy"),
-    Response("The LOCATION makes me smile.", _R.OPINION, "happy"),
+    Response("I love the LOCATION, it is one of my favourite places!", _R.OPINION, "elated"),
+    Response("The LOCATION makes me smile.", _R.OPINION, "elated"),
     Response("What is this place? A LOCATION you say?", _R.OPINION, "curious"),
     Response("I wonder what goes on at the LOCATION.", _R.OPINION, "curious"),
     Response("I hate the LOCATION.", _R.OPINION, "angry"),
     Response("Do not talk to me about the LOCATION.", _R.OPINION, "angry"),
     Response("The LOCATION is so boring.", _R.OPINION, "bored"),
     Response("Nothing ever happens at the LOCATION.", _R.OPINION, "bored"),
-    Response("The LOCATION makes me feel a bit down.", _R.OPINION, "sad"),
+    Response("The LOCATION makes me feel a bit down.", _R.OPINION, "inhibited"),
     Response("The LOCATION is fine, I suppose.", _R.OPINION, "unconcerned"),
-    Response("Oh! The LOCATION? I did not expect that.", _R.OPINION, "surprised"),
+    Response("Oh! The LOCATION? I did not expect that.", _R.OPINION, "puzzled"),
     Response("The LOCATION is a place of some importance, like me.", _R.OPINION, "dignified"),
     Response("Everyone at the LOCATION is so kind to me.", _R.OPINION, "loved"),
     Response("Human, this is LOCATION", _R.ARRIVED),
     Response("There. The LOCATION. Happy now?", _R.ARRIVED, "angry"),
     Response("I am stuck and cannot get to the LOCATION.", _R.STUCK),
     Response("Something is blocking my way to the LOCATION!", _R.STUCK, "angry"),
-    Response("I tried, but I could not reach the LOCATION.", _R.STUCK, "sad"),
+    Response("I tried, but I could not reach the LOCATION.", _R.STUCK, "inhibited"),
     Response("I think I know where that is, would you like me to show you?", _R.OFFER_GUIDE),
     Response("At once.", _R.CONFIRM),
     Response("Fine, if I must.", _R.CONFIRM, "bored"),
@@ -868,9 +865,17 @@ class NavigationDatabase(SQLiteFile):
         except ValueError:
             log.warning("skipping response %s in %s: unknown type %r", response_id, self.path, kind)
             return None
-        return Response(
-            str(sentence), response_type, None if emotion is None else str(emotion), int(str(response_id))
-        )
+        try:
+            key = None if emotion is None else _emotion_key(str(emotion))
+        except DatabaseError:
+            log.warning(
+                "response %s in %s has emotion %r, no name; it fits any emotion",
+                response_id,
+                self.path,
+                emotion,
+            )
+            key = None
+        return Response(str(sentence), response_type, key, int(str(response_id)))
 
 
 # --- validation helpers ----------------------------------------------------------------------
@@ -920,13 +925,14 @@ def _compact(name: str) -> str:
 
 
 def _emotion_key(emotion: str | None) -> str | None:
-    """Canonical emotion name (lower case, Table 2.2 synonyms mapped); None/'' means any emotion."""
+    """Canonical emotion name (lower case, Table 2.2's bracketed words mapped to its names, so a
+    sentence stored for 'happy' by an older version fits 'elated'); None/'' means any emotion."""
     if emotion is None or not emotion.strip():
         return None
     key = "_".join(emotion.strip().lower().split())
     if not re.fullmatch(r"[a-z][a-z0-9_]*", key):
-        raise DatabaseError(f"emotion {emotion!r} is not a name; use e.g. happy, angry or curious")
-    return EMOTION_SYNONYMS.get(key, key)
+        raise DatabaseError(f"emotion {emotion!r} is not a name; use e.g. elated, angry or curious")
+    return TABLE_2_2_ALIASES.get(key, key)
 
 
 def _zone_key(moment: datetime) -> str:
