@@ -9,7 +9,9 @@ warning and started afresh, so the robot never crashes on it.
 
 from __future__ import annotations
 
+import fcntl
 import logging
+import os
 import sqlite3
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
@@ -21,6 +23,51 @@ from typing import Self
 from cyborg.errors import DatabaseError
 
 log = logging.getLogger(__name__)
+
+
+LOCK_FILE = "sim.lock"
+
+
+@contextmanager
+def lock_data_dir(folder: Path, what: str = "cyborg sim") -> Iterator[Path]:
+    """Hold ``folder`` (created if missing) for this process while the block runs.
+
+    Two robots on one data folder would overwrite each other's databases; the second one
+    gets a DatabaseError naming the first one's process and the fix. The lock is an
+    ``fcntl.flock`` on ``folder/sim.lock``, so it goes away with the process however it ends.
+    """
+    if folder.exists() and not folder.is_dir():
+        raise DatabaseError(
+            f"the data folder {folder} is a file, not a folder; fix: give a folder with --data-dir "
+            "(it is created if missing)"
+        )
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        handle = open(folder / LOCK_FILE, "a+", encoding="utf-8")  # noqa: SIM115 - held until the block ends
+    except OSError as exc:
+        raise DatabaseError(
+            f"cannot use the data folder {folder}: {exc.strerror}; fix: give a writable folder with --data-dir"
+        ) from exc
+    with handle:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            handle.seek(0)
+            holder = handle.read().strip() or "another process"
+            raise DatabaseError(
+                f"the data folder {folder} is in use by {holder}; fix: stop that one first, or give this "
+                "one its own folder with --data-dir"
+            ) from None
+        handle.seek(0)
+        handle.truncate()
+        handle.write(f"{what} (process {os.getpid()})\n")
+        handle.flush()
+        try:
+            yield folder
+        finally:
+            handle.seek(0)
+            handle.truncate()
+            fcntl.flock(handle, fcntl.LOCK_UN)
 
 
 class Unusable(Exception):
@@ -66,6 +113,11 @@ class SQLiteFile:
         try:
             return self._open()
         except Unusable as exc:
+            if isinstance(exc.__cause__, sqlite3.Error) and _disk_trouble(exc.__cause__):
+                raise DatabaseError(
+                    f"cannot use {self.path}: {exc.__cause__}; fix: free some space on that disk "
+                    "(or give another folder with --data-dir)"
+                ) from exc
             self._move_aside(str(exc.args[0]))
         try:
             return self._open()
@@ -96,9 +148,12 @@ class SQLiteFile:
                 conn.execute("PRAGMA foreign_keys=ON")
         except sqlite3.OperationalError as exc:
             conn.close()
-            raise DatabaseError(
-                f"cannot use {self.path}: {exc}; check permissions and that no other program locks it"
-            ) from exc
+            fix = (
+                "free some space on that disk (or give another folder with --data-dir)"
+                if _disk_trouble(exc)
+                else "check permissions and that no other program locks it"
+            )
+            raise DatabaseError(f"cannot use {self.path}: {exc}; fix: {fix}") from exc
         except sqlite3.DatabaseError as exc:
             conn.close()
             raise Unusable(f"not an SQLite database ({exc})") from exc
@@ -161,3 +216,9 @@ class SQLiteFile:
         self, kind: type[BaseException] | None, value: BaseException | None, tb: TracebackType | None
     ) -> None:
         self.close()
+
+
+def _disk_trouble(exc: sqlite3.Error) -> bool:
+    """A full disk or an I/O error: the file is fine, the disk is not (never move it aside then)."""
+    code = getattr(exc, "sqlite_errorcode", 0) & 0xFF
+    return code in (sqlite3.SQLITE_FULL, sqlite3.SQLITE_IOERR)

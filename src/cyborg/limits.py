@@ -1,0 +1,42 @@
+"""Limits on everything a user or a file can hand the robot.
+
+A small input must not take unbounded memory or time: a 600-byte YAML alias bomb, a
+megabyte of "speech", a map header promising a gigapixel image or a calendar rule that
+repeats every second since 1970. Each limit lives here, so the refusals, the checks and
+docs/configuration.md name the same numbers. Every refusal names the limit and the fix.
+"""
+
+from __future__ import annotations
+
+MAX_YAML_BYTES = 1_000_000
+"""Largest state machine file or scenario script. The packaged Cyborg is about 8 kB."""
+
+MAX_YAML_NODES = 200_000
+"""Most values a YAML file may hold once its aliases (``*name``) are expanded."""
+
+MAX_YAML_DEPTH = 64
+"""Deepest nesting of mappings and lists in a YAML file."""
+
+MAX_TEXT_LENGTH = 2_000
+"""Longest text the robot is told to have heard (a scenario's ``say``, the API's /api/say)."""
+
+MAX_SCRIPT_SECONDS = 366 * 24 * 3600.0
+"""Longest virtual time a scenario script may run (``until``, ``at``, ``delay``): a year."""
+
+MAX_SPEED = 1e6
+"""Largest virtual-time factor for ``--speed`` (use ``max`` for as fast as possible)."""
+
+MAX_MAP_CELLS = 25_000_000
+"""Most grid cells of a map (5000 x 5000, e.g. 250 m x 250 m at 5 cm): about 25 MB of grid."""
+
+MAX_ICS_BYTES = 10_000_000
+"""Largest .ics calendar file ``cyborg db import-ics`` reads."""
+
+MAX_RULE_COUNT = 10_000
+"""Largest COUNT of a calendar rule (a daily event for 27 years); longer series use UNTIL."""
+
+MAX_EVENT_DAYS = 366
+"""Longest calendar event (one occurrence), in days."""
+
+MAX_OCCURRENCES_PER_QUERY = 1_000
+"""Most occurrences of one recurring event that one calendar query expands."""
