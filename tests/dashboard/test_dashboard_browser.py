@@ -374,11 +374,11 @@ def test_motivator_decisions_show_reward_cost_and_the_choice(browser: Browser, s
         fake = socket[0]
         seq = 10**6
         # Ranked by reward among those whose reward exceeds their cost: "music_play" wins on reward
-        # although "joke_ask" has the larger net; "weather_ask" costs more than it brings.
+        # although "joke_tell" has the larger net; "weather_tell" costs more than it brings.
         candidates = [
-            {"event": "joke_ask", "reward": 0.3, "cost": 0.1, "net": 0.2, "eligible": True},
+            {"event": "joke_tell", "reward": 0.3, "cost": 0.1, "net": 0.2, "eligible": True},
             {"event": "music_play", "reward": 0.5, "cost": 0.45, "net": 0.05, "eligible": True},
-            {"event": "weather_ask", "reward": 0.05, "cost": 0.2, "net": -0.15, "eligible": False},
+            {"event": "weather_tell", "reward": 0.05, "cost": 0.2, "net": -0.15, "eligible": False},
         ]
         fake.send(
             page,
@@ -401,12 +401,12 @@ def test_motivator_decisions_show_reward_cost_and_the_choice(browser: Browser, s
         expect(chosen).to_have_count(1)
         expect(chosen).to_have_text("✓ music_play reward 0.5000 · cost 0.4500 · net 0.0500")
         assert chips.first.get_attribute("data-event") == "music_play", "the chosen one comes first"
-        expect(row.locator('.cand[data-event="joke_ask"]')).to_have_text(
-            "joke_ask reward 0.3000 · cost 0.1000 · net 0.2000"
+        expect(row.locator('.cand[data-event="joke_tell"]')).to_have_text(
+            "joke_tell reward 0.3000 · cost 0.1000 · net 0.2000"
         )
-        refused = row.locator('.cand[data-event="weather_ask"]')
+        refused = row.locator('.cand[data-event="weather_tell"]')
         expect(refused).to_have_class(re.compile(r"\bineligible\b"))
-        expect(refused).to_have_text("✗ weather_ask reward 0.0500 · cost 0.2000 · net -0.1500")
+        expect(refused).to_have_text("✗ weather_tell reward 0.0500 · cost 0.2000 · net -0.1500")
         expect(refused).to_have_attribute(
             "title", re.compile("not eligible: its cost is not below its reward")
         )
@@ -454,7 +454,7 @@ def test_motivator_decisions_show_reward_cost_and_the_choice(browser: Browser, s
         rule = page.request.get(sim + "/api/health").json()["motivator"]["selection"]
         latest = page.locator(f'#log li[data-seq="{seq + 5}"]')
         expect(latest.locator(".rule")).to_contain_text(f"by {rule}")  # no rule in the record: the config's
-        expect(latest.locator(".cand.ineligible")).to_contain_text("weather_ask")
+        expect(latest.locator(".cand.ineligible")).to_contain_text("weather_tell")
         page.screenshot(path=str(SHOTS / "cyborg-dashboard-motivator.png"))
     finally:
         page.context.close()

@@ -237,3 +237,37 @@ def test_saturations_survive_a_restart(tmp_path: Path) -> None:
     assert chosen
     saturations = ControllerStore(tmp_path / "controller.db").get_saturations()
     assert any(value > 0 for value in saturations.values())
+
+
+def test_an_event_the_controller_did_not_take_gives_no_reward_and_no_saturation(tmp_path: Path) -> None:
+    """Another module's event reaches the controller in the same instant as the motivator's choice
+    (as the scheduler's did at t = 10 s in scenario C): only the event taken counts."""
+    clock = VirtualClock()
+    transport = EmbeddedTransport(clock)
+    other = transport.node("cyborg_music_fan").publisher(topics.REGISTER_EVENT, String)
+    # due at the motivator's first decision (10 s in idle), and queued before it
+    clock.call_later(10.0, lambda: other.publish(String(data="music_play")))
+    config = CONFIG.replace(
+        "{succeeded: idle, aborted: idle, joke_tell: joke}", "{succeeded: idle, aborted: idle}"
+    )
+    config = config.replace(
+        "    - {state: music, event: joke_tell, reward_pleasure: 0.0, reward_arousal: 0.0, reward_dominance: -0.5}\n",
+        "",
+    )
+    robot = build_robot(parse_config(config), transport, data_dir=tmp_path)
+    watch = Watch(transport)
+    robot.start()
+    try:
+        clock.run(clock.sleep(10.5))
+        assert watch.events_seen == [("idle", "joke_tell")], "the motivator did choose the joke"
+        assert watch.transitions()[-1] == ("idle", "music_play", "music"), "the other event came first"
+        assert watch.feedback == [], "no reward for a joke that was never told"
+        assert robot.motivator.saturations.get("joke_tell", 0.0) == 0.0
+        assert robot.motivator.not_taken == {"joke_tell": 1} and robot.motivator.chosen == {}
+        assert robot.store.get_saturations().get("joke_tell", 0.0) == 0.0
+        clock.run(clock.sleep(80.0))  # back in idle after the music: a choice taken is rewarded
+        taken = [e for e in watch.events_seen if e[0] == "idle"]
+        assert robot.motivator.chosen and len(watch.feedback) == sum(robot.motivator.chosen.values())
+        assert watch.feedback[0] == REWARDS[taken[1]]
+    finally:
+        clock.close()

@@ -67,11 +67,11 @@ A = ev("a_many", 0.1, 0.1, 0.1)  # R at neutral = 0.875 * 0.15 = 0.13125
 B = ev("b_pleasure", 0.2, 0.0, 0.0)  # R at neutral = 0.875 * 0.10 = 0.0875
 
 
-def test_by_default_the_largest_reward_above_its_cost_wins() -> None:
-    # Thesis 6.3/8.3: "selects the action that gives the largest reward" among reward > cost.
+def test_the_reward_rule_takes_the_largest_reward_above_its_cost() -> None:
+    # The thesis read literally: the largest reward among reward > cost (an option).
     # A: saturation 0.343, cbrt = 0.7, cost = 0.7 * 0.15 = 0.105 < R = 0.13125, net = 0.02625
     # B: saturation 0, cost 0, R = net = 0.0875 < 0.13125
-    decision = choose(PAD(), [A, B], {"a_many": 0.343}, state="idle")
+    decision = choose(PAD(), [A, B], {"a_many": 0.343}, state="idle", rule=SelectionRule.REWARD)
     assert decision.status is DecisionStatus.CHOSEN
     assert decision.chosen == A
     by_name = {c.event.event: c for c in decision.candidates}
@@ -81,9 +81,12 @@ def test_by_default_the_largest_reward_above_its_cost_wins() -> None:
     assert all(c.eligible for c in decision.candidates)
 
 
-def test_net_rule_prefers_the_fresh_event() -> None:
-    decision = choose(PAD(), [A, B], {"a_many": 0.343}, rule=SelectionRule.NET)
+def test_by_default_reward_minus_cost_ranks_so_a_just_used_event_gives_way() -> None:
+    # After one choice A's saturation is the thesis's 0.33 (+0.013 left over): its net 0.026 is
+    # below fresh B's 0.0875, so B comes next although A's reward is larger.
+    decision = choose(PAD(), [A, B], {"a_many": 0.343})
     assert decision.chosen == B
+    assert MotivatorSettings().selection is SelectionRule.NET
 
 
 def test_event_whose_cost_reaches_its_reward_is_not_eligible() -> None:
@@ -138,8 +141,8 @@ def test_the_reward_rule_repeats_a_question_until_its_cost_catches_up() -> None:
     # Four equally rewarding questions, event_cost 0.33: at a neutral mood R = 0.875 * sum(d), so a
     # question stays eligible while cbrt(saturation) < 0.875, i.e. saturation < 0.67: asked 2-3 times.
     questions = [ev(name, 0.02, 0.02) for name in ("joke", "selfie", "simon", "weather")]
-    assert ask_ten_times(questions, MotivatorSettings())[:2] == ["joke", "joke"]
-    rotating = ask_ten_times(questions, MotivatorSettings(selection=SelectionRule.NET))
+    assert ask_ten_times(questions, MotivatorSettings(selection=SelectionRule.REWARD))[:2] == ["joke", "joke"]
+    rotating = ask_ten_times(questions, MotivatorSettings())  # the default: reward - cost
     assert all(x != y for x, y in itertools.pairwise(rotating))
     assert set(rotating) == {"joke", "selfie", "simon", "weather"}
 
@@ -147,7 +150,7 @@ def test_the_reward_rule_repeats_a_question_until_its_cost_catches_up() -> None:
 def test_a_high_event_cost_makes_questions_rotate_with_the_reward_rule() -> None:
     # event_cost 1 saturates a question at once (cost = sum(d) > R); relief 0.15 per other choice
     # brings it back below 0.67 after three others: 1 - 3 * 0.15 = 0.55.
-    settings = MotivatorSettings(saturation_relief=0.15)
+    settings = MotivatorSettings(saturation_relief=0.15, selection=SelectionRule.REWARD)
     questions = [ev(name, 0.02, 0.02, event_cost=1.0) for name in ("joke", "selfie", "simon", "weather")]
     asked = ask_ten_times(questions, settings)
     assert "-" not in asked
@@ -156,10 +159,13 @@ def test_a_high_event_cost_makes_questions_rotate_with_the_reward_rule() -> None
 
 
 def test_the_default_robot_rotates_its_questions() -> None:
-    # cyborg.yaml's conversation questions (thesis 10.2.4, scenario D) at a neutral mood.
+    # cyborg.yaml's conversation questions (thesis 10.2.4, scenario D) at a neutral mood, with
+    # the thesis's saturation step and no event_cost of their own.
     settings = load_config(packaged_config("cyborg.yaml")).model.motivator
     questions = [e for e in settings.events if e.state == "conversation"]
-    assert settings.selection is SelectionRule.REWARD and len(questions) == 5
+    assert settings.selection is SelectionRule.NET and len(questions) == 5
+    assert (settings.saturation_increment, settings.saturation_relief) == (0.33, 0.05)
+    assert all(q.event_cost is None for q in questions)
     asked = ask_ten_times(questions, settings)
     assert "-" not in asked, asked
     assert all(x != y for x, y in itertools.pairwise(asked)), asked
@@ -219,7 +225,7 @@ def test_readiness_and_reset() -> None:
 def test_default_settings() -> None:
     s = MotivatorSettings()
     assert (s.rate_seconds, s.saturation_increment, s.saturation_relief) == (2.0, 0.33, 0.05)
-    assert s.selection is SelectionRule.REWARD
+    assert s.selection is SelectionRule.NET
     assert s.increment_for(NAVIGATION) == 0.33
 
 

@@ -58,3 +58,26 @@ def test_a_script_run_starts_fresh_whatever_its_data_folder_holds(tmp_path: Path
     assert emotions[-1]["emotion"] == "unconcerned", "the idle module's boredom counts: the system is on"
     chosen = [r["event"] for r in records if r["type"] == "motivator" and r["status"] == "chosen"]
     assert chosen == ["navigation_emotional"], "saturations start at 0 too"
+
+
+def test_a_question_asked_during_a_question_is_answered(tmp_path: Path) -> None:
+    """What the navigation module hears while the robot asks its own question is acted on."""
+    script = tmp_path / "ask.yaml"
+    script.write_text(
+        "seed: 5\nuntil: 60\nsteps:\n"
+        "  - {when: {type: emotion, emotion: unconcerned}, delay: 1, say: Hello}\n"
+        "  - {when: {type: state, from: conversation}, delay: 2, say: where is the cafeteria}\n"
+    )
+    records = run_scenario(load_config(packaged_config("cyborg.yaml")), load_script(script))
+    changes = [r for r in records if r["type"] == "state"]
+    question = next(r for r in changes if r["from"] == "conversation")
+    assert question["to"] in {"joke", "weather", "selfie", "follower", "simon_says"}
+    heard = next(r["t"] for r in records if r["type"] == "heard" and "cafeteria" in r["text"])
+    answer = next(r for r in changes if r["t"] >= heard)
+    assert (answer["from"], answer["event"], answer["to"]) == (
+        question["to"],
+        "navigation_information",
+        "navigation_talking",
+    )
+    offers = [r for r in records if r["type"] == "say" and "show you" in r["text"]]
+    assert offers and offers[0]["t"] == pytest.approx(heard, abs=0.5)

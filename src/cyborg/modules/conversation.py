@@ -4,8 +4,10 @@ The conversation module listens to speech-to-text: a greeting asks the
 controller for the ``conversation`` state (event ``conversation_interest``).
 While in conversation it waits; the motivator picks one of the question
 states (joke, weather, selfie, follower, Simon says), each served by its own
-question module, which asks its question and succeeds. The conversation ends
-(succeeded) after a quiet spell.
+question module, which asks its question, waits for an answer and succeeds. A
+question left unanswered cools the robot down (less arousal: unconcerned, as in
+thesis 10.2.4); an answer pleases it. The conversation ends (succeeded) after a
+quiet spell.
 """
 
 from __future__ import annotations
@@ -49,7 +51,6 @@ class ConversationModule(BehaviourModule):
         try:
             if ctx.event == CONVERSATION_INTEREST:
                 self.last_heard = self.node.clock.monotonic()
-                self.send_emotion(0.05, 0.05, 0.0)
             while True:
                 remaining = self.last_heard + self.quiet_seconds - self.node.clock.monotonic()
                 if remaining <= 0:
@@ -59,15 +60,49 @@ class ConversationModule(BehaviourModule):
             self.in_conversation = False
 
 
-class QuestionModule(BehaviourModule):
-    """Asks one question through speech, gives the person time to answer, and succeeds."""
+UNANSWERED_FEEDBACK = (-0.01, -0.04, 0.01)
+"""PAD change when nobody answers a question: the robot cools down towards unconcerned."""
+ANSWERED_FEEDBACK = (0.03, 0.03, 0.0)
+"""PAD change when someone answers."""
 
-    def __init__(self, node: Node, *, action: str, question: str, answer_seconds: float = 6.0) -> None:
+
+class QuestionModule(BehaviourModule):
+    """Asks one question through speech, gives the person time to answer, and succeeds.
+
+    Whatever speech-to-text hears in that time counts as an answer (``answered_feedback``);
+    silence sends ``unanswered_feedback``.
+    """
+
+    def __init__(
+        self,
+        node: Node,
+        *,
+        action: str,
+        question: str,
+        answer_seconds: float = 6.0,
+        unanswered_feedback: tuple[float, float, float] = UNANSWERED_FEEDBACK,
+        answered_feedback: tuple[float, float, float] = ANSWERED_FEEDBACK,
+    ) -> None:
         super().__init__(node)
         self.question = question
         self.answer_seconds = answer_seconds
+        self.unanswered_feedback = unanswered_feedback
+        self.answered_feedback = answered_feedback
+        self._asked_at: float | None = None
+        self._answered = False
         self.serve(action, self.ask)
+        self.on_speech_text(self._on_text)
+
+    def _on_text(self, text: str, info: MessageInfo) -> None:
+        if self._asked_at is not None:
+            self._answered = True
 
     async def ask(self, ctx: GoalContext) -> None:
-        self.say(self.question)
-        await ctx.sleep(self.answer_seconds)
+        self._answered = False
+        self._asked_at = self.node.clock.monotonic()
+        try:
+            self.say(self.question)
+            await ctx.sleep(self.answer_seconds)
+        finally:
+            self._asked_at = None
+        self.send_emotion(*(self.answered_feedback if self._answered else self.unanswered_feedback))

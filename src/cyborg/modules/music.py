@@ -71,6 +71,11 @@ def find_player() -> tuple[str, ...] | None:
     return None
 
 
+MUSIC_FEEDBACK = (0.0, 0.05, -0.12)
+"""PAD change when a tune starts: stirring and a little humbling, which makes the robot curious
+(thesis 10.2.1 observation 2, 10.2.2 observation 3)."""
+
+
 class MusicModule(BehaviourModule):
     def __init__(
         self,
@@ -79,8 +84,10 @@ class MusicModule(BehaviourModule):
         action: str = MUSIC_ACTION,
         tune_dir: Path | None = None,
         play_audio: bool | None = None,
+        feedback: tuple[float, float, float] = MUSIC_FEEDBACK,
     ) -> None:
         super().__init__(node)
+        self.feedback = feedback
         directory = tune_dir or Path(tempfile.gettempdir())
         directory.mkdir(parents=True, exist_ok=True)
         self.tune_path = directory / "cyborg-tune.wav"
@@ -92,7 +99,7 @@ class MusicModule(BehaviourModule):
 
     async def play(self, ctx: GoalContext) -> None:
         self.plays += 1
-        self.send_emotion(0.05, 0.05, 0.0)
+        self.send_emotion(*self.feedback)
         if self.player is None:
             await ctx.sleep(self.duration)
             return

@@ -4,8 +4,11 @@ Every ``rate_seconds`` it weighs the motivational events registered for the
 active state (those that are transitions of it) and publishes the decision on
 ``/cyborg_controller/motivator_decision`` (JSON: status, reason and every
 candidate's reward, cost and net), also when nothing is chosen. When an event
-is worth it, it publishes the event on ``register_event`` and its reward as
-emotional feedback, like any module. It does not decide while a handover is in
+is worth it, it publishes the event on ``register_event``, like any module; once
+the controller has taken it (a state change by that event from the state it was
+chosen in) it sends the event's reward as emotional feedback and raises the
+event's saturation. An event the controller did not take (another module's
+event came first) gives neither. It does not decide while a handover is in
 progress: from any event that is a transition of the active state (its own or
 another module's, seen on ``register_event``) until the state changes, and
 while the in-process controller, if given, is not simply running a module.
@@ -88,6 +91,14 @@ class _Handover:
     since: float
 
 
+@dataclass(frozen=True)
+class _Sent:
+    """A chosen event on its way to the controller: rewarded once a state change shows it taken."""
+
+    event: MotivationalEvent
+    state: str
+
+
 class Motivator:
     """Chooses motivational events on a timer; counts what it chose.
 
@@ -114,6 +125,10 @@ class Motivator:
         self.pad = PAD(0.0, 0.0, 0.0)
         self.saturations = store.get_saturations()
         self.chosen = Counter[str]()
+        """Events the controller took, by name (each was rewarded)."""
+        self.not_taken = Counter[str]()
+        """Events sent but not taken (another event came first): no reward, no saturation."""
+        self._sent: _Sent | None = None
         self.last_decision: Decision | None = None
         self.handover_patience = machine.timeouts.preempt + machine.timeouts.connect + HANDOVER_MARGIN
         self._handover: _Handover | None = None
@@ -133,6 +148,12 @@ class Motivator:
         return [e for e in self.store.list_events(state) if e.event in valid]
 
     def _on_state(self, message: SystemState, info: MessageInfo) -> None:
+        sent, self._sent = self._sent, None
+        if sent is not None:
+            if message.event == sent.event.event and message.from_system_state == sent.state:
+                self._reward(sent.event)
+            else:
+                self._not_taken(sent, f"the controller took {message.event!r} instead")
         self.state = message.to_system_state
         self.entered_at = self.node.clock.monotonic()
         self._handover = None
@@ -170,6 +191,9 @@ class Motivator:
                 self.state,
             )
             self._handover = None
+            if self._sent is not None:
+                self._not_taken(self._sent, "no state change followed")
+                self._sent = None
         if self.controller_busy is not None and self.controller_busy():
             return "the controller is not running a module"
         return None
@@ -196,7 +220,7 @@ class Motivator:
             )
         self._publish(decision, state)
         if decision.chosen is not None:
-            self._send(decision.chosen, now)
+            self._send(decision.chosen, state, now)
 
     def _publish(self, decision: Decision, state: str) -> None:
         """Publish every decision; log choices and changed reasons at INFO, repeated ones at DEBUG."""
@@ -211,12 +235,25 @@ class Motivator:
         self._last_logged = key
         log.log(level, "motivator chose nothing in %s: %s", state, decision.reason)
 
-    def _send(self, chosen: MotivationalEvent, now: float) -> None:
-        self.chosen[chosen.event] += 1
+    def _send(self, chosen: MotivationalEvent, state: str, now: float) -> None:
         self._handover = _Handover(chosen.event, self.node.name, now)
+        self._sent = _Sent(chosen, state)
         self._events.publish(String(data=chosen.event))
+
+    def _reward(self, chosen: MotivationalEvent) -> None:
+        """The controller took ``chosen``: its PAD reward as feedback (thesis 8.3), then the saturations."""
+        self.chosen[chosen.event] += 1
         self._feedback.publish(
             EmotionalFeedback(chosen.reward_pleasure, chosen.reward_arousal, chosen.reward_dominance)
         )
         self.saturations = apply_choice(self.saturations, chosen, self.store.list_events(), self.settings)
         self.store.save_saturations(self.saturations)
+
+    def _not_taken(self, sent: _Sent, why: str) -> None:
+        self.not_taken[sent.event.event] += 1
+        log.info(
+            "motivator's %s in %s was not taken (%s): no reward, saturation unchanged",
+            sent.event.event,
+            sent.state,
+            why,
+        )

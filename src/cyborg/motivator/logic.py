@@ -25,13 +25,18 @@ from cyborg.emotion.model import PAD
 
 
 class SelectionRule(enum.StrEnum):
-    """Which eligible event (reward > cost, reward > 0) wins; ties go to the first name."""
+    """Which eligible event (reward > cost, reward > 0) wins; ties go to the first name.
 
-    REWARD = "reward"
-    """Largest reward (thesis 2.6, 6.3, 8.3; the default): an event is chosen again while it stays
-    eligible, so its ``event_cost`` must push its cost above its reward for it to make way."""
+    docs/motivator.md says why ``net`` is the default.
+    """
+
     NET = "net"
-    """Largest reward - cost: a just-used event loses to a fresh one even at small costs."""
+    """Largest reward - cost (the default): the social cost counts in the ranking, so with the
+    thesis's saturation step (+0.33 chosen, -0.05 others) a just-used event gives way to a fresh
+    one, and the thesis's scenarios come out in its order (wander, music, wander, ...)."""
+    REWARD = "reward"
+    """Largest reward (thesis 2.6 read literally): an event is chosen again while it stays
+    eligible, so its ``event_cost`` must push its cost above its reward for it to make way."""
 
 
 class DecisionStatus(enum.StrEnum):
@@ -101,8 +106,8 @@ class MotivatorSettings(BaseModel):
         None, gt=0.0, description="after this long in one state all saturations reset to 0"
     )
     selection: SelectionRule = Field(
-        SelectionRule.REWARD,
-        description="reward: the largest reward wins (thesis); net: the largest reward - cost wins",
+        SelectionRule.NET,
+        description="net: the largest reward - cost wins (default); reward: the largest reward wins",
     )
     events: list[MotivationalEvent] = Field(default_factory=list)
 
@@ -198,7 +203,7 @@ def choose(
     saturations: Mapping[str, float],
     *,
     state: str | None = None,
-    rule: SelectionRule = SelectionRule.REWARD,
+    rule: SelectionRule = SelectionRule.NET,
 ) -> Decision:
     """Pick the eligible event (reward > cost, reward > 0) that ``rule`` ranks highest.
 

@@ -15,10 +15,15 @@ from typing import Any, Protocol
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from cyborg.errors import ConfigError
-from cyborg.modules.conversation import ConversationModule, QuestionModule
+from cyborg.modules.conversation import (
+    ANSWERED_FEEDBACK,
+    UNANSWERED_FEEDBACK,
+    ConversationModule,
+    QuestionModule,
+)
 from cyborg.modules.event_script import EventScript
 from cyborg.modules.idle import IdleModule, IdleSettings
-from cyborg.modules.music import MusicModule
+from cyborg.modules.music import MUSIC_FEEDBACK, MusicModule
 from cyborg.modules.placeholder import PlaceholderModule, PlaceholderSpec
 from cyborg.modules.speech import TextToSpeech
 from cyborg.transport.base import Node
@@ -72,11 +77,14 @@ class QuestionSettings(KindSettings):
     action: str
     question: str = Field(min_length=1)
     answer_seconds: float = Field(6.0, ge=0)
+    unanswered_feedback: tuple[float, float, float] = UNANSWERED_FEEDBACK
+    answered_feedback: tuple[float, float, float] = ANSWERED_FEEDBACK
 
 
 class MusicSettings(KindSettings):
     action: str = "cyborg_music/play"
     play_audio: bool | None = None
+    feedback: tuple[float, float, float] = MUSIC_FEEDBACK
 
 
 class TtsSettings(KindSettings):
@@ -183,12 +191,19 @@ MODULE_KINDS: dict[str, ModuleKind] = {
     "question": ModuleKind(
         QuestionSettings,
         lambda n, s, r: QuestionModule(
-            n, action=s.action, question=s.question, answer_seconds=s.answer_seconds
+            n,
+            action=s.action,
+            question=s.question,
+            answer_seconds=s.answer_seconds,
+            unanswered_feedback=s.unanswered_feedback,
+            answered_feedback=s.answered_feedback,
         ),
     ),
     "music": ModuleKind(
         MusicSettings,
-        lambda n, s, r: MusicModule(n, action=s.action, tune_dir=r.data_dir, play_audio=s.play_audio),
+        lambda n, s, r: MusicModule(
+            n, action=s.action, tune_dir=r.data_dir, play_audio=s.play_audio, feedback=s.feedback
+        ),
     ),
     "tts": ModuleKind(TtsSettings, _tts),
 }
