@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sqlite3
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
 from zoneinfo import ZoneInfo
@@ -12,6 +13,7 @@ import recurring_ical_events
 
 from cyborg.errors import DatabaseError
 from cyborg.navigation.calendar import (
+    build_rule_set,
     import_ics,
     normalise_recurrence,
     occurrences_between,
@@ -274,3 +276,86 @@ def test_events_without_uid_get_a_stable_one(db: NavigationDatabase, tmp_path: P
     [open_day] = [e for e in first.added if e.summary == "Open day"]
     assert open_day.uid and open_day.uid.startswith("cyborg-import-")
     assert open_day.uid in {e.uid for e in second.updated}
+
+
+# --- rules that would never finish expanding (issue 12, item 2) --------------------------------
+
+
+@pytest.mark.parametrize(
+    ("rule", "length", "message"),
+    [
+        ("FREQ=DAILY;INTERVAL=0", timedelta(hours=1), "INTERVAL=0 must be a whole number of at least 1"),
+        ("FREQ=SECONDLY;INTERVAL=-2", timedelta(seconds=1), "INTERVAL=-2 must be a whole number"),
+        ("FREQ=WEEKLY;COUNT=-1", timedelta(hours=1), "COUNT=-1 must be a whole number from 1 to 10000"),
+        ("FREQ=DAILY;COUNT=10001", timedelta(hours=1), "COUNT=10001 must be a whole number from 1 to 10000"),
+        ("FREQ=DAILY;COUNT=3;UNTIL=20240601", timedelta(hours=1), "both COUNT and UNTIL"),
+        ("FREQ=MINUTELY;BYSETPOS=2", timedelta(seconds=1), "BYSETPOS with FREQ=MINUTELY"),
+        ("FREQ=DAILY;BYMONTH=2;BYMONTHDAY=30", timedelta(hours=1), "never repeats"),
+        ("FREQ=SECONDLY", timedelta(hours=1), "its occurrences overlap"),
+        ("FREQ=YEARLY", timedelta(days=400), "over the limit of 366 days"),
+    ],
+)
+def test_rules_that_repeat_nothing_or_never_stop_expanding_are_refused_with_the_fix(
+    rule: str, length: timedelta, message: str
+) -> None:
+    start = at(2024, 1, 1, 9)
+    with pytest.raises(DatabaseError, match=message) as info:
+        normalise_recurrence(rule, start, start + length)
+    assert "fix:" in str(info.value)
+
+
+def test_events_add_refuses_interval_0_and_stores_nothing(db: NavigationDatabase) -> None:
+    start = at(2024, 1, 1, 9)
+    event = CalendarEvent("cafeteria", start, start + timedelta(hours=1), recurrence="FREQ=DAILY;INTERVAL=0")
+    with pytest.raises(DatabaseError, match="INTERVAL=0"):
+        db.add_event(event)
+    assert db.list_events() == []
+
+
+@pytest.mark.parametrize(
+    "rule",
+    [
+        "FREQ=SECONDLY;INTERVAL=7",
+        "FREQ=MINUTELY;INTERVAL=13;BYHOUR=8,9,10",
+        "FREQ=HOURLY;INTERVAL=5;BYMINUTE=0,30",
+        "FREQ=DAILY;INTERVAL=3;BYHOUR=9,15",
+        "FREQ=WEEKLY;INTERVAL=2;BYDAY=MO,FR;WKST=SU",
+        "FREQ=MONTHLY;BYMONTHDAY=31",
+        "FREQ=MONTHLY;INTERVAL=5;BYDAY=-1FR",
+        "FREQ=YEARLY;BYMONTH=2;BYMONTHDAY=29",
+        "FREQ=DAILY;COUNT=2000\nEXDATE:20240105T080000Z",
+    ],
+)
+def test_a_window_years_after_the_start_sees_the_same_occurrences_as_expanding_from_the_start(
+    rule: str,
+) -> None:
+    # The windowed expansion starts the rule a whole number of periods before the window; dateutil
+    # expanding from the first start is the reference.
+    # (The reference is slow for rules repeating within the hour: they start a few days before.)
+    often = "SECONDLY" in rule or "MINUTELY" in rule
+    start = at(2019, 3, 29, 9) if often else at(2019, 1, 31, 9)
+    end = start + (timedelta(seconds=1) if "SECONDLY" in rule else timedelta(minutes=1))
+    stored = normalise_recurrence(rule, start, end)
+    length = end - start
+    windows = [at(2019, 3, 31, 1), at(2019, 4, 2, 7)]
+    windows += [] if often else [at(2024, 3, 31, 1), at(2024, 10, 27, 2), at(2028, 2, 28)]
+    for window_start in windows:
+        window_end = window_start + timedelta(hours=20)
+        reference = build_rule_set(stored, start).between(window_start - length, window_end, inc=True)
+        expected = [(s, s + length) for s in reference if s + length > window_start and s < window_end]
+        assert occurrences_between(start, end, stored, window_start, window_end) == expected[:1000], rule
+
+
+def test_a_rule_an_older_version_stored_is_skipped_with_a_warning(
+    db: NavigationDatabase, caplog: pytest.LogCaptureFixture
+) -> None:
+    start = at(2024, 1, 1, 9)
+    good = db.add_event(
+        CalendarEvent("cafeteria", start, start + timedelta(hours=1), recurrence="FREQ=DAILY")
+    )
+    bad = db.add_event(CalendarEvent("el5", start, start + timedelta(hours=1), recurrence="FREQ=DAILY"))
+    with sqlite3.connect(db.path) as conn:  # as written before the checks existed
+        conn.execute("UPDATE events SET recurrence = 'RRULE:FREQ=DAILY;COUNT=-1' WHERE id = ?", (bad.id,))
+    ongoing = db.ongoing_events(at(2024, 5, 6, 9, 30))
+    assert [o.event.id for o in ongoing] == [good.id]
+    assert any("COUNT=-1" in r.getMessage() and "skipping" in r.getMessage() for r in caplog.records)

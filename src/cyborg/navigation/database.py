@@ -664,7 +664,7 @@ class NavigationDatabase(SQLiteFile):
         return replace(
             event,
             location=self.get_location(event.location).name,
-            recurrence=normalise_recurrence(recurrence, event.start) if recurrence else None,
+            recurrence=normalise_recurrence(recurrence, event.start, event.end) if recurrence else None,
             summary=(event.summary or "").strip() or None,
             uid=(event.uid or "").strip() or None,
         )
