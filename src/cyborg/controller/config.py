@@ -251,7 +251,7 @@ class StateModel(BaseModel):
 
 
 class TimeoutsModel(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
     connect: float = Field(2.0, gt=0, description="seconds to wait for a module's action server")
     preempt: float = Field(2.0, gt=0, description="seconds to wait for a module to acknowledge a cancel")

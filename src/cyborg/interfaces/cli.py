@@ -6,7 +6,9 @@ Top of the import chain: it may use every layer below it.
 from __future__ import annotations
 
 import asyncio
+import errno
 import logging
+import math
 import sys
 from importlib import resources
 from pathlib import Path
@@ -15,6 +17,7 @@ import click
 
 from cyborg.controller.config import LoadedConfig, load_config
 from cyborg.errors import ConfigError, CyborgError
+from cyborg.limits import MAX_SCRIPT_SECONDS, MAX_SPEED
 
 DEFAULT_CONFIG = "cyborg.yaml"
 
@@ -113,11 +116,55 @@ def _parse_speed(value: str | None) -> float | str | None:
     except ValueError:
         raise click.BadParameter(f"{value!r} is not a number; use e.g. --speed 10 or --speed max") from None
     if speed <= 0:
+    if not math.isfinite(speed) or speed > MAX_SPEED:
+        raise click.BadParameter(
+            f"{value!r} is not a usable factor (at most {MAX_SPEED:g}); fix: use e.g. --speed 10, "
+            "or --speed max for as fast as possible",
+            param_hint="--speed",
+        )
         raise click.BadParameter(f"{value!r} must be positive")
     return speed
 
 
 @cli.command()
+def _check_port(ctx: click.Context, param: click.Parameter, value: int) -> int:
+    if not 0 <= value <= 65535:
+        raise click.BadParameter(f"{value} is not a TCP port; fix: use 1-65535, or 0 for any free port")
+    return value
+
+
+def _check_duration(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
+    if value is None:
+        return None
+    if not (math.isfinite(value) and 0 <= value <= MAX_SCRIPT_SECONDS):
+        raise click.BadParameter(
+            f"{value!r} is not a duration; fix: give seconds from 0 to {MAX_SCRIPT_SECONDS:.0f} (a year), "
+            "or leave --duration out to run until stopped"
+        )
+    return value
+
+
+def _check_factor(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
+    if value is not None and not (math.isfinite(value) and value <= MAX_SPEED):
+        raise click.BadParameter(
+            f"{value!r} is not a usable factor; fix: use e.g. --speed 20 (at most {MAX_SPEED:g})"
+        )
+    return value
+
+
+def _os_problem(exc: OSError) -> CyborgError:
+    """A file system error met while running, as 'what; fix' instead of a traceback."""
+    where = f"{exc.filename}: " if exc.filename else ""
+    fixes = {
+        errno.ENOSPC: "free some space on that disk, or give another folder with --data-dir",
+        errno.EDQUOT: "free some space on that disk, or give another folder with --data-dir",
+        errno.EACCES: "check the permissions of that path, or use another one",
+        errno.EROFS: "that disk is read-only; give a writable folder",
+    }
+    fix = fixes.get(exc.errno or 0, "check the path")
+    return CyborgError(f"{where}{exc.strerror or exc}; fix: {fix}")
+
+
 @click.option(
     "--config",
     "config_path",
@@ -131,7 +178,13 @@ def _parse_speed(value: str | None) -> float | str | None:
     help="map for the simulated base: ARNL .map or map_server .yaml",
 )
 @click.option("--speed", default=None, help="virtual time: a factor (10) or 'max'; default real time")
-@click.option("--duration", type=float, default=None, help="stop after this many (virtual) seconds")
+@click.option(
+    "--duration",
+    type=float,
+    default=None,
+    callback=_check_duration,
+    help="stop after this many (virtual) seconds",
+)
 @click.option("--host", default="127.0.0.1", show_default=True, help="address the API and dashboard bind to")
 @click.option(
     "--port",
@@ -139,6 +192,7 @@ def _parse_speed(value: str | None) -> float | str | None:
     show_default=True,
     type=int,
     help="port of the API and dashboard (0: any free port)",
+    callback=_check_port,
 )
 @click.option(
     "--db",
@@ -215,6 +269,8 @@ def sim(
     except KeyboardInterrupt:
         click.echo("stopped")
 
+    except OSError as exc:
+        _fail(_os_problem(exc))
 
 def _ros_speed(speed: str | None) -> float | None:
     """--speed over ROS: real time (None) or a factor; 'max' has no meaning across processes."""
@@ -276,12 +332,16 @@ def _sim_over_ros(
 
 def _echo_records(records: list[dict[str, object]]) -> None:
     for record in records:
-        t = float(record["t"])  # type: ignore[arg-type]
-        if record["type"] == "state":
-            click.echo(f"[{t:8.1f}s] {record['from'] or '-'} --{record['event']}--> {record['to']}")
-        elif record["type"] in ("say", "heard"):
-            who = "Cyborg" if record["type"] == "say" else "User"
-            click.echo(f"[{t:8.1f}s] {who}: {record['text']}")
+        _echo_record(record)
+
+
+def _echo_record(record: dict[str, object]) -> None:
+    t = float(record["t"])  # type: ignore[arg-type]
+    if record["type"] == "state":
+        click.echo(f"[{t:8.1f}s] {record['from'] or '-'} --{record['event']}--> {record['to']}")
+    elif record["type"] in ("say", "heard"):
+        who = "Cyborg" if record["type"] == "say" else "User"
+        click.echo(f"[{t:8.1f}s] {who}: {record['text']}")
 
 
 def _run_script(
@@ -301,8 +361,24 @@ def _run_script(
     parsed = _parse_speed(speed)
     virtual_speed = 1.0 if parsed == "real" else (None if parsed is None else float(parsed))
     with contextlib.ExitStack() as stack:
-        out = stack.enter_context(transcript_path.open("w", encoding="utf-8")) if transcript_path else None
-        records = run_scenario(
+        out = None
+        if transcript_path is not None:
+            try:
+                out = stack.enter_context(transcript_path.open("w", encoding="utf-8"))
+            except OSError as exc:
+                raise CyborgError(
+                    f"cannot write the transcript {transcript_path}: {exc.strerror}; fix: create the folder "
+                    f"{transcript_path.parent} first, or give a writable path"
+                ) from exc
+        # Each record is echoed and written as it happens; none is kept, so memory stays flat.
+        run_scenario(
+    count = 0
+
+    def echo(record: dict[str, object]) -> None:
+        nonlocal count
+        count += 1
+        _echo_record(record)
+
             config,
             script,
             transcript=out,
@@ -310,9 +386,10 @@ def _run_script(
             speed=virtual_speed,
             map_path=map_path,
         )
-    _echo_records(records)
     if transcript_path:
-        click.secho(f"wrote {len(records)} records to {transcript_path}", fg="green")
+            keep_records=False,
+            on_record=echo,
+        click.secho(f"wrote {count} records to {transcript_path}", fg="green")
 
 
 _speed_help = "virtual time at this factor of real time (all nodes share one clock); default real time"
@@ -336,9 +413,16 @@ _speed_help = "virtual time at this factor of real time (all nodes share one clo
 )
 @click.option("--map", "map_path", type=click.Path(path_type=Path), help="map for the simulated base")
 @click.option("--host", default="127.0.0.1", show_default=True, help="address of the API (cyborg_api only)")
-@click.option("--port", default=8642, show_default=True, type=int, help="port of the API (cyborg_api only)")
+@click.option(
+    "--port",
+    default=8642,
+    show_default=True,
+    type=int,
+    callback=_check_port,
+    help="port of the API (cyborg_api only)",
+)
 @click.option("--seed", default=0, show_default=True, type=int, help="seed of the node's randomness")
-@click.option("--speed", type=float, default=None, help=_speed_help)
+@click.option("--speed", type=float, default=None, callback=_check_factor, help=_speed_help)
 @click.option(
     "--epoch",
     default=None,
@@ -428,7 +512,9 @@ def node(
     help="folder of the databases",
 )
 @click.option("--map", "map_path", type=click.Path(path_type=Path), help="map for the simulated base")
-@click.option("--port", default=8642, show_default=True, type=int, help="port of the API node")
+@click.option(
+    "--port", default=8642, show_default=True, type=int, callback=_check_port, help="port of the API node"
+)
 @click.option("--only", multiple=True, help="launch only these parts (repeatable)")
 @click.option(
     "--write",
@@ -436,9 +522,17 @@ def node(
     type=click.Path(path_type=Path),
     help="write a roslaunch file instead of launching",
 )
-@click.option("--speed", type=float, default=None, help=_speed_help + "; sets /use_sim_time")
+@click.option(
+    "--speed", type=float, default=None, callback=_check_factor, help=_speed_help + "; sets /use_sim_time"
+)
 @click.option("--start", "start_at", default=None, help="with --speed: virtual start, ISO date-time (UTC)")
-@click.option("--duration", type=float, default=None, help="stop after this many (virtual) seconds")
+@click.option(
+    "--duration",
+    type=float,
+    default=None,
+    callback=_check_duration,
+    help="stop after this many (virtual) seconds",
+)
 def launch_command(
     config_path: Path | None,
     data_dir: Path | None,

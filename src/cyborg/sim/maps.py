@@ -20,10 +20,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 from numpy.typing import NDArray
 
-from cyborg.errors import MapError
+from cyborg.errors import ConfigError, MapError
+from cyborg.limits import MAX_MAP_CELLS
 
 Point = tuple[float, float]
 
@@ -274,14 +274,16 @@ def load_map_server(yaml_path: str | Path) -> OccupancyMap:
 
 
 def _read_map_server_yaml(yaml_path: Path) -> dict[str, Any]:
+    from cyborg.controller.config import load_yaml, read_text_file
+
     try:
-        raw = yaml.safe_load(yaml_path.read_text(encoding="utf-8"))
+        raw = load_yaml(read_text_file(yaml_path), str(yaml_path))
     except OSError as error:
         raise MapError(
             f"{yaml_path}: cannot read the map file ({error.strerror}); fix: check the path"
         ) from None
-    except yaml.YAMLError as error:
-        raise MapError(f"{yaml_path}: not valid YAML ({error}); fix: repair the YAML syntax") from None
+    except ConfigError as error:
+        raise MapError(str(error)) from None
     if not isinstance(raw, dict):
         raise MapError(f"{yaml_path}: expected a YAML mapping with 'image:', 'resolution:' and 'origin:'")
     missing = [key for key in ("image", "resolution", "origin") if key not in raw]
@@ -304,6 +306,8 @@ def _read_map_server_yaml(yaml_path: Path) -> dict[str, Any]:
         raise MapError(
             f"{yaml_path}: bad number ({error}); fix: resolution and origin must be numbers"
         ) from None
+    if not all(math.isfinite(v) for v in (*origin, info["resolution"])):
+        raise MapError(f"{yaml_path}: origin and resolution must be finite numbers; fix: correct them")
     if len(origin) == 3 and origin[2] != 0.0:
         raise MapError(f"{yaml_path}: a rotated origin (yaw {origin[2]}) is not supported; fix: set yaw to 0")
     if info["resolution"] <= 0:
@@ -339,7 +343,8 @@ def read_pgm(path: str | Path) -> NDArray[np.float64]:
     except ValueError:
         width = height = maxval = 0
     if min(width, height, maxval) <= 0 or maxval > 65535:
-        raise MapError(f"{path}: bad PGM header {b' '.join(header)!r}; fix: re-export the image as PGM")
+        raise MapError(f"{path}: bad PGM header {b' '.join(header)[:80]!r}; fix: re-export the image as PGM")
+    _check_cells(path, width, height)
     return _pgm_pixels(
         path, data[position + 1 :] if magic == b"P5" else data[position:], magic, (height, width), maxval
     )
@@ -528,14 +533,36 @@ def _unique_names(poses: list[NamedPose]) -> list[NamedPose]:
     return unique
 
 
+def _check_cells(path: Path, width: float, height: float, resolution: float | None = None) -> None:
+    """Refuse a map of more than MAX_MAP_CELLS cells before allocating it."""
+    if width * height <= MAX_MAP_CELLS:
+        return
+    size = (
+        f" ({width * resolution:,.0f} m x {height * resolution:,.0f} m at {resolution} m/cell)"
+        if resolution
+        else ""
+    )
+    raise MapError(
+        f"{path}: the map would be {width:,.0f} x {height:,.0f} cells{size}, over the limit of "
+        f"{MAX_MAP_CELLS:,} cells; fix: check for stray far-away points or lines, crop the map, or use a "
+        "coarser resolution"
+    )
+
+
 def _rasterise_arnl(path: Path, content: _ArnlContent, resolution: float) -> OccupancyMap:
     corners = [content.points, content.walls.reshape(-1, 2), np.array([p.position for p in content.poses])]
     known = np.concatenate([c.reshape(-1, 2) for c in corners])
     if not len(content.points) and not len(content.walls):
         raise MapError(f"{path}: the map has no scan points (DATA) and no wall lines (LINES); fix: add some")
+    if not np.isfinite(known).all():
+        raise MapError(
+            f"{path}: a point, line or cairn has a coordinate that is not a finite number; {_ARNL_FIX}"
+        )
     low = known.min(axis=0) - ARNL_MAP_MARGIN_M
     high = known.max(axis=0) + ARNL_MAP_MARGIN_M
-    cols, rows = np.ceil((high - low) / resolution).astype(int)
+    extent = np.ceil((high - low) / resolution)
+    _check_cells(path, float(extent[0]), float(extent[1]), resolution)
+    cols, rows = extent.astype(int)
     grid = np.zeros((rows, cols), dtype=np.uint8)
     if len(content.points):
         cells = np.floor((content.points - low) / resolution).astype(int)

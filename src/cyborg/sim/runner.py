@@ -12,6 +12,7 @@ from cyborg.sim.robot import Robot, build_robot
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Transport
 from cyborg.transport.clock import Clock, RealClock, VirtualClock
+from cyborg.storage import lock_data_dir
 from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import String, SystemState
 
@@ -43,7 +44,21 @@ def run_sim(
 ) -> None:
     clock = make_clock(speed)
     transport = EmbeddedTransport(clock)
-    robot = build_robot(config, transport, data_dir=data_dir or default_data_dir(), map_path=map_path)
+) -> None:
+    with lock_data_dir(data_dir or default_data_dir()) as folder:
+        _run(config, folder, speed=speed, duration=duration, echo=echo, serve=serve, map_path=map_path)
+
+
+def _run(
+    config: LoadedConfig,
+    data_dir: Path,
+    *,
+    speed: float | str | None,
+    duration: float | None,
+    echo: Callable[[str], None],
+    serve: Callable[[Transport, Robot], Awaitable[Callable[[], Awaitable[None]]]] | None,
+    map_path: Path | None,
+    robot = build_robot(config, transport, data_dir=data_dir, map_path=map_path)
     monitor = transport.node("cyborg_console")
     start = clock.monotonic()
 

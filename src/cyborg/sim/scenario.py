@@ -9,6 +9,7 @@ previous step. Every record goes to the transcript, one JSON object a line.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import logging
 import random
@@ -23,6 +24,7 @@ from cyborg.errors import ConfigError, CyborgError
 from cyborg.sim.records import Record, RecordStream
 from cyborg.sim.robot import Robot, build_robot
 from cyborg.sim.script import CalendarEntry, Match, Script, Step, check_against
+from cyborg.storage import lock_data_dir
 from cyborg.transport import topics
 from cyborg.transport.base import Node
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, VirtualClock
@@ -132,16 +134,21 @@ class ScenarioRun:
         self.script = script
         self.clock = VirtualClock(start=script_start(script), speed=speed)
         self.transport = EmbeddedTransport(self.clock)
-        self.robot: Robot = build_robot(
-            config, self.transport, data_dir=data_dir, rng=random.Random(script.seed), map_path=map_path
-        )
-        self.driver = ScenarioDriver(
-            self.transport.node("cyborg_scenario"), script, keep_records=keep_records
-        )
-        self.records = self.driver.records
-        self.listeners = self.driver.listeners
-        self.stream = self.driver.stream
-        self._prepare()
+        try:
+            self.robot: Robot = build_robot(
+                config, self.transport, data_dir=data_dir, rng=random.Random(script.seed), map_path=map_path
+            )
+            self.driver = ScenarioDriver(
+                self.transport.node("cyborg_scenario"), script, keep_records=keep_records
+            )
+            self.records = self.driver.records
+            self.listeners = self.driver.listeners
+            self.stream = self.driver.stream
+            self._prepare()
+        except BaseException:
+            self.transport.shutdown()  # a refused script leaves no half-started robot behind
+            self.clock.close()
+            raise
 
     def _prepare(self) -> None:
         if self.script.emotion:
@@ -210,7 +217,10 @@ def run_scenario(
     With ``keep_records=False`` the records go only to ``transcript`` and ``on_record`` as they
     happen and the returned list is empty, so a week-long script runs in flat memory.
     """
-    with tempfile.TemporaryDirectory(prefix="cyborg-scenario-") as scratch:
+    with contextlib.ExitStack() as stack:
+        scratch = stack.enter_context(tempfile.TemporaryDirectory(prefix="cyborg-scenario-"))
+        if data_dir is not None:
+            stack.enter_context(lock_data_dir(data_dir, "cyborg sim --script"))
         run = ScenarioRun(
             config,
             script,

@@ -9,6 +9,7 @@ then acts (``say`` text as speech-to-text, publish an ``event``, or set the
 
 from __future__ import annotations
 
+import math
 import re
 from datetime import datetime
 from pathlib import Path
@@ -18,25 +19,36 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from cyborg.errors import ConfigError
+from cyborg.limits import MAX_SCRIPT_SECONDS, MAX_TEXT_LENGTH
 
 RECORD_TYPES = ("state", "emotion", "say", "heard", "pose", "motivator")
 _HMS = re.compile(r"^(\d+):([0-5]\d):([0-5]\d(?:\.\d+)?)$")
 
 
 def parse_seconds(value: Any) -> float:
-    """Seconds from a number or "H:MM:SS"."""
+    """Seconds from a number or "H:MM:SS", at most :data:`~cyborg.limits.MAX_SCRIPT_SECONDS`."""
     if isinstance(value, bool):
-        raise ValueError(f"{value!r} is not a time; use seconds (90) or H:MM:SS (0:01:30)")
+        raise ValueError(f"{value!r} is not a time; fix: use seconds (90) or H:MM:SS (0:01:30)")
+    seconds: float | None = None
+    if isinstance(value, float) and math.isnan(value):
+        raise ValueError(f"{value!r} is not a time; fix: use seconds (90) or H:MM:SS (0:01:30)")
     if isinstance(value, int | float):
         if value < 0:
-            raise ValueError(f"{value} is negative; times count from the start, use 0 or more")
-        return float(value)
-    if isinstance(value, str):
+            raise ValueError(f"{value} is negative (times count from the start); fix: use 0 or more")
+        seconds = float(value) if value <= MAX_SCRIPT_SECONDS else math.inf
+    elif isinstance(value, str):
         match = _HMS.match(value.strip())
         if match:
-            hours, minutes, seconds = match.groups()
-            return int(hours) * 3600 + int(minutes) * 60 + float(seconds)
-    raise ValueError(f"{value!r} is not a time; use seconds (90) or H:MM:SS (0:01:30)")
+            hours, minutes, secs = match.groups()
+            seconds = int(hours) * 3600 + int(minutes) * 60 + float(secs) if len(hours) < 10 else math.inf
+    if seconds is None or math.isnan(seconds):
+        raise ValueError(f"{value!r} is not a time; fix: use seconds (90) or H:MM:SS (0:01:30)")
+    if seconds > MAX_SCRIPT_SECONDS:
+        raise ValueError(
+            f"{value!r} is over the limit of {MAX_SCRIPT_SECONDS:.0f} s (366 days); "
+            "fix: use a finite time within a year, e.g. 604800 for a week"
+        )
+    return seconds
 
 
 class Match(BaseModel):
@@ -45,7 +57,7 @@ class Match(BaseModel):
     model_config = ConfigDict(extra="allow")
 
     type: str
-    contains: str | None = None
+    contains: str | None = Field(None, max_length=MAX_TEXT_LENGTH)
 
     @field_validator("type")
     @classmethod
@@ -53,6 +65,16 @@ class Match(BaseModel):
         if value not in RECORD_TYPES:
             raise ValueError(f"unknown record type {value!r}; use one of {', '.join(RECORD_TYPES)}")
         return value
+
+    @model_validator(mode="after")
+    def _plain_fields(self) -> Match:
+        for key, value in (self.model_extra or {}).items():
+            if not isinstance(value, str | int | float | bool) or len(str(value)) > MAX_TEXT_LENGTH:
+                raise ValueError(
+                    f"field {key!r} must be one short value (text, a number, true or false), "
+                    f"not {type(value).__name__} {str(value)[:40]!r}; fix: e.g. {{type: state, to: idle}}"
+                )
+        return self
 
     def matches(self, record: dict[str, Any]) -> bool:
         if record.get("type") != self.type:
@@ -71,9 +93,9 @@ class Step(BaseModel):
     at: float | None = None
     when: Match | None = None
     delay: float = 0.0
-    say: str | None = None
-    event: str | None = None
-    emotion: str | None = None
+    say: str | None = Field(None, max_length=MAX_TEXT_LENGTH)
+    event: str | None = Field(None, max_length=200)
+    emotion: str | None = Field(None, max_length=200)
     line: int = Field(0, exclude=True)
 
     @field_validator("at", "delay", mode="before")
@@ -103,6 +125,12 @@ class CalendarEntry(BaseModel):
 
     @model_validator(mode="after")
     def _ends_after_start(self) -> CalendarEntry:
+        if (self.start.tzinfo is None) != (self.end.tzinfo is None):
+            naive, aware = ("start", "end") if self.start.tzinfo is None else ("end", "start")
+            raise ValueError(
+                f"{naive} has no time zone but {aware} has one; fix: give both an offset "
+                "(e.g. 2026-11-23T15:00:00+01:00) or neither (then they are read in UTC)"
+            )
         if self.end <= self.start:
             raise ValueError(
                 f"end {self.end.isoformat()} is not after start {self.start.isoformat()}; fix: swap them"
@@ -171,8 +199,10 @@ def check_against(script: Script, events: set[str], emotions: set[str]) -> None:
 
 def load_script(path: str | Path) -> Script:
     path = Path(path)
+    from cyborg.controller.config import read_text_file
+
     try:
-        text = path.read_text(encoding="utf-8")
+        text = read_text_file(path)
     except OSError as exc:
         raise ConfigError(
             f"cannot read the script: {exc.strerror}; fix: check the path", source=str(path)
@@ -231,6 +261,12 @@ def _describe(error: Any, lines: dict[str, list[int]]) -> str:
     elif error["type"] == "missing":
         example = _MISSING_EXAMPLES.get(str(loc[-1]), f"{loc[-1]}: ...")
         message = f"missing {loc[-1]!r}; fix: add it (e.g. {example})"
+    elif error["type"] == "string_too_long":
+        limit = error.get("ctx", {}).get("max_length")
+        message = (
+            f"is {len(str(error.get('input')))} characters, over the limit of {limit}; "
+            "fix: shorten it (one sentence is what the robot hears at a time)"
+        )
     elif error["type"].startswith("datetime"):
         message = f"{error.get('input')!r} is not a date-time; fix: write it as 2026-11-23T15:00:00"
     return f"{where}: {message}"

@@ -1,0 +1,40 @@
+"""Run the real ``cyborg`` command in its own process, as a user would, with guards."""
+
+from __future__ import annotations
+
+import os
+import resource
+import subprocess
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+CYBORG = Path(sys.executable).with_name("cyborg")
+GUARD_SECONDS = 300  # a guard against a hang, far above what any case takes; not a speed test
+MEMORY_LIMIT = 3 * 2**30  # address space: an alias bomb or a giant map fails instead of eating the machine
+
+
+def _limit_memory() -> None:
+    resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT, MEMORY_LIMIT))
+
+
+def run_cyborg(args: list[str], tmp_path: Path) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "CYBORG_DATA_DIR": str(tmp_path / "data"), "NO_COLOR": "1"}
+    return subprocess.run(
+        [str(CYBORG), "--log-level", "ERROR", *args],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=GUARD_SECONDS,
+        preexec_fn=_limit_memory,
+        check=False,
+    )
+
+
+@pytest.fixture
+def cyborg(tmp_path: Path) -> Callable[[list[str]], subprocess.CompletedProcess[str]]:
+    """``cyborg(args)`` runs ``cyborg --log-level ERROR *args`` in ``tmp_path`` (its data folder inside)."""
+    return lambda args: run_cyborg(args, tmp_path)
