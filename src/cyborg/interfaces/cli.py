@@ -115,18 +115,17 @@ def _parse_speed(value: str | None) -> float | str | None:
         speed = float(value)
     except ValueError:
         raise click.BadParameter(f"{value!r} is not a number; use e.g. --speed 10 or --speed max") from None
-    if speed <= 0:
     if not math.isfinite(speed) or speed > MAX_SPEED:
         raise click.BadParameter(
             f"{value!r} is not a usable factor (at most {MAX_SPEED:g}); fix: use e.g. --speed 10, "
             "or --speed max for as fast as possible",
             param_hint="--speed",
         )
+    if speed <= 0:
         raise click.BadParameter(f"{value!r} must be positive")
     return speed
 
 
-@cli.command()
 def _check_port(ctx: click.Context, param: click.Parameter, value: int) -> int:
     if not 0 <= value <= 65535:
         raise click.BadParameter(f"{value} is not a TCP port; fix: use 1-65535, or 0 for any free port")
@@ -165,6 +164,7 @@ def _os_problem(exc: OSError) -> CyborgError:
     return CyborgError(f"{where}{exc.strerror or exc}; fix: {fix}")
 
 
+@cli.command()
 @click.option(
     "--config",
     "config_path",
@@ -191,8 +191,8 @@ def _os_problem(exc: OSError) -> CyborgError:
     default=8642,
     show_default=True,
     type=int,
-    help="port of the API and dashboard (0: any free port)",
     callback=_check_port,
+    help="port of the API and dashboard (0: any free port)",
 )
 @click.option(
     "--db",
@@ -266,11 +266,11 @@ def sim(
         )
     except CyborgError as exc:
         _fail(exc)
+    except OSError as exc:
+        _fail(_os_problem(exc))
     except KeyboardInterrupt:
         click.echo("stopped")
 
-    except OSError as exc:
-        _fail(_os_problem(exc))
 
 def _ros_speed(speed: str | None) -> float | None:
     """--speed over ROS: real time (None) or a factor; 'max' has no meaning across processes."""
@@ -360,6 +360,13 @@ def _run_script(
     script = load_script(script_path)
     parsed = _parse_speed(speed)
     virtual_speed = 1.0 if parsed == "real" else (None if parsed is None else float(parsed))
+    count = 0
+
+    def echo(record: dict[str, object]) -> None:
+        nonlocal count
+        count += 1
+        _echo_record(record)
+
     with contextlib.ExitStack() as stack:
         out = None
         if transcript_path is not None:
@@ -372,23 +379,16 @@ def _run_script(
                 ) from exc
         # Each record is echoed and written as it happens; none is kept, so memory stays flat.
         run_scenario(
-    count = 0
-
-    def echo(record: dict[str, object]) -> None:
-        nonlocal count
-        count += 1
-        _echo_record(record)
-
             config,
             script,
             transcript=out,
             data_dir=data_dir,
             speed=virtual_speed,
             map_path=map_path,
-        )
-    if transcript_path:
             keep_records=False,
             on_record=echo,
+        )
+    if transcript_path:
         click.secho(f"wrote {count} records to {transcript_path}", fg="green")
 
 

@@ -9,10 +9,10 @@ from pathlib import Path
 
 from cyborg.controller.config import LoadedConfig
 from cyborg.sim.robot import Robot, build_robot
+from cyborg.storage import lock_data_dir
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Transport
 from cyborg.transport.clock import Clock, RealClock, VirtualClock
-from cyborg.storage import lock_data_dir
 from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import String, SystemState
 
@@ -42,9 +42,6 @@ def run_sim(
     data_dir: Path | None = None,
     map_path: Path | None = None,
 ) -> None:
-    clock = make_clock(speed)
-    transport = EmbeddedTransport(clock)
-) -> None:
     with lock_data_dir(data_dir or default_data_dir()) as folder:
         _run(config, folder, speed=speed, duration=duration, echo=echo, serve=serve, map_path=map_path)
 
@@ -58,6 +55,9 @@ def _run(
     echo: Callable[[str], None],
     serve: Callable[[Transport, Robot], Awaitable[Callable[[], Awaitable[None]]]] | None,
     map_path: Path | None,
+) -> None:
+    clock = make_clock(speed)
+    transport = EmbeddedTransport(clock)
     robot = build_robot(config, transport, data_dir=data_dir, map_path=map_path)
     monitor = transport.node("cyborg_console")
     start = clock.monotonic()
