@@ -20,6 +20,8 @@ from typing import Any
 from aiohttp import WSMsgType, web
 
 from cyborg.controller.machine import MachineSpec
+from cyborg.emotion.model import EmotionSettings
+from cyborg.limits import MAX_TEXT_LENGTH
 from cyborg.sim.records import Record, RecordStream
 from cyborg.transport import topics
 from cyborg.transport.base import Node
@@ -130,8 +132,8 @@ class RobotAPI:
     async def _json(self, request: web.Request) -> dict[str, Any]:
         try:
             body = await request.json()
-        except (json.JSONDecodeError, UnicodeDecodeError):
-            raise CommandError('the body is not JSON; send e.g. {"name": "music_play"}') from None
+        except (ValueError, RecursionError):  # also numbers of over 4300 digits and very deep nesting
+            raise CommandError('the body is not usable JSON; send e.g. {"name": "music_play"}') from None
         if not isinstance(body, dict):
             raise CommandError("the body must be a JSON object")
         return body
@@ -154,11 +156,20 @@ class RobotAPI:
 
     async def post_say(self, request: web.Request) -> web.Response:
         text = self._text_field(await self._json(request), "text")
+        if len(text) > MAX_TEXT_LENGTH:
+            raise CommandError(
+                f"'text' has {len(text)} characters, over the limit of {MAX_TEXT_LENGTH}; send one sentence"
+            )
         self._heard.publish(String(data=text))
         return web.json_response({"sent": text})
 
     async def post_emotion_set(self, request: web.Request) -> web.Response:
         name = self._text_field(await self._json(request), "name")
+        if self.emotions:  # the emotion system would only log a warning: say so to the sender
+            try:
+                EmotionSettings(prototypes=self.emotions, aliases=self.emotion_aliases).resolve(name[:100])
+            except ValueError as exc:
+                raise CommandError(str(exc)) from None
         self._set_emotion.publish(String(data=name))
         return web.json_response({"sent": name})
 
