@@ -167,7 +167,10 @@ class RobotAPI:
         name = self._text_field(await self._json(request), "name")
         if self.emotions:  # the emotion system would only log a warning: say so to the sender
             try:
-                EmotionSettings(prototypes=self.emotions, aliases=self.emotion_aliases).resolve(name[:100])
+                settings = EmotionSettings.model_validate(
+                    {"prototypes": self.emotions, "aliases": self.emotion_aliases}
+                )
+                settings.resolve(name[:100])
             except ValueError as exc:
                 raise CommandError(str(exc)) from None
         self._set_emotion.publish(String(data=name))
