@@ -93,17 +93,18 @@ def test_bad_input_is_refused_with_the_reason(running_sim: str) -> None:
     assert result.returncode != 0
     assert "'AROUSAL': 3.0 is outside [-1, 1]" in result.stderr
     values = json.dumps({"pleasure": 0.5, "arousal": 3, "dominance": 0}).encode()
-    request = urllib.request.Request(running_sim + "/api/emotion/values", data=values, method="POST")
+    as_json = {"Content-Type": "application/json"}  # commands take only JSON (docs/security.md)
+    request = urllib.request.Request(running_sim + "/api/emotion/values", data=values, headers=as_json)
     with pytest.raises(urllib.error.HTTPError) as info:
         urllib.request.urlopen(request)
     assert (
         info.value.code == 400
         and "'arousal' must be a number in [-1, 1], got 3" in info.value.read().decode()
     )
-    request = urllib.request.Request(running_sim + "/api/event", data=b"not json", method="POST")
+    request = urllib.request.Request(running_sim + "/api/event", data=b"not json", headers=as_json)
     with pytest.raises(urllib.error.HTTPError) as info:
         urllib.request.urlopen(request)
-    assert info.value.code == 400 and "not JSON" in info.value.read().decode()
+    assert info.value.code == 400 and "not usable JSON" in info.value.read().decode()
 
 
 def test_no_robot_running_is_explained() -> None:

@@ -6,9 +6,13 @@ border. The active state can be highlighted (the dashboard uses that).
 
 from __future__ import annotations
 
+import contextlib
+import resource
 import shutil
 import subprocess
+from collections.abc import Callable
 from pathlib import Path
+from xml.sax.saxutils import escape, quoteattr
 
 import graphviz
 
@@ -89,18 +93,82 @@ def render(machine: MachineSpec, output: Path, *, active: str | None = None) -> 
     return output
 
 
-def render_bytes(graph: graphviz.Digraph, fmt: str = "svg") -> bytes:
+def render_bytes(
+    graph: graphviz.Digraph,
+    fmt: str = "svg",
+    *,
+    timeout: float | None = None,
+    memory: int | None = None,
+    started: Callable[[subprocess.Popen[bytes]], None] | None = None,
+) -> bytes:
+    """Run Graphviz's ``dot`` on ``graph``.
+
+    ``timeout`` (real seconds) and ``memory`` (bytes of address space) cap the ``dot`` process:
+    past either it is stopped and a :class:`CyborgError` names the cap. ``started`` receives the
+    process (so a server can kill it when it stops).
+    """
     if shutil.which("dot") is None:
         raise CyborgError(
             "Graphviz's 'dot' program is not installed, so the graph cannot be rendered; "
             "fix: install it (apt-get install graphviz) or write a .dot file instead"
         )
+    process = subprocess.Popen(
+        ["dot", f"-T{fmt}"], stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE
+    )
+    if memory is not None:  # dot waits for its input, so the cap is in place before it lays anything out
+        with contextlib.suppress(ProcessLookupError):
+            resource.prlimit(process.pid, resource.RLIMIT_AS, (memory, memory))
+    if started is not None:
+        started(process)
     try:
-        done = subprocess.run(
-            ["dot", f"-T{fmt}"], input=graph.source.encode(), capture_output=True, check=True
-        )
-    except subprocess.CalledProcessError as exc:
+        out, err = process.communicate(graph.source.encode(), timeout=timeout)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.communicate()
         raise CyborgError(
-            f"Graphviz could not render format {fmt!r}: {exc.stderr.decode().strip()}; fix: use svg, png or pdf"
-        ) from exc
-    return bytes(done.stdout)
+            f"Graphviz took longer than {timeout:g} s (the limit) to lay out this machine; "
+            "fix: draw it offline with `cyborg graph FILE -o machine.svg`, or group states in superstates"
+        ) from None
+    if process.returncode != 0:
+        problem = err.decode(errors="replace").strip().splitlines()
+        if memory is not None and (process.returncode < 0 or any("memory" in line for line in problem)):
+            raise CyborgError(
+                f"Graphviz needed more than {memory // 2**20} MiB (the limit) to lay out this machine, "
+                f"or was stopped (exit {process.returncode}); fix: draw it offline with "
+                "`cyborg graph FILE -o machine.svg`"
+            )
+        raise CyborgError(
+            f"Graphviz could not render format {fmt!r}: {' '.join(problem[-3:])}; fix: use svg, png or pdf"
+        )
+    return bytes(out)
+
+
+def list_svg(machine: MachineSpec, note: str) -> bytes:
+    """The machine as a readable list instead of a graph: one box per leaf state, its transitions
+    beside it, in columns; ``note`` on top says why. Boxes have the ids ``state:<name>`` (and the
+    classes) of Graphviz's nodes, so the dashboard highlights the active state as on the graph."""
+    per_column, row, width, gap = 40, 22, 360, 24
+    leaves = [state.name for state in machine.leaves()]
+    rows: list[str] = []
+    for index, state in enumerate(leaves):
+        x = 10 + (index // per_column) * (width + gap)
+        y = 48 + (index % per_column) * row
+        transitions = ", ".join(
+            f"{event} \u2192 {target}" for event, target in machine.transitions_of(state).items()
+        )
+        rows.append(
+            f'<g id={quoteattr("state:" + state)} class="node"><title>{escape(state)}</title>'
+            f'<polygon points="{x},{y} {x + width},{y} {x + width},{y + row - 4} {x},{y + row - 4}"/>'
+            f'<text x="{x + 6}" y="{y + 13}" font-size="12">{escape(state)}'
+            f'<tspan font-size="9" dx="8">{escape(transitions)}</tspan></text></g>'
+        )
+    columns = max(1, -(-len(leaves) // per_column))
+    total_width = 20 + columns * (width + gap)
+    total_height = 60 + min(len(leaves), per_column) * row
+    return (
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="{total_width}pt" height="{total_height}pt" '
+        f'viewBox="0 0 {total_width} {total_height}" font-family="Helvetica,sans-serif">'
+        f'<g class="graph" id="list"><text x="10" y="24" font-size="14">{escape(note)}</text>'
+        + "".join(rows)
+        + "</g></svg>"
+    ).encode()

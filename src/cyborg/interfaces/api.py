@@ -10,17 +10,21 @@ buffer and streamed over a websocket. Bound to 127.0.0.1 unless told otherwise.
 from __future__ import annotations
 
 import asyncio
+import functools
 import json
 import logging
 import math
+import subprocess
 from collections import deque
 from collections.abc import Callable
 from typing import Any
 
-from aiohttp import WSMsgType, web
+from aiohttp import WSCloseCode, WSMsgType, web
 
 from cyborg.controller.machine import MachineSpec
 from cyborg.emotion.model import EmotionSettings
+from cyborg.errors import CyborgError
+from cyborg.interfaces.security import Access, Guard, needs_token, new_token
 from cyborg.limits import MAX_TEXT_LENGTH
 from cyborg.sim.records import Record, RecordStream
 from cyborg.transport import topics
@@ -31,6 +35,9 @@ log = logging.getLogger(__name__)
 
 DEFAULT_PORT = 8642
 RECORD_BUFFER = 5000
+GRAPH_MAX_STATES = 200  # more leaf states are shown as a list: Graphviz needs minutes and gigabytes
+GRAPH_TIMEOUT = 10.0  # real seconds Graphviz may take to lay out the machine (once per machine)
+GRAPH_MEMORY = 2**30  # bytes of address space Graphviz may use
 
 
 class CommandError(web.HTTPBadRequest):
@@ -49,12 +56,15 @@ class RobotAPI:
         extra_status: Callable[[], dict[str, Any]] | None = None,
         emotions: dict[str, tuple[float, float, float]] | None = None,
         emotion_aliases: dict[str, str] | None = None,
+        access: Access | None = None,
     ) -> None:
         self.node = node
         self.machine = machine
         self.emotions = emotions or {}
         self.emotion_aliases = emotion_aliases or {}
-        self._graph_svg: bytes | None = None
+        self._graph: asyncio.Future[tuple[bytes, str]] | None = None  # laid out once, shared by all requests
+        self._dot: subprocess.Popen[bytes] | None = None
+        self.guard = Guard(access or Access())
         self.extra_status = extra_status
         self.records: deque[Record] = deque(maxlen=RECORD_BUFFER)
         self.sequence = 0
@@ -75,7 +85,9 @@ class RobotAPI:
         self._set_emotion = node.publisher(topics.SET_EMOTIONAL_STATE, String)
         self._set_values = node.publisher(topics.SET_EMOTIONAL_VALUES, EmotionalFeedback)
         self._switch = node.publisher(topics.EMOTIONAL_CONTROLLER, String)
-        self.app = web.Application()
+        self.app = web.Application(
+            middlewares=[self.guard.middleware], client_max_size=self.guard.limits.max_body
+        )
         self.app.add_routes(
             [
                 web.get("/api/status", self.get_status),
@@ -93,6 +105,7 @@ class RobotAPI:
             ]
         )
         self._runner: web.AppRunner | None = None
+        self._server: asyncio.Server | None = None
         self.port: int | None = None
 
     # --- records ------------------------------------------------------------------------
@@ -228,15 +241,41 @@ class RobotAPI:
         return web.json_response({"initial": self.machine.initial, "states": states})
 
     async def get_graph(self, request: web.Request) -> web.Response:
-        """The machine drawn by Graphviz; nodes have ids ``state:<name>`` for live highlighting."""
+        """The machine drawn by Graphviz; nodes have ids ``state:<name>`` for live highlighting.
+
+        Laid out once (every request waits for the same layout), within a time and memory cap;
+        a machine too big for that is shown as a list (header ``X-Graph-Layout: list``).
+        """
         if self.machine is None:
             raise web.HTTPNotFound(text="this robot's state machine is not known here")
-        if self._graph_svg is None:
-            from cyborg.controller.graph import render_bytes, to_graph
+        if self._graph is None:
+            self._graph = asyncio.ensure_future(self._lay_out(self.machine))
+        svg, layout = await asyncio.shield(self._graph)
+        return web.Response(body=svg, content_type="image/svg+xml", headers={"X-Graph-Layout": layout})
 
-            loop = asyncio.get_running_loop()
-            self._graph_svg = await loop.run_in_executor(None, render_bytes, to_graph(self.machine), "svg")
-        return web.Response(body=self._graph_svg, content_type="image/svg+xml")
+    async def _lay_out(self, machine: MachineSpec) -> tuple[bytes, str]:
+        from cyborg.controller.graph import list_svg, render_bytes, to_graph
+
+        leaves = len(machine.leaves())
+        if leaves > GRAPH_MAX_STATES:
+            note = (
+                f"{leaves} states: more than the {GRAPH_MAX_STATES} laid out as a graph here, so a list. "
+                "Fix: draw it offline with `cyborg graph FILE -o machine.svg`"
+            )
+            return list_svg(machine, note), "list"
+
+        def started(process: subprocess.Popen[bytes]) -> None:
+            self._dot = process
+
+        render = functools.partial(render_bytes, timeout=GRAPH_TIMEOUT, memory=GRAPH_MEMORY, started=started)
+        try:
+            svg = await asyncio.get_running_loop().run_in_executor(None, render, to_graph(machine), "svg")
+        except (CyborgError, OSError) as exc:
+            log.warning("the dashboard shows the state machine as a list: %s", exc)
+            return list_svg(machine, f"Shown as a list: {exc}"), "list"
+        finally:
+            self._dot = None
+        return svg, "graphviz"
 
     async def get_emotions(self, request: web.Request) -> web.Response:
         return web.json_response(
@@ -249,7 +288,8 @@ class RobotAPI:
         return web.json_response(OPENAPI)
 
     async def websocket(self, request: web.Request) -> web.WebSocketResponse:
-        socket = web.WebSocketResponse(heartbeat=20)
+        self.guard.websocket_allowed(len(self._sockets))
+        socket = web.WebSocketResponse(heartbeat=20, max_msg_size=self.guard.limits.max_ws_message)
         await socket.prepare(request)
         queue: asyncio.Queue[str] = asyncio.Queue(maxsize=1000)
         self._sockets[socket] = queue
@@ -271,19 +311,43 @@ class RobotAPI:
 
     # --- serving --------------------------------------------------------------------------
 
+    @property
+    def token(self) -> str | None:
+        """The bearer token every /api/ request needs, if any (see :mod:`cyborg.interfaces.security`)."""
+        return self.guard.access.token
+
     async def start(self, host: str = "127.0.0.1", port: int = DEFAULT_PORT) -> str:
-        self._runner = web.AppRunner(self.app, access_log=None)
+        """Serve on ``host``:``port``; returns the address of the page. Beyond loopback a token is
+        required: without one given, one is made here (read it from :attr:`token`)."""
+        if self.guard.access.token is None and needs_token(host):
+            self.guard.access.token = new_token()
+        clock = self.node.clock
+        speed = getattr(clock, "speed", 1.0) if clock.is_virtual else 1.0
+        # The loop's timers run on the robot's clock: scale the real-time limit; none at --speed max.
+        timeout = self.guard.limits.header_timeout * speed if speed else 0.0
+        self._runner = web.AppRunner(self.app, access_log=None, keepalive_timeout=timeout)
         await self._runner.setup()
-        site = web.TCPSite(self._runner, host, port)
-        await site.start()
-        server = site._server
-        sockets = getattr(server, "sockets", None) or []
+        assert self._runner.server is not None
+        accept = self.guard.protocol_factory(self._runner.server, speed or 0.0)
+        self._server = await asyncio.get_running_loop().create_server(
+            accept, host or None, port, reuse_address=True, backlog=128
+        )
+        sockets = self._server.sockets
         self.port = sockets[0].getsockname()[1] if sockets else port
-        return f"http://{host}:{self.port}/"
+        self.guard.bind(host, self.port)
+        return self.guard.public_url
 
     async def stop(self) -> None:
+        dot = self._dot
+        if dot is not None and dot.poll() is None:
+            dot.kill()  # a layout still running is of no use once the robot stops
         for socket in list(self._sockets):
-            await socket.close()
+            await socket.close(code=WSCloseCode.GOING_AWAY, message=b"the robot stopped")
+        if self._server is not None:
+            self._server.close()
         if self._runner is not None:
             await self._runner.cleanup()
             self._runner = None
+        if self._server is not None:
+            await self._server.wait_closed()
+            self._server = None

@@ -17,6 +17,7 @@ import click
 
 from cyborg.controller.config import LoadedConfig, load_config
 from cyborg.errors import ConfigError, CyborgError
+from cyborg.interfaces.security import Access, access_options
 from cyborg.limits import MAX_SCRIPT_SECONDS, MAX_SPEED
 
 DEFAULT_CONFIG = "cyborg.yaml"
@@ -217,6 +218,7 @@ def _os_problem(exc: OSError) -> CyborgError:
     is_flag=True,
     help="run every part as its own ROS 1 node (as `cyborg launch`); with --script, the script too",
 )
+@access_options
 def sim(
     config_path: Path | None,
     map_path: Path | None,
@@ -228,6 +230,7 @@ def sim(
     script_path: Path | None,
     transcript_path: Path | None,
     over_ros: bool,
+    access: Access,
 ) -> None:
     """Run the whole simulated robot in this process, with its API and dashboard.
 
@@ -260,7 +263,7 @@ def sim(
             speed=_parse_speed(speed),
             duration=duration,
             echo=click.echo,
-            serve=serve_api(host, port, click.secho),
+            serve=serve_api(host, port, click.secho, access),
             data_dir=data_dir,
             map_path=map_path,
         )
@@ -451,6 +454,7 @@ _speed_help = "virtual time at this factor of real time (all nodes share one clo
     "without it a controller restarted after a crash resumes an emotion stored within "
     "resume_within_seconds",
 )
+@access_options
 def node(
     name: str,
     config_path: Path | None,
@@ -466,6 +470,7 @@ def node(
     script_path: Path | None,
     transcript_path: Path | None,
     fresh: bool,
+    access: Access,
 ) -> None:
     """Run one part of the robot as the ROS 1 node NAME (cyborg_controller, a module, a gatekeeper,
     cyborg_api, or cyborg_scenario with --script)."""
@@ -491,6 +496,7 @@ def node(
             publish_clock_too=publish_clock,
             scenario=scenario,
             resume=not fresh,
+            access=access,
         )
     except CyborgError as exc:
         _fail(exc)

@@ -23,6 +23,7 @@ import click
 
 from cyborg.errors import CyborgError
 from cyborg.interfaces.api import DEFAULT_PORT
+from cyborg.interfaces.security import TOKEN_ENV, client_headers
 
 DEFAULT_URL = f"http://127.0.0.1:{DEFAULT_PORT}"
 
@@ -31,10 +32,11 @@ class ToolError(click.ClickException):
     pass
 
 
-def _request(base: str, path: str, body: dict[str, Any] | None = None) -> Any:
+def _request(base: str, path: str, body: dict[str, Any] | None = None, token: str | None = None) -> Any:
     url = base.rstrip("/") + path
     data = None if body is None else json.dumps(body).encode()
-    request = urllib.request.Request(url, data=data, headers={"Content-Type": "application/json"})
+    headers = {"Content-Type": "application/json", **client_headers(token)}
+    request = urllib.request.Request(url, data=data, headers=headers)
     try:
         with urllib.request.urlopen(request, timeout=5) as response:
             return json.loads(response.read())
@@ -54,39 +56,45 @@ def _request(base: str, path: str, body: dict[str, Any] | None = None) -> Any:
 class HttpLink:
     """The robot's local HTTP API (``cyborg sim``, or the ``cyborg_api`` ROS node)."""
 
-    def __init__(self, url: str) -> None:
+    def __init__(self, url: str, token: str | None = None) -> None:
         self.url = url
+        self.token = token
 
     def close(self) -> None:
         pass
 
+    def _call(self, path: str, body: dict[str, Any] | None = None) -> Any:
+        return _request(self.url, path, body, self.token)
+
     def send_event(self, name: str) -> bool | None:
-        answer = _request(self.url, "/api/event", {"name": name})
+        answer = self._call("/api/event", {"name": name})
         return answer.get("is_transition") if isinstance(answer, dict) else None
 
     def say(self, text: str) -> None:
-        _request(self.url, "/api/say", {"text": text})
+        self._call("/api/say", {"text": text})
 
     def set_emotion(self, name: str) -> None:
-        _request(self.url, "/api/emotion/set", {"name": name})
+        self._call("/api/emotion/set", {"name": name})
 
     def set_values(self, pleasure: float, arousal: float, dominance: float) -> None:
-        _request(
-            self.url,
-            "/api/emotion/values",
-            {"pleasure": pleasure, "arousal": arousal, "dominance": dominance},
-        )
+        self._call("/api/emotion/values", {"pleasure": pleasure, "arousal": arousal, "dominance": dominance})
 
     def switch(self, on: bool) -> None:
-        _request(self.url, "/api/emotion/switch", {"on": on})
+        self._call("/api/emotion/switch", {"on": on})
 
     def status(self) -> dict[str, Any]:
-        answer: dict[str, Any] = _request(self.url, "/api/status")
+        answer: dict[str, Any] = self._call("/api/status")
         return answer
 
     def follow(self, status: dict[str, Any], show: Callable[[dict[str, Any]], None]) -> None:
-        with contextlib.suppress(KeyboardInterrupt):
-            asyncio.run(_follow(self.url, status, show))
+        import aiohttp
+
+        try:
+            with contextlib.suppress(KeyboardInterrupt):
+                asyncio.run(_follow(self.url, status, show, self.token))
+        except aiohttp.WSServerHandshakeError as exc:
+            fix = f"pass --token or set ${TOKEN_ENV}" if exc.status == 401 else "check --url"
+            raise ToolError(f"the robot refused its live stream (HTTP {exc.status}); fix: {fix}") from None
 
 
 class RobotLink(Protocol):
@@ -109,6 +117,12 @@ def link_options(command: Callable[..., None]) -> Callable[..., None]:
         "--url", default=DEFAULT_URL, show_default=True, envvar="CYBORG_URL", help="the running robot's API"
     )
     @click.option(
+        "--token",
+        envvar=TOKEN_ENV,
+        help=f"the robot's API token (${TOKEN_ENV}), needed when it serves beyond loopback; "
+        "`cyborg sim` prints it at start",
+    )
+    @click.option(
         "--ros",
         "over_ros",
         is_flag=True,
@@ -116,7 +130,7 @@ def link_options(command: Callable[..., None]) -> Callable[..., None]:
         help="talk to a robot of ROS nodes through its topics and services (ROS_MASTER_URI)",
     )
     @functools.wraps(command)
-    def wrapper(*args: Any, url: str, over_ros: bool, **kwargs: Any) -> None:
+    def wrapper(*args: Any, url: str, token: str | None, over_ros: bool, **kwargs: Any) -> None:
         link: RobotLink
         if over_ros:
             from cyborg.interfaces.ros_tool import RosLink
@@ -126,7 +140,7 @@ def link_options(command: Callable[..., None]) -> Callable[..., None]:
             except CyborgError as exc:
                 raise ToolError(str(exc)) from None
         else:
-            link = HttpLink(url)
+            link = HttpLink(url, token)
         try:
             command(*args, link=link, **kwargs)
         except CyborgError as exc:
@@ -246,11 +260,14 @@ def status_command(follow: bool, link: RobotLink) -> None:
         link.follow(status, show)
 
 
-async def _follow(url: str, status: dict[str, Any], show: Callable[[dict[str, Any]], None]) -> None:
+async def _follow(
+    url: str, status: dict[str, Any], show: Callable[[dict[str, Any]], None], token: str | None = None
+) -> None:
     import aiohttp
 
     ws_url = url.rstrip("/").replace("http", "ws", 1) + "/api/ws"
-    async with aiohttp.ClientSession() as session, session.ws_connect(ws_url) as socket:
+    headers = client_headers(token)
+    async with aiohttp.ClientSession() as session, session.ws_connect(ws_url, headers=headers) as socket:
         async for message in socket:
             record = json.loads(message.data)
             kind = record.get("type")

@@ -38,6 +38,7 @@ import click
 
 from cyborg.controller.config import LoadedConfig
 from cyborg.errors import CyborgError
+from cyborg.interfaces.security import Access, announcement
 from cyborg.sim.nodes import API, CONTROLLER, NodeContext, Part, build_part
 from cyborg.transport.base import Node, Publisher
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, Clock, RealClock, VirtualClock
@@ -226,6 +227,7 @@ def run_node(
     publish_clock_too: bool | None = None,
     scenario: ScenarioFiles | None = None,
     resume: bool = True,
+    access: Access | None = None,
 ) -> None:
     """Run part ``name`` as the ROS node of the same name until SIGINT/SIGTERM.
 
@@ -294,6 +296,7 @@ def run_node(
                 machine=config.machine,
                 emotions=dict(config.model.emotion.prototypes),
                 emotion_aliases=config.model.emotion.usable_aliases(),
+                access=access,
             )
             has_base = any(
                 isinstance(m, dict) and m.get("kind") == "simulated_base"
@@ -302,8 +305,10 @@ def run_node(
             mirror = remote_robot(api_node, config, context.occupancy_map() if has_base else None)
             api.extra_status = lambda: {"emotion_enabled": mirror.emotion.enabled}
             dashboard.register(api, mirror)  # type: ignore[arg-type]
+            given = access is not None and access.token is not None
             url = await api.start(host, port)
-            click.echo(f"API: {url}", err=True)
+            for text, colour in announcement(url, host, api.port or port, api.token, generated=not given):
+                click.secho(text, fg=colour, err=True)
         if part.controller is not None:
             part.controller.start()
         click.echo(f"node {name} running", err=True)

@@ -8,6 +8,7 @@ from typing import Any
 from cyborg.errors import CyborgError
 from cyborg.interfaces.api import RobotAPI
 from cyborg.interfaces.dashboard import register as register_dashboard
+from cyborg.interfaces.security import Access, announcement
 from cyborg.modules.gatekeeper import Gatekeeper
 from cyborg.sim.robot import Robot
 from cyborg.transport.base import Transport
@@ -18,8 +19,16 @@ Stop = Callable[[], Awaitable[None]]
 EXTENSIONS: list[Callable[[RobotAPI, Robot], None]] = [register_dashboard]
 
 
-def serve_api(host: str, port: int, say: Callable[..., Any]) -> Callable[[Transport, Robot], Awaitable[Stop]]:
-    """A ``serve`` hook for :func:`cyborg.sim.runner.run_sim` that starts the HTTP API."""
+def serve_api(
+    host: str, port: int, say: Callable[..., Any], access: Access | None = None
+) -> Callable[[Transport, Robot], Awaitable[Stop]]:
+    """A ``serve`` hook for :func:`cyborg.sim.runner.run_sim` that starts the HTTP API.
+
+    ``access``: the token and extra origins (see :mod:`cyborg.interfaces.security`); beyond
+    loopback a token is made if none is given, and printed with the address.
+    """
+    access = access or Access()
+    given = access.token is not None
 
     async def serve(transport: Transport, robot: Robot) -> Stop:
         gatekeepers = {name: c for name, c in robot.components.items() if isinstance(c, Gatekeeper)}
@@ -32,6 +41,7 @@ def serve_api(host: str, port: int, say: Callable[..., Any]) -> Callable[[Transp
                 "gatekeepers": {name: g.report() for name, g in gatekeepers.items()},
                 "emotion_enabled": robot.emotion.enabled,
             },
+            access=access,
         )
         for extend in EXTENSIONS:
             extend(api, robot)
@@ -41,7 +51,8 @@ def serve_api(host: str, port: int, say: Callable[..., Any]) -> Callable[[Transp
             raise CyborgError(
                 f"cannot serve on {host}:{port}: {exc.strerror}; fix: pass --port 0 or another port"
             ) from exc
-        say(f"dashboard and API: {url}  (command tool: cyborg status --url {url.rstrip('/')})", fg="green")
+        for text, colour in announcement(url, host, api.port or port, api.token, generated=not given):
+            say(text, fg=colour)
         return api.stop
 
     return serve

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import os
+import signal
 from collections.abc import Awaitable, Callable
 from pathlib import Path
+from typing import Any
 
 from cyborg.controller.config import LoadedConfig
 from cyborg.sim.robot import Robot, build_robot
@@ -77,16 +80,45 @@ def _run(
     async def main() -> None:
         stop_server = await serve(transport, robot) if serve is not None else None
         robot.start()
+        signalled = _stop_on_signals(clock.loop)
         if duration is None:
-            await clock.loop.create_future()
+            await signalled
         else:
-            await clock.sleep(duration)
+            timer = asyncio.ensure_future(clock.sleep(duration))
+            either: set[asyncio.Future[Any]] = {signalled, timer}
+            await asyncio.wait(either, return_when=asyncio.FIRST_COMPLETED)
+            timer.cancel()
+        if signalled.done():
+            echo(f"{stamp()} {signal.Signals(signalled.result()).name}: stopping")
         await robot.controller.stop()
         if stop_server is not None:
             await stop_server()
         transport.shutdown()
+        if signalled.done():
+            echo("stopped")
 
     try:
         clock.run(main())
     finally:
         clock.close()
+
+
+def _stop_on_signals(loop: asyncio.AbstractEventLoop) -> asyncio.Future[int]:
+    """A future that SIGINT or SIGTERM (what a service manager sends) completes with the signal,
+    so the robot stops as at the end of --duration. A second signal acts as usual, at once."""
+    received: asyncio.Future[int] = loop.create_future()
+    installed: list[int] = []
+
+    def on_signal(number: int) -> None:
+        for each in installed:
+            loop.remove_signal_handler(each)
+        if not received.done():
+            received.set_result(number)
+
+    for number in (signal.SIGINT, signal.SIGTERM):
+        try:
+            loop.add_signal_handler(number, on_signal, number)
+        except (ValueError, RuntimeError, NotImplementedError):  # not the main thread: no handlers
+            continue
+        installed.append(number)
+    return received

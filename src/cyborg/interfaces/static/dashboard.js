@@ -62,14 +62,35 @@
 
   // --- helpers ---------------------------------------------------------------------------
 
+  // A robot serving beyond loopback wants its token on every /api/ request: it comes once in the
+  // address the robot printed (…/#token=…), is kept for this tab and taken out of the address bar.
+  const TOKEN = (() => {
+    const given = new URLSearchParams(location.hash.slice(1)).get("token");
+    if (given) {
+      sessionStorage.setItem("cyborg-token", given);
+      history.replaceState(null, "", location.pathname + location.search);
+    }
+    return sessionStorage.getItem("cyborg-token");
+  })();
+
+  async function api(url, options = {}) {
+    const headers = { ...(options.headers || {}) };
+    if (TOKEN) headers.Authorization = `Bearer ${TOKEN}`;
+    const response = await fetch(url, { ...options, headers });
+    if (response.status === 401) {
+      say("this robot needs its token: open the address it printed at start (it ends in #token=…)", true);
+    }
+    return response;
+  }
+
   async function getJSON(url) {
-    const response = await fetch(url, { cache: "no-store" });
+    const response = await api(url, { cache: "no-store" });
     if (!response.ok) throw new Error(`${url}: HTTP ${response.status} ${await response.text()}`);
     return response.json();
   }
 
   async function post(url, body) {
-    const response = await fetch(url, {
+    const response = await api(url, {
       method: "POST",
       headers: { "Content-Type": "application/json" },
       body: JSON.stringify(body),
@@ -219,7 +240,7 @@
   async function loadGraph() {
     const box = $("graph");
     try {
-      const [machine, response] = await Promise.all([getJSON("/api/machine"), fetch("/api/graph.svg")]);
+      const [machine, response] = await Promise.all([getJSON("/api/machine"), api("/api/graph.svg")]);
       if (!response.ok) throw new Error(`/api/graph.svg: HTTP ${response.status} ${await response.text()}`);
       for (const state of machine.states) dash.parents[state.name] = state.parent;
       const text = await response.text();
@@ -684,7 +705,7 @@
     if (view.loaded >= wanted || view.loading >= wanted) return;
     view.loading = wanted;
     try {
-      const response = await fetch(`${m.image}?max=${wanted}`, { cache: "no-store" });
+      const response = await api(`${m.image}?max=${wanted}`, { cache: "no-store" });
       if (!response.ok) throw new Error(`${m.image}: HTTP ${response.status} ${await response.text()}`);
       const perPixel = Number(response.headers.get("X-Cells-Per-Pixel") || "1");
       const url = URL.createObjectURL(await response.blob());
@@ -999,7 +1020,8 @@
 
   function connect() {
     setConnection("connecting", "connecting");
-    const socket = new WebSocket(`${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/api/ws`);
+    const query = TOKEN ? `?token=${encodeURIComponent(TOKEN)}` : ""; // a browser's websocket takes no headers
+    const socket = new WebSocket(`${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/api/ws${query}`);
     dash.syncing = true;
     dash.pending = [];
     socket.onopen = () => {
