@@ -4,26 +4,47 @@ In ``cyborg sim`` the dashboard reads the in-process controller and base. As a
 ROS node (``cyborg node cyborg_api``) it has neither, so these mirrors follow
 the state changes, the base's pose and path state on their topics, the last
 on/off sent to the emotion system, and load the same map file the simulated
-base uses. Not on the wire, so not shown under ROS: the goal status of the
-active module, the controller's counters beyond handovers, and the base's
-planned route.
+base uses. The controller's counters come as JSON on ``/cyborg_controller/stats``
+(published by ``cyborg node cyborg_controller``, see :func:`publish_controller_stats`).
+Not on the wire, so not shown under ROS: the goal status of the active module
+and the base's planned route.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import json
+import logging
 import math
 from dataclasses import dataclass, field
 from typing import Any
 
 from cyborg.controller.config import LoadedConfig
-from cyborg.controller.runtime import ControllerStats, Phase
+from cyborg.controller.runtime import Controller, ControllerStats, Phase
 from cyborg.transport import topics
-from cyborg.transport.base import MessageInfo, Node
+from cyborg.transport.base import MessageInfo, Node, Publisher
 from cyborg.transport.messages import PoseWithCovarianceStamped, String, SystemState
+
+log = logging.getLogger(__name__)
+
+STATS_PERIOD = 1.0  # clock seconds between looks at the controller's counters
+
+
+async def publish_controller_stats(publisher: Publisher[String], controller: Controller) -> None:
+    """Publish ``controller``'s counters as JSON whenever they changed (looked at every
+    STATS_PERIOD), for ever; the publisher should be latched so a late API node gets the last."""
+    last: dict[str, int] | None = None
+    while True:
+        counters = dataclasses.asdict(controller.stats)
+        if counters != last:
+            publisher.publish(String(data=json.dumps(counters)))
+            last = counters
+        await controller.node.clock.sleep(STATS_PERIOD)
 
 
 class ControllerMirror:
-    """Follows ``state_change``: active and previous state, last event. Counters are not on the wire."""
+    """Follows ``state_change`` (active and previous state, last event) and the controller's
+    counters on ``/cyborg_controller/stats``; until those arrive it counts handovers itself."""
 
     def __init__(self, node: Node) -> None:
         self.node = node
@@ -34,6 +55,7 @@ class ControllerMirror:
         self.stats = ControllerStats()
         self._listeners: list[Any] = []
         node.subscribe(topics.STATE_CHANGE, SystemState, self._on_change, queue_size=1000)
+        node.subscribe(topics.CONTROLLER_STATS, String, self._on_stats, queue_size=10)
 
     @property
     def phase(self) -> Phase:
@@ -48,6 +70,19 @@ class ControllerMirror:
         self.stats.handovers += 1
         for listener in self._listeners:
             listener(message)
+
+    def _on_stats(self, message: String, info: MessageInfo) -> None:
+        try:
+            counters = json.loads(message.data)
+        except ValueError:
+            log.warning("%s sent counters that are not JSON: %.80r", info.sender, message.data)
+            return
+        if not isinstance(counters, dict):
+            return
+        for name in (f.name for f in dataclasses.fields(self.stats)):
+            value = counters.get(name)
+            if isinstance(value, int) and not isinstance(value, bool):
+                setattr(self.stats, name, value)
 
 
 class EmotionSwitchMirror:

@@ -40,6 +40,7 @@ from cyborg.controller.config import LoadedConfig
 from cyborg.errors import CyborgError
 from cyborg.interfaces.security import Access, announcement
 from cyborg.sim.nodes import API, CONTROLLER, NodeContext, Part, build_part
+from cyborg.transport import topics
 from cyborg.transport.base import Node, Publisher
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, Clock, RealClock, VirtualClock
 from cyborg.transport.messages import Clock as ClockMessage
@@ -262,6 +263,9 @@ def run_node(
         # Made now, so every node is connected when the time starts (they all wait for /clock).
         clock_node = transport.node(f"{name}_clock")
         clock_publisher = clock_node.publisher(CLOCK_TOPIC, ClockMessage, queue_size=1)
+    stats_publisher = None
+    if part.controller is not None:  # its counters, for the cyborg_api node's dashboard
+        stats_publisher = part.controller.node.publisher(topics.CONTROLLER_STATS, String, latch=True)
 
     try:
         namespace = sim_time.epoch_params
@@ -284,6 +288,11 @@ def run_node(
         if clock_publisher is not None:
             assert isinstance(clock, VirtualClock)
             background.append(loop.create_task(publish_clock(clock_publisher, clock), name="clock"))
+        if stats_publisher is not None and part.controller is not None:
+            from cyborg.interfaces.remote import publish_controller_stats
+
+            counters = publish_controller_stats(stats_publisher, part.controller)
+            background.append(loop.create_task(counters, name="controller stats"))
         api = None
         if name == API:
             from cyborg.interfaces import dashboard
