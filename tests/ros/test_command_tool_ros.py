@@ -9,6 +9,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -82,3 +83,41 @@ def test_command_tool_without_a_master_explains_the_fix() -> None:
     assert result.returncode != 0
     assert "no ROS master answers at http://localhost:9" in result.stderr
     assert "cyborg launch" in result.stderr
+
+
+def test_a_controller_back_after_a_crash_resumes_its_emotion_and_a_fresh_start_is_neutral(
+    processes: Processes, observe: Observers, tmp_path: Path
+) -> None:
+    """Issue: a restart came back angry with the emotion system silently off. Now only a
+    controller started again without --fresh while the rest runs on resumes, and says so."""
+    changes = observe.state_changes()
+    emotions = observe.topic("/cyborg_controller/emotional_state", EmotionalState)
+    idle = processes.cyborg_node("cyborg_test_idle", FAULTS, tmp_path)
+    worker = processes.cyborg_node("cyborg_test_worker", FAULTS, tmp_path)
+    first = processes.cyborg_node("cyborg_controller", FAULTS, tmp_path, "--fresh")
+    processes.wait_ready(idle, worker, first)
+    changes.wait_state("idle", event="start")
+    status = tool("status").stdout
+    assert "emotion neutral" in status and "emotion system on" in status, status
+
+    mark = emotions.mark()
+    assert tool("emotion", "set", "happy").returncode == 0  # the table's bracketed word
+    emotions.wait_for(lambda h: h.message.to_emotional_state == "elated", after=mark, what="elated")
+    assert tool("emotion", "off").returncode == 0
+    deadline = time.monotonic() + 10
+    while "emotion system OFF" not in (status := tool("status").stdout):
+        assert time.monotonic() < deadline, status
+    first.kill()
+
+    back = processes.cyborg_node("cyborg_controller", FAULTS, tmp_path)  # as a respawn would
+    processes.wait_ready(back)
+    status = tool("status").stdout
+    assert "emotion elated" in status and "emotion system OFF" in status, status
+    ros_log = Path(os.environ["ROS_HOME"]) / "log" / "cyborg_controller.log"  # where rospy puts it
+    assert "resumed the stored emotion elated" in ros_log.read_text(), ros_log.read_text()[-2000:]
+    back.kill()
+
+    fresh = processes.cyborg_node("cyborg_controller", FAULTS, tmp_path, "--fresh")
+    processes.wait_ready(fresh)
+    status = tool("status").stdout
+    assert "emotion neutral" in status and "emotion system on" in status, status

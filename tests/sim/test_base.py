@@ -138,6 +138,37 @@ def test_move_base_to_a_named_place_arrives_after_distance_over_speed(
     assert base.distance_travelled == pytest.approx(route.length, rel=1e-6)
 
 
+def test_late_ticks_do_not_slow_the_trip_down(
+    clock: VirtualClock,
+    transport: EmbeddedTransport,
+    campus: OccupancyMap,
+    campus_planner: RoutePlanner,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """On a loaded machine at 25x every sleep wakes late; the trip still takes distance / speed
+    (scenario C over ROS reached the cafeteria 40 s late and in another mood)."""
+    base = make_base(transport, campus, campus_planner)
+    client = Client(transport)
+    cafeteria = campus.pose("cafeteria")
+    route = campus_planner.plan((base.x, base.y), cafeteria)
+    on_time = clock.sleep
+
+    async def late(delay: float) -> None:
+        await on_time(delay * 1.5 + 0.01)
+
+    monkeypatch.setattr(clock, "sleep", late)
+
+    async def main() -> float:
+        started = clock.monotonic()
+        await client.send_to(cafeteria).wait()
+        return clock.monotonic() - started
+
+    took = clock.run(main())
+    assert math.dist(client.position, cafeteria.position) < ARRIVED
+    assert took == pytest.approx(route.length / SPEED, abs=0.5)
+    assert base.distance_travelled == pytest.approx(route.length, rel=1e-6)
+
+
 def test_feedback_reports_poses_along_the_way(
     clock: VirtualClock, transport: EmbeddedTransport, campus: OccupancyMap, campus_planner: RoutePlanner
 ) -> None:

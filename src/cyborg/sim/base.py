@@ -165,13 +165,20 @@ class SimulatedBase:
         if length < 1e-9:
             return
         self.theta = math.atan2(dy, dx)
-        steps = max(1, math.ceil(length / (self.speed * TICK)))
         sx, sy = self.x, self.y
-        for step in range(1, steps + 1):
-            await clock.sleep(min(TICK, length / self.speed - (step - 1) * TICK))
-            fraction = step / steps
+        duration = length / self.speed
+        start = clock.monotonic()
+        done = 0.0
+        # The pose follows the clock, not the number of ticks: a tick that comes late (a loaded
+        # machine, virtual time at 25x) moves the robot further, so a trip takes the same
+        # virtual time however the ticks fall.
+        while done < 1.0:
+            await clock.sleep(min(TICK, max(0.0, duration - (clock.monotonic() - start))))
+            elapsed = clock.monotonic() - start
+            fraction = 1.0 if elapsed >= duration - 1e-9 else elapsed / duration
             self.x, self.y = sx + dx * fraction, sy + dy * fraction
-            self.distance_travelled += length / steps
+            self.distance_travelled += length * (fraction - done)
+            done = fraction
             self._publish_pose()
             if on_pose is not None:
                 on_pose()
