@@ -225,10 +225,14 @@ def test_chat_leads_to_speech_in_the_log(page: Page) -> None:
 
 
 def test_emotion_set_and_switch(page: Page, sim: str) -> None:
+    expect(page.locator('#emotion-select option[value="elated"]')).to_have_text("elated (happy)")
     page.select_option("#emotion-select", "elated")
     page.click("#emotion-set")
-    expect(page.locator("#emotion-name")).to_have_text("elated")
+    expect(page.locator("#emotion-name")).to_have_text("elated (happy)")  # table 2.2's name and bracket
+    expect(page.locator("#top-emotion")).to_have_text("elated (happy)")
     expect(page.locator("#val-p")).to_have_text("+0.50")
+    page.request.post(sim + "/api/emotion/set", data={"name": "surprised"})  # a typed alias
+    expect(page.locator("#emotion-name")).to_have_text("puzzled (surprised)")
     page.locator("#emotion-switch").uncheck()
     expect(page.locator("#emotion-switch-state")).to_have_text("switched off")
     assert page.request.get(sim + "/api/health").json()["emotion_enabled"] is False
@@ -330,21 +334,24 @@ def test_the_emotion_shown_survives_state_changes(page: Page, sim: str) -> None:
     page.request.post(sim + "/api/emotion/switch", data={"on": False})  # no decay or feedback meanwhile
     try:
         loaded_with = page.locator("#emotion-name").inner_text()
-        wanted = "inhibited" if loaded_with != "inhibited" else "angry"
-        pleasure = page.request.get(sim + "/api/emotions").json()["prototypes"][wanted][0]
+        wanted = "inhibited" if not loaded_with.startswith("inhibited") else "angry"
+        emotions = page.request.get(sim + "/api/emotions").json()
+        pleasure = emotions["prototypes"][wanted][0]
+        aliases = sorted(alias for alias, name in emotions["aliases"].items() if name == wanted)
+        shown = f"{wanted} ({', '.join(aliases)})" if aliases else wanted
         page.select_option("#emotion-select", wanted)
         page.click("#emotion-set")
-        expect(page.locator("#emotion-name")).to_have_text(wanted)
+        expect(page.locator("#emotion-name")).to_have_text(shown)
         go_idle(page, sim)
         page.locator('#event-buttons button[data-event="music_play"]').click()
         expect(page.locator("#top-state")).to_have_text("music")
         page.wait_for_timeout(1500)  # the status and health polls that follow a state change
-        expect(page.locator("#emotion-name")).to_have_text(wanted)
-        expect(page.locator("#top-emotion")).to_have_text(wanted)
+        expect(page.locator("#emotion-name")).to_have_text(shown)
+        expect(page.locator("#top-emotion")).to_have_text(shown)
         expect(page.locator("#val-p")).to_have_text(f"{pleasure:+.2f}")
         go_idle(page, sim)
         page.wait_for_timeout(500)
-        expect(page.locator("#emotion-name")).to_have_text(wanted)
+        expect(page.locator("#emotion-name")).to_have_text(shown)
     finally:
         page.request.post(sim + "/api/emotion/switch", data={"on": True})
 
