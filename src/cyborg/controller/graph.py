@@ -168,7 +168,7 @@ def list_svg(machine: MachineSpec, note: str) -> bytes:
     return (
         f'<svg xmlns="http://www.w3.org/2000/svg" width="{total_width}pt" height="{total_height}pt" '
         f'viewBox="0 0 {total_width} {total_height}" font-family="Helvetica,sans-serif">'
-        f'<g class="graph" id="list"><text x="10" y="24" font-size="14">{escape(note)}</text>'
+        f'<g class="graph" id="list"><text x="10" y="24" font-size="14" fill="#8a93a3">{escape(note)}</text>'
         + "".join(rows)
         + "</g></svg>"
     ).encode()

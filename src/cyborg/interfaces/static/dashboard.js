@@ -252,6 +252,10 @@
       dash.graphZoom = makeZoomable(svg, $("graph-tools"), { maxZoom: 15 });
       const leaves = machine.states.filter((s) => s.leaf).length;
       $("graph-caption").textContent = `${leaves} states · initial ${machine.initial}`;
+      if (response.headers.get("X-Graph-Layout") === "list") { // too big or too slow for Graphviz here
+        $("graph-caption").textContent += " · listed, not drawn";
+        $("graph-caption").title = box.querySelector("#list > text")?.textContent || "";
+      }
       highlightGraph();
     } catch (error) {
       box.innerHTML = "";
