@@ -16,6 +16,8 @@ def _command(summary: str, schema: dict[str, Any]) -> dict[str, Any]:
                     "content": {"application/json": {"schema": {"type": "object"}}},
                 },
                 "400": {"description": "bad input; the body's 'error' names the problem"},
+                "413": {"description": "the body is over the API's limit (64 KiB)"},
+                "415": {"description": "the body was not sent as Content-Type: application/json"},
             },
         }
     }
@@ -45,8 +47,13 @@ OPENAPI: dict[str, Any] = {
     "info": {
         "title": "Cyborg robot API",
         "version": "1",
-        "description": "Commands and status of a running Cyborg.",
+        "description": "Commands and status of a running Cyborg. Every answer may also be 403 (a Host or "
+        "Origin that is not the robot's, see docs/security.md), 401 (the robot serves beyond loopback "
+        "or was given --token: send 'Authorization: Bearer TOKEN'; the websocket also takes ?token=) "
+        "or 503 (a connection or stream limit); the body's 'error' names the limit and the fix.",
     },
+    "components": {"securitySchemes": {"token": {"type": "http", "scheme": "bearer"}}},
+    "security": [{}, {"token": []}],
     "paths": {
         "/api/status": {
             "get": {
@@ -105,7 +112,8 @@ OPENAPI: dict[str, Any] = {
         },
         "/api/graph.svg": {
             "get": {
-                "summary": "The state machine drawn by Graphviz (node ids state:<name>)",
+                "summary": "The state machine drawn by Graphviz (node ids state:<name>), laid out once; "
+                "a machine too big or too slow to lay out is listed instead (header X-Graph-Layout: list)",
                 "responses": {"200": {"description": "SVG"}},
             }
         },
