@@ -27,6 +27,7 @@ from __future__ import annotations
 import contextlib
 import difflib
 import enum
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import UnionType
@@ -45,6 +46,8 @@ from cyborg.motivator.logic import MotivatorSettings
 
 # --- YAML with duplicate-key detection -------------------------------------------
 
+Loader = yaml.SafeLoader | yaml.CSafeLoader
+
 
 def load_yaml(text: str, source: str) -> Any:
     """Parse YAML, reporting syntax errors and duplicate keys with line numbers.
@@ -56,12 +59,44 @@ def load_yaml(text: str, source: str) -> Any:
     size = len(text.encode("utf-8", errors="surrogateescape"))
     if size > MAX_YAML_BYTES:
         raise ConfigError(
-            f"the file is {size:,} bytes, over the limit of {MAX_YAML_BYTES:,}; fix: check that this is the "
+            f"the file is {size:,} bytes, over the limit of {MAX_YAML_BYTES:,} bytes; fix: check that this is the "
             "right file, and split a long scenario into several scripts",
             source=source,
         )
+    if yaml_loader(text) is yaml.CSafeLoader:
+        try:
+            return _load_yaml_with(yaml.CSafeLoader(text), source)
+        except ConfigError as exc:
+            if not isinstance(exc.__cause__, yaml.YAMLError):
+                raise
+            # The C loader's messages have no file name and no excerpt: the Python one tells it better.
     loader = yaml.SafeLoader(text)
     loader.name = source  # syntax errors then say 'in "machine.yaml", line 3'
+    return _load_yaml_with(loader, source)
+
+
+_FLOW_BRACKETS = re.compile(r"[\[\]{}]")
+_C_LOADER_DEPTH = 1000
+"""libyaml's composer recurses in C: tens of thousands of nested brackets crash the process."""
+
+
+def yaml_loader(text: str) -> type[Loader]:
+    """The fast C loader (libyaml) if it is there and safe for ``text``, else the Python one.
+
+    Brackets inside quotes count too: a file that merely looks deep is read by the Python
+    loader, which refuses real depth with a RecursionError instead of crashing.
+    """
+    if not hasattr(yaml, "CSafeLoader"):
+        return yaml.SafeLoader
+    depth = 0
+    for match in _FLOW_BRACKETS.finditer(text):
+        depth += 1 if match.group() in "[{" else -1
+        if depth > _C_LOADER_DEPTH:
+            return yaml.SafeLoader
+    return yaml.CSafeLoader
+
+
+def _load_yaml_with(loader: Loader, source: str) -> Any:
     try:
         try:
             root = loader.get_single_node()
@@ -145,7 +180,7 @@ def _children(node: yaml.Node) -> list[yaml.Node]:
 
 
 def _find_duplicates(
-    loader: yaml.SafeLoader, node: yaml.Node, path: list[Any], out: list[str], seen_nodes: set[int]
+    loader: Loader, node: yaml.Node, path: list[Any], out: list[str], seen_nodes: set[int]
 ) -> None:
     if id(node) in seen_nodes:  # an alias of a node already checked
         return

@@ -157,9 +157,11 @@ class Script(BaseModel):
 
 def _item_lines(text: str, key: str) -> list[int]:
     """Line numbers (1-based) of each entry of the top-level list ``key`` (``steps``, ``calendar``)."""
+    from cyborg.controller.config import yaml_loader
+
     try:
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
-    except yaml.YAMLError:
+        root = yaml.compose(text, Loader=yaml_loader(text))
+    except (yaml.YAMLError, RecursionError):
         return []
     if not isinstance(root, yaml.MappingNode):
         return []
