@@ -110,7 +110,18 @@ class Controller:
         if self._task is None:
             self._wakeup = asyncio.Event()
             self._task = self.node.clock.loop.create_task(self._run(), name="controller")
+            self._task.add_done_callback(self._on_task_done)
         return self._task
+
+    def _on_task_done(self, task: asyncio.Task[None]) -> None:
+        if not task.cancelled() and (error := task.exception()) is not None:
+            log.critical(
+                "the controller stopped in state %s: %r; the robot changes state no more; "
+                "fix: restart cyborg_controller, and report this error",
+                self.active_state,
+                error,
+                exc_info=error,
+            )
 
     async def stop(self) -> None:
         self.phase = Phase.STOPPED
@@ -272,7 +283,15 @@ class Controller:
             self._goal = None
             self.previous_state, self.active_state, self.last_event = previous, state, event
             self.stats.handovers += 1
-            self.node.set_param(topics.STATE_RESOURCES_PARAM, self.machine.resources_of(state))
+            try:  # (over ROS a master that does not answer gets it when it is back)
+                self.node.set_param(topics.STATE_RESOURCES_PARAM, self.machine.resources_of(state))
+            except Exception:
+                log.exception(
+                    "could not set %s for state %s; entering it anyway (gatekeepers still read the "
+                    "previous state's resources)",
+                    topics.STATE_RESOURCES_PARAM,
+                    state,
+                )
             change = SystemState(event=event, from_system_state=previous, to_system_state=state)
             self._state_pub.publish(change)
             for listener in self._listeners:

@@ -4,10 +4,14 @@ It relays messages from an input topic to an output topic only when their
 sender is the node the active state grants the gatekeeper's resource. On every
 state change it reads the active state's resource list from the parameter
 ``/state_resources``. Until it has read a list it passes nothing (fail closed).
+If the parameter cannot be read (over ROS: the master does not answer), it passes
+nothing and reads it again every READ_RETRY seconds until it finds a resource
+list (a restarted master gets the list from the controller when it is back).
 """
 
 from __future__ import annotations
 
+import asyncio
 import logging
 from collections import Counter
 from dataclasses import dataclass, field
@@ -17,6 +21,8 @@ from cyborg.transport.base import MessageInfo, Node, normalize_node_name
 from cyborg.transport.messages import Message, String, SystemState
 
 log = logging.getLogger(__name__)
+
+READ_RETRY = 0.5  # seconds between reads of the resources while they cannot be read
 
 
 @dataclass
@@ -46,12 +52,35 @@ class Gatekeeper:
         self.known = False
         self.stats = GatekeeperStats()
         self._warned: set[str] = set()  # senders already logged at INFO in this state
+        self._retry: asyncio.TimerHandle | None = None  # the next read while reading fails
         self._output = node.publisher(output_topic, msg_type)
         node.subscribe(topics.STATE_CHANGE, SystemState, self._on_state_change)
         node.subscribe(input_topic, msg_type, self._on_message, queue_size=100)
 
     def _on_state_change(self, message: SystemState, info: MessageInfo) -> None:
-        resources = self.node.get_param(topics.STATE_RESOURCES_PARAM)
+        if self._retry is not None:
+            self._retry.cancel()
+            self._retry = None
+        self._read_resources()
+
+    def _read_resources(self) -> None:
+        retrying, self._retry = self._retry is not None, None
+        try:
+            resources = self.node.get_param(topics.STATE_RESOURCES_PARAM)
+        except Exception as exc:
+            if not retrying:
+                log.warning(
+                    "%s: could not read %s (%s); passing nothing and reading it again every %.1f s",
+                    self.node.name,
+                    topics.STATE_RESOURCES_PARAM,
+                    exc,
+                    READ_RETRY,
+                )
+            self._fail_closed_and_retry()
+            return
+        if retrying and not isinstance(resources, dict):
+            self._fail_closed_and_retry()  # a restarted master may not hold them yet
+            return
         if not isinstance(resources, dict):
             log.warning(
                 "%s: %s is not a resource list (%r); passing nothing",
@@ -65,6 +94,18 @@ class Gatekeeper:
         self.allowed = normalize_node_name(holder) if isinstance(holder, str) else None
         self.known = True
         self._warned.clear()
+        if retrying:
+            log.info(
+                "%s: read %s again: %s is held by %s",
+                self.node.name,
+                topics.STATE_RESOURCES_PARAM,
+                self.resource,
+                self.allowed or "nobody",
+            )
+
+    def _fail_closed_and_retry(self) -> None:
+        self.allowed, self.known = None, False
+        self._retry = self.node.clock.call_later(READ_RETRY, self._read_resources)
 
     def _on_message(self, message: Message, info: MessageInfo) -> None:
         if self.known and self.allowed is not None and normalize_node_name(info.sender) == self.allowed:

@@ -10,6 +10,8 @@ event loop with ``call_soon_threadsafe``, so components still run one callback
 at a time. Messages are converted field by field between our dataclasses and
 the generated ROS classes (the names are the same by design).
 
+A restart of the ROS master is lived through: see :class:`_MasterWatch`.
+
 This is the only module that imports rospy.
 """
 
@@ -18,11 +20,14 @@ from __future__ import annotations
 import asyncio
 import copy
 import dataclasses
+import http.client
 import importlib
 import inspect
 import logging
 import threading
 import time
+import weakref
+import xmlrpc.client
 from collections import deque
 from collections.abc import Awaitable, Callable
 from typing import Any, Generic
@@ -78,6 +83,241 @@ def _ask_for_tcp_nodelay() -> None:
 
 
 _ask_for_tcp_nodelay()
+
+
+# --- the master going away and coming back ----------------------------------------------
+
+MASTER_CHECK_PERIOD = 0.5  # seconds between two looks at the master, in each process
+MASTER_CALL_TIMEOUT = 2.0  # seconds a call to the master may take before it counts as away
+UNREACHABLE = (OSError, http.client.HTTPException, xmlrpc.client.Error)
+"""What a call to a master that is not there (or not answering) raises."""
+
+
+class _TimeoutTransport(xmlrpc.client.Transport):
+    def __init__(self, timeout: float) -> None:
+        super().__init__()
+        self._timeout = timeout
+
+    def make_connection(self, host: Any) -> http.client.HTTPConnection:
+        connection = super().make_connection(host)
+        connection.timeout = self._timeout
+        return connection
+
+
+def _master_proxy(uri: str | None = None) -> xmlrpc.client.ServerProxy:
+    """A proxy of the master for one thread, whose calls give up after MASTER_CALL_TIMEOUT."""
+    return xmlrpc.client.ServerProxy(
+        uri or rosgraph.get_master_uri(), transport=_TimeoutTransport(MASTER_CALL_TIMEOUT)
+    )
+
+
+def _value(answer: Any, what: str) -> Any:
+    code, message, value = answer
+    if code != 1:
+        log.error("the ROS master refused to %s: %s", what, message)
+    return value
+
+
+class _MasterWatch:
+    """Keeps this process's registrations on the ROS master through an outage or a restart of it.
+
+    (The master going away and coming back are logged with rospy's logwarn: on the node's console,
+    where rospy's own warnings go, and in its ROS log.)
+
+    rospy tells the master of each publisher, subscriber and service once, when it is made, so a
+    restarted master knows none of them (``rosnode list`` shows only /rosout) and no node that
+    starts or subscribes afterwards finds them. Connections already made go on working (they do
+    not pass through the master). This thread asks the master for its pid every
+    MASTER_CHECK_PERIOD seconds. When it does not answer, that is logged once; when it answers
+    again (with a new pid after a restart), or after a registration or a parameter could not be
+    sent meanwhile, everything rospy holds is registered again as rospy's own first registration
+    does (publishers, subscribers and services; actions are topics), the parameters this process
+    set are set again and the ones it follows are subscribed again. Registering again with the
+    same master changes nothing. While the master is away, making a publisher, subscriber or
+    service does not wait for it (see :func:`_register_once`): it is registered here when it is back.
+    """
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._wanted: dict[str, Any] = {}  # parameter -> the value this process set last
+        self._followed: set[str] = set()  # parameters whose changes this process is told of
+        self._out_of_sync = threading.Event()
+        self._transports: weakref.WeakSet[RosTransport] = weakref.WeakSet()
+        self._thread: threading.Thread | None = None
+        self._pid: int | None = None
+        self.away = False
+        self.comebacks = 0
+
+    def start(self, transport: RosTransport) -> None:
+        self._transports.add(transport)
+        if self._thread is not None:
+            return
+        try:
+            self._pid = int(_value(_master_proxy().getPid(rospy.get_name()), "give its pid"))
+        except UNREACHABLE:
+            self._out_of_sync.set()
+        self._thread = threading.Thread(target=self._run, name="ROS master watch", daemon=True)
+        self._thread.start()
+
+    # what this process set and follows (any thread)
+    def want(self, key: str, value: Any) -> None:
+        with self._lock:
+            self._wanted[key] = copy.deepcopy(value)
+
+    def follow(self, key: str) -> None:
+        with self._lock:
+            self._followed.add(key)
+
+    def changed_elsewhere(self, key: str, value: Any) -> None:
+        """A followed parameter changed: a value another node set is no longer ours to set again."""
+        changed = key.rstrip("/") + "/"
+        with self._lock:
+            for wanted in list(self._wanted):
+                if wanted == key.rstrip("/") and self._wanted[wanted] == value:
+                    continue  # our own set
+                if changed.startswith(wanted + "/") or (wanted + "/").startswith(changed):
+                    del self._wanted[wanted]
+
+    def missed(self, what: str, exc: BaseException) -> None:
+        """Something could not reach the master: it is sent when the master is back."""
+        first = not (self.away or self._out_of_sync.is_set())
+        self._out_of_sync.set()
+        if first:
+            rospy.logwarn(
+                "could not %s: the ROS master at %s does not answer (%s); this node carries on with "
+                "the connections it has and sends it when the master is back; fix: start roscore "
+                "again on the same port",
+                what,
+                rosgraph.get_master_uri(),
+                exc,
+            )
+            self.away = True
+
+    # the thread
+    def _run(self) -> None:
+        proxy = _master_proxy()
+        while not rospy.core.is_shutdown():
+            time.sleep(MASTER_CHECK_PERIOD)
+            try:
+                self._check(proxy)
+            except Exception:  # the watch must outlive any surprise
+                log.exception(
+                    "looking at the ROS master failed; looking again in %.1f s", MASTER_CHECK_PERIOD
+                )
+
+    def _check(self, proxy: xmlrpc.client.ServerProxy) -> None:
+        uri = rosgraph.get_master_uri()
+        try:
+            pid = int(_value(proxy.getPid(rospy.get_name()), "give its pid"))
+        except UNREACHABLE as exc:
+            if not self.away:
+                self.away = True
+                rospy.logwarn(
+                    "the ROS master at %s does not answer (%s); this node carries on with the "
+                    "connections it has and registers again when the master is back; fix: start "
+                    "roscore again on the same port",
+                    uri,
+                    exc,
+                )
+            return
+        if pid == self._pid and not self.away and not self._out_of_sync.is_set():
+            return
+        restarted = pid != self._pid
+        self._out_of_sync.clear()
+        try:
+            counts = self._register_all(proxy)
+        except UNREACHABLE as exc:
+            self._out_of_sync.set()
+            log.debug("registering again with the ROS master failed (%s); trying again", exc)
+            return
+        self._pid, was_away, self.away = pid, self.away, False
+        self.comebacks += 1
+        say = rospy.logwarn if restarted or was_away else log.info
+        say(
+            "the ROS master at %s is back%s: registered again %d publishers, %d subscribers, %d services, "
+            "set %d parameters again",
+            uri,
+            " (restarted)" if restarted else "",
+            *counts,
+        )
+
+    def _register_all(self, proxy: xmlrpc.client.ServerProxy) -> tuple[int, int, int, int]:
+        from rospy.impl.registration import (  # type: ignore[import-not-found]
+            RegManager,
+            get_registration_listeners,
+            get_service_manager,
+            get_topic_manager,
+        )
+
+        caller, node_uri = rospy.get_name(), rospy.core.get_node_uri()
+        topics, services = get_topic_manager(), get_service_manager()
+        manager = next((x for x in get_registration_listeners().listeners if isinstance(x, RegManager)), None)
+        with topics.lock, services.lock:  # as rospy's first registration: nothing added meanwhile
+            publications, subscriptions = topics.get_publications(), topics.get_subscriptions()
+            offered = services.get_services()
+            for name, data_type in publications:
+                _value(proxy.registerPublisher(caller, name, data_type, node_uri), f"register {name}")
+            for name, data_type in subscriptions:
+                publishers = _value(
+                    proxy.registerSubscriber(caller, name, data_type, node_uri), f"register {name}"
+                )
+                if manager is not None and publishers:
+                    manager.publisher_update(name, publishers)  # connects to any not connected yet
+            for name, service_uri in offered:
+                _value(proxy.registerService(caller, name, service_uri, node_uri), f"register {name}")
+        for transport in list(self._transports):
+            transport._forget_param_values()  # what the master held: a new one holds nothing
+        with self._lock:
+            wanted, followed = copy.deepcopy(self._wanted), set(self._followed)
+        for key, value in wanted.items():
+            _value(proxy.setParam(caller, key, value), f"set {key}")
+        cache = rospy.impl.paramserver.get_param_server_cache()
+        for key in followed:
+            value = _value(proxy.subscribeParam(caller, node_uri, key), f"subscribe to {key}")
+            cache.set(key, value)
+        return len(publications), len(subscriptions), len(offered), len(wanted)
+
+
+_WATCH = _MasterWatch()
+
+
+def _register_once() -> None:
+    """Make rospy register a new publisher, subscriber or service without waiting for the master.
+
+    rospy's ``RegManager.reg_added`` calls the master again every 0.2 s until it answers, on the
+    thread that made the publisher (in our nodes the event loop: a controller entering a state
+    during an outage would stop there) and under rospy's topic lock. This one calls it once; if the
+    master does not answer, :class:`_MasterWatch` registers it with everything else when it is back.
+    """
+    from rospy.impl.registration import Registration, RegManager  # type: ignore[import-not-found]
+
+    original = RegManager.reg_added
+    if getattr(original, "_cyborg_once", False):
+        return
+
+    def reg_added(self: Any, resolved_name: str, data_type_or_uri: str, reg_type: str) -> None:
+        if not self.master_uri:
+            original(self, resolved_name, data_type_or_uri, reg_type)  # logs rospy's own error
+            return
+        proxy = _master_proxy(self.master_uri)
+        args = (rospy.names.get_caller_id(), resolved_name, data_type_or_uri, self.uri)
+        try:
+            if reg_type == Registration.PUB:
+                _value(proxy.registerPublisher(*args), f"register publisher {resolved_name}")
+            elif reg_type == Registration.SUB:
+                publishers = _value(proxy.registerSubscriber(*args), f"register subscriber {resolved_name}")
+                if publishers:
+                    self.publisher_update(resolved_name, publishers)
+            elif reg_type == Registration.SRV:
+                _value(proxy.registerService(*args), f"register service {resolved_name}")
+        except UNREACHABLE as exc:
+            _WATCH.missed(f"register {resolved_name}", exc)
+
+    reg_added._cyborg_once = True  # type: ignore[attr-defined]
+    RegManager.reg_added = reg_added
+
+
+_register_once()
 
 
 def listed_subscribers(topic: str) -> list[str]:
@@ -198,9 +438,9 @@ class RosTransport(Transport):
         self._chained_notifier: Callable[[str, Any], None] | None = None
 
     def _ensure_init(self, first: str) -> None:
-        if rospy.core.is_initialized():
-            return
-        rospy.init_node(self.process_name or first, anonymous=False, disable_signals=True)
+        if not rospy.core.is_initialized():
+            rospy.init_node(self.process_name or first, anonymous=False, disable_signals=True)
+        _WATCH.start(self)
 
     @property
     def ros_name(self) -> str:
@@ -242,22 +482,36 @@ class RosTransport(Transport):
         controller sets ``/state_resources`` on every handover, often to the value it already has.
         After its first set this process subscribes to the parameter, so the master reports
         other nodes' changes to it (``paramUpdate``); such a change forgets the remembered value.
+
+        While the master does not answer, this logs it (once) and returns: the value is set when
+        the master is back, as is every parameter this process set last (a restarted master holds
+        none), unless another node set it since.
         """
+        _WATCH.want(key, value)  # first: our own set's update notice must find it ours
         with self._params_lock:
             known = self._param_values.get(key, _UNKNOWN)
         if known is not _UNKNOWN and known == value:
             return
-        rospy.set_param(key, copy.deepcopy(value))  # rospy's cache keeps what it is given
-        if key not in self._watched_params:
-            self._watched_params.add(key)
-            cache = rospy.impl.paramserver.get_param_server_cache()
-            if cache.notifier != self._on_param_update:
-                self._chained_notifier = cache.notifier
-                cache.set_notifier(self._on_param_update)
-            # Subscribes. An empty dict reads as "unset" in rospy's cache: hence the default.
-            rospy.get_param_cached(key, None)
+        try:
+            rospy.set_param(key, copy.deepcopy(value))  # rospy's cache keeps what it is given
+            if key not in self._watched_params:
+                self._watched_params.add(key)
+                _WATCH.follow(key)
+                cache = rospy.impl.paramserver.get_param_server_cache()
+                if cache.notifier != self._on_param_update:
+                    self._chained_notifier = cache.notifier
+                    cache.set_notifier(self._on_param_update)
+                # Subscribes. An empty dict reads as "unset" in rospy's cache: hence the default.
+                rospy.get_param_cached(key, None)
+        except UNREACHABLE as exc:
+            _WATCH.missed(f"set {key}", exc)
+            return
         with self._params_lock:
             self._param_values[key] = copy.deepcopy(value)
+
+    def _forget_param_values(self) -> None:  # the master watch's thread: a new master holds nothing
+        with self._params_lock:
+            self._param_values.clear()
 
     def _on_param_update(self, key: str, value: Any) -> None:  # rospy thread, under the cache's lock
         """A subscribed parameter changed (our own set comes here first, then records its value)."""
@@ -266,6 +520,7 @@ class RosTransport(Transport):
             for watched in list(self._param_values):
                 if changed.startswith(watched + "/") or (watched + "/").startswith(changed):
                     del self._param_values[watched]
+        _WATCH.changed_elsewhere(key, value)
         if self._chained_notifier is not None:
             self._chained_notifier(key, value)
 
@@ -346,7 +601,14 @@ class RosNode(Node):
         return client
 
     def get_param(self, name: str, default: Any = None) -> Any:
-        return rospy.get_param(self.resolve(name), default)
+        key = self.resolve(name)
+        try:
+            return rospy.get_param(key, default)
+        except UNREACHABLE as exc:
+            raise TransportError(
+                f"could not read the parameter {key}: the ROS master at {rosgraph.get_master_uri()} does "
+                f"not answer ({exc}); fix: start roscore again on the same port (the nodes register again)"
+            ) from exc
 
     def set_param(self, name: str, value: Any) -> None:
         self.transport.set_param(self.resolve(name), value)
