@@ -14,6 +14,9 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from cyborg.emotion.model import PAD
+from cyborg.emotion.store import ControllerStore
+
 if TYPE_CHECKING:
     from conftest import Observers, Processes
 
@@ -96,11 +99,18 @@ def test_rostopic_rosservice_and_rosbag_on_a_running_controller(
 def test_roslaunch_starts_the_robot_from_a_written_launch_file(observe: Observers, tmp_path: Path) -> None:
     launch_file = tmp_path / "robot.launch"
     run(f"cyborg launch --config {FAULTS} --db {tmp_path} --write {launch_file}")
+    store = ControllerStore(tmp_path / "controller.db")  # a robot stopped a moment ago, angry and off
+    store.save_emotion(PAD(-0.51, 0.59, 0.25), time.time())
+    store.set_emotion_enabled(False)
+    store.close()
     changes = observe.state_changes()
     roslaunch = in_activated_shell(f"roslaunch {launch_file}", start_new_session=True)
     try:
         change = changes.wait_state("idle", event="start", timeout=60)
         assert change.sender == "cyborg_controller"  # the node keeps its part's name under roslaunch
+        out = run("rosservice call /cyborg_controller/get_emotional_state")
+        assert 'emotional_state: "neutral"' in out, "a launch is a fresh start (thesis 8.2)"
+        assert run("rosparam get /cyborg_controller/emotion_enabled").strip() == "true"
         mark = changes.mark()
         run('rostopic pub -1 /cyborg_controller/register_event std_msgs/String "data: work"')
         changes.wait_state("working", event="work", after=mark)
