@@ -5,6 +5,10 @@ Shared by the controller's store and the navigation database: WAL journal with
 ``BEGIN IMMEDIATE`` transaction per write, and recovery: a file that is not a
 usable database is moved aside to ``<name>.corrupt-<time>`` with a logged
 warning and started afresh, so the robot never crashes on it.
+
+A write that fails (a full disk, an I/O error) raises :class:`NotSaved` and leaves
+the file as it was; the file's :attr:`SQLiteFile.save_status` says so (and why) until
+a write works again. Each such episode is logged once, and its end too.
 """
 
 from __future__ import annotations
@@ -14,7 +18,8 @@ import logging
 import os
 import sqlite3
 from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
+from dataclasses import asdict, dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 from types import TracebackType
@@ -74,15 +79,43 @@ class Unusable(Exception):
     """The file exists but cannot be used as this database (reason in args[0])."""
 
 
+class NotSaved(DatabaseError):
+    """A write failed and stored nothing: the file holds what it held before (why and the fix in the text)."""
+
+
+@dataclass(frozen=True)
+class SaveStatus:
+    """Whether the writes to a database work, for status reports (``saved`` false: why and the fix)."""
+
+    path: str
+    saved: bool
+    problem: str | None = None
+    """The first failed write of this episode and its error, e.g. 'could not save the PAD values
+    in /data/controller.db: database or disk is full'."""
+    fix: str | None = None
+    failed_writes: int = 0
+    """Writes that failed since the last one that worked."""
+    unsaved: tuple[str, ...] = ()
+    """What is kept in memory until it can be written (see ControllerStore)."""
+
+    def as_json(self) -> dict[str, object]:
+        data = asdict(self)
+        data["unsaved"] = list(self.unsaved)
+        return data
+
+
 @contextmanager
 def transaction(conn: sqlite3.Connection) -> Iterator[None]:
+    """One write: committed as a whole, or (on any error, also a failed COMMIT) not at all."""
     conn.execute("BEGIN IMMEDIATE")
     try:
         yield
+        conn.execute("COMMIT")
     except BaseException:
-        conn.execute("ROLLBACK")
+        if conn.in_transaction:  # SQLite itself rolls back on a full disk or an I/O error
+            with suppress(sqlite3.Error):
+                conn.execute("ROLLBACK")
         raise
-    conn.execute("COMMIT")
 
 
 class SQLiteFile:
@@ -93,6 +126,8 @@ class SQLiteFile:
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
+        self._failure: tuple[str, str] | None = None  # (problem, fix) of the first failed write of an episode
+        self._failed_writes = 0
         self._conn = self._open_or_recover()
 
     def _prepare(self, conn: sqlite3.Connection) -> None:
@@ -188,15 +223,49 @@ class SQLiteFile:
 
     # --- reading and writing -------------------------------------------------------------------
 
+    @property
+    def save_status(self) -> SaveStatus:
+        """Whether writes work; if not, the first failed write of the episode and the fix."""
+        if self._failure is None:
+            return SaveStatus(str(self.path), saved=True)
+        problem, fix = self._failure
+        return SaveStatus(str(self.path), False, problem, fix, self._failed_writes)
+
     @contextmanager
     def _writing(self, what: str) -> Iterator[sqlite3.Connection]:
+        """One write transaction; a failure raises :class:`NotSaved` (logged once per episode)."""
         try:
             with transaction(self._conn):
                 yield self._conn
         except sqlite3.Error as exc:
-            raise DatabaseError(
-                f"could not {what} in {self.path}: {exc}; check the disk and permissions"
-            ) from exc
+            raise self._write_failed(what, exc) from exc
+        if self._failure is not None:
+            log.warning(
+                "%s %s: writes work again, after %d failed writes (the first: %s)",
+                self.what,
+                self.path,
+                self._failed_writes,
+                self._failure[0],
+            )
+            self._failure, self._failed_writes = None, 0
+
+    def _write_failed(self, what: str, exc: sqlite3.Error) -> NotSaved:
+        problem = f"could not {what} in {self.path}: {exc}"
+        fix = (
+            "free some space on that disk (or give another folder with --data-dir)"
+            if _disk_trouble(exc)
+            else "check the disk and the file's permissions"
+        )
+        self._failed_writes += 1
+        if self._failure is None:
+            self._failure = (problem, fix)
+            log.warning(
+                "%s: %s; fix: %s (further failed writes are not logged; a line says when writes work again)",
+                self.what,
+                problem,
+                fix,
+            )
+        return NotSaved(f"{problem}; fix: {fix}")
 
     def _read(self, sql: str, params: Sequence[object] = ()) -> list[tuple[object, ...]]:
         try:

@@ -17,7 +17,7 @@ from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo
 from cyborg.transport.clock import VirtualClock
 from cyborg.transport.embedded import EmbeddedTransport
-from cyborg.transport.messages import EmotionalFeedback, String, SystemState
+from cyborg.transport.messages import EmotionalFeedback, EmotionalState, String, SystemState
 
 CONFIG = """
 states:
@@ -269,5 +269,42 @@ def test_an_event_the_controller_did_not_take_gives_no_reward_and_no_saturation(
         taken = [e for e in watch.events_seen if e[0] == "idle"]
         assert robot.motivator.chosen and len(watch.feedback) == sum(robot.motivator.chosen.values())
         assert watch.feedback[0] == REWARDS[taken[1]]
+    finally:
+        clock.close()
+
+
+def test_the_motivator_decides_and_rewards_while_the_disk_is_full(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Issue 12, item 4: saving the saturations fails, yet the robot goes on (in memory) and saves later."""
+    from full_disk import Disk
+
+    clock, _, robot, watch = start(CONFIG, tmp_path)
+    disk = Disk(robot.store)
+    disk.fill()
+    emotions: list[float] = []
+    robot.emotion.node.subscribe(
+        topics.EMOTIONAL_STATE, EmotionalState, lambda m, i: emotions.append(m.current_pleasure)
+    )
+    try:
+        clock.run(clock.sleep(600))
+        assert robot.motivator.chosen, "the motivator stopped choosing"
+        assert len(watch.feedback) == sum(robot.motivator.chosen.values())
+        assert robot.emotion.stats.updates >= len(watch.feedback) and len(set(emotions)) > 10
+        assert len(watch.decisions) > 100
+        in_memory = dict(robot.motivator.saturations)
+        assert any(in_memory.values())
+        status = robot.store.save_status
+        assert not status.saved and "the motivator's saturations" in status.unsaved
+        assert ControllerStore(tmp_path / "controller.db").get_saturations() == {}
+        assert [r.levelname for r in caplog.records if r.levelno >= logging.WARNING] == ["WARNING"]
+
+        disk.free()
+        clock.run(clock.sleep(1.5))
+        assert robot.store.save_status.saved
+        stored = ControllerStore(tmp_path / "controller.db").get_saturations()
+        # those of the last reward (they are saved at a reward; in memory they decline between)
+        assert stored.keys() == in_memory.keys()
+        assert all(stored[event] >= in_memory[event] > 0 for event in stored)
     finally:
         clock.close()

@@ -9,6 +9,10 @@ A missing file is created with defaults (events seeded from the caller's list);
 a file that is not a database, fails ``PRAGMA integrity_check`` or has another
 schema is moved aside to ``<name>.corrupt-<timestamp>`` with a warning and
 recreated, so the controller always starts.
+
+While writes fail (a full disk), the emotion, its switch and the saturations are
+kept in memory, reported in :attr:`ControllerStore.save_status`, and written as soon
+as a write works: at the next save, and every ``SAVE_RETRY`` seconds on the given clock.
 """
 
 from __future__ import annotations
@@ -16,19 +20,22 @@ from __future__ import annotations
 import logging
 import math
 import sqlite3
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from pydantic import ValidationError
 
 from cyborg.emotion.model import DIMENSIONS, PAD, clamp
 from cyborg.motivator.logic import MotivationalEvent
-from cyborg.storage import SQLiteFile, Unusable, transaction
+from cyborg.storage import NotSaved, SaveStatus, SQLiteFile, Unusable, transaction
+from cyborg.transport.clock import Clock, Periodic
 
 log = logging.getLogger(__name__)
 
 SCHEMA_VERSION = "1"
+SAVE_RETRY = 1.0
+"""Clock seconds between tries to write what a failed write left unsaved."""
 
 _TABLES: dict[str, str] = {
     "meta": "CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)",
@@ -68,14 +75,75 @@ class StoredEmotion:
     enabled: bool
 
 
+Write = Callable[[sqlite3.Connection], object]
+
+
 class ControllerStore(SQLiteFile):
-    """The SQLite file behind the emotion system and the motivator."""
+    """The SQLite file behind the emotion system and the motivator.
+
+    The emotion, the switch and the saturations are saved latest-value-wins: a save that fails
+    does not raise but keeps the value (True means stored, False kept in memory), and
+    :meth:`write_pending` writes what is kept; with a ``clock`` it is tried every SAVE_RETRY s.
+    """
 
     what = "controller store"
 
-    def __init__(self, path: str | Path, seed_events: Sequence[MotivationalEvent] = ()) -> None:
+    def __init__(
+        self, path: str | Path, seed_events: Sequence[MotivationalEvent] = (), *, clock: Clock | None = None
+    ) -> None:
         self._seed = list(seed_events)
+        self.clock = clock
+        self._pending: dict[str, Write] = {}  # what is not stored yet (its name) -> how to write it
+        self._retry: Periodic | None = None
         super().__init__(path)
+
+    # --- saving what a failed write left in memory ---------------------------------------
+
+    @property
+    def save_status(self) -> SaveStatus:
+        status = super().save_status
+        return replace(status, saved=status.saved and not self._pending, unsaved=tuple(self._pending))
+
+    def _save_latest(self, name: str, write: Write) -> bool:
+        self._pending.pop(name, None)
+        self._pending[name] = write  # (last in the order of the pending ones)
+        return self.write_pending()
+
+    def write_pending(self) -> bool:
+        """Write what is kept in memory, in one transaction; True when everything is stored."""
+        if not self._pending:
+            return True
+        try:
+            with self._writing("save " + " and ".join(self._pending)) as conn:
+                for write in self._pending.values():
+                    write(conn)
+        except NotSaved:  # logged once per episode by _writing; the status says it
+            if self.clock is not None and self._retry is None:
+                self._retry = self.clock.every(
+                    SAVE_RETRY, self.write_pending, name=f"saving the {self.what}", logger=log
+                )
+            return False
+        self._pending.clear()
+        if self._retry is not None:
+            self._retry.cancel()
+            self._retry = None
+        return True
+
+    def close(self) -> None:
+        """Write what is kept in memory (a last try), then close; what cannot be written is logged."""
+        self.clock = None  # no more tries after this one
+        if self._retry is not None:
+            self._retry.cancel()
+            self._retry = None
+        if not self.write_pending():
+            log.warning(
+                "%s %s closed with %s not saved: %s",
+                self.what,
+                self.path,
+                " and ".join(self._pending),
+                self.save_status.problem,
+            )
+        super().close()
 
     def _prepare(self, conn: sqlite3.Connection) -> None:
         tables = {row[0] for row in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
@@ -109,16 +177,19 @@ class ControllerStore(SQLiteFile):
         when = updated_at if isinstance(updated_at, int | float) and math.isfinite(updated_at) else None
         return StoredEmotion(PAD.of(values), when, bool(enabled))
 
-    def save_emotion(self, pad: PAD, updated_at: float) -> None:
-        with self._writing("save the PAD values") as conn:
-            conn.execute(
-                "UPDATE emotion SET pleasure = ?, arousal = ?, dominance = ?, updated_at = ?",
-                (*pad.as_tuple(), updated_at),
-            )
+    def save_emotion(self, pad: PAD, updated_at: float) -> bool:
+        """Store the PAD values; False if they are kept in memory for now (see the class)."""
+        values = (*pad.as_tuple(), updated_at)
+        sql = "UPDATE emotion SET pleasure = ?, arousal = ?, dominance = ?, updated_at = ?"
+        return self._save_latest("the PAD values", lambda conn: conn.execute(sql, values))
 
-    def set_emotion_enabled(self, enabled: bool) -> None:
-        with self._writing("switch the emotion system") as conn:
-            conn.execute("UPDATE emotion SET enabled = ?", (int(enabled),))
+    def set_emotion_enabled(self, enabled: bool) -> bool:
+        """Store the on/off switch; False if it is kept in memory for now (see the class)."""
+        value = int(enabled)
+        return self._save_latest(
+            "the emotion system's switch",
+            lambda conn: conn.execute("UPDATE emotion SET enabled = ?", (value,)),
+        )
 
     # --- saturations -----------------------------------------------------------------
 
@@ -126,11 +197,15 @@ class ControllerStore(SQLiteFile):
         rows = self._read("SELECT event, value FROM saturations ORDER BY event")
         return {str(name): max(0.0, min(1.0, _finite(v, f"saturation of {name}"))) for name, v in rows}
 
-    def save_saturations(self, saturations: Mapping[str, float]) -> None:
-        """Replace all saturations with ``saturations``."""
-        with self._writing("save the motivator's saturations") as conn:
+    def save_saturations(self, saturations: Mapping[str, float]) -> bool:
+        """Replace all saturations with ``saturations``; False if kept in memory for now (see the class)."""
+        rows = sorted(saturations.items())
+
+        def write(conn: sqlite3.Connection) -> None:
             conn.execute("DELETE FROM saturations")
-            conn.executemany("INSERT INTO saturations VALUES (?, ?)", sorted(saturations.items()))
+            conn.executemany("INSERT INTO saturations VALUES (?, ?)", rows)
+
+        return self._save_latest("the motivator's saturations", write)
 
     # --- motivational events -------------------------------------------------------------
 
@@ -154,11 +229,13 @@ class ControllerStore(SQLiteFile):
         """Add ``event``, replacing any event of the same name in the same state."""
         with self._writing(f"add event {event.event!r}") as conn:
             self._upsert_event(conn, event)
+        self.write_pending()
 
     def remove_event(self, state: str, event: str) -> bool:
         """Remove an event; False if there was none of that name in that state."""
         with self._writing(f"remove event {event!r}") as conn:
             cursor = conn.execute("DELETE FROM events WHERE state = ? AND event = ?", (state, event))
+        self.write_pending()
         return cursor.rowcount > 0
 
     @staticmethod

@@ -9,7 +9,8 @@ on or off (while off, feedback is ignored).
 Every fresh start is neutral with the system on (thesis 8.2). The state is kept
 in the :class:`ControllerStore` so that a controller brought back after a crash
 while the rest of the robot runs on (``resume=True``) can resume it, if it was
-stored within ``resume_within_seconds``.
+stored within ``resume_within_seconds``. While the store cannot write (a full
+disk) the emotion goes on in memory; the store says so and writes it once it can.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ from cyborg.emotion.model import (
 from cyborg.emotion.store import ControllerStore
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Node
+from cyborg.transport.clock import Periodic
 from cyborg.transport.messages import (
     EmotionalFeedback,
     EmotionalState,
@@ -91,9 +93,17 @@ class EmotionSystem:
         node.subscribe(topics.SET_EMOTIONAL_VALUES, EmotionalFeedback, self._on_set_values)
         node.subscribe(topics.EMOTIONAL_CONTROLLER, String, self._on_switch)
         node.advertise_service(topics.GET_EMOTIONAL_STATE, EmotionalStateService, self._on_get)
+        self._decay: Periodic | None = None
         if settings.time_decay_half_lives is not None:
-            node.clock.call_later(TIME_DECAY_TICK, self._tick)
+            self._decay = node.clock.every(
+                TIME_DECAY_TICK, self._tick, name="the emotion's time decay", logger=log
+            )
         self._publish(self.emotion)
+
+    def close(self) -> None:
+        """Stop the time decay (the store is closed by whoever opened it)."""
+        if self._decay is not None:
+            self._decay.cancel()
 
     def _start_from(self, store: ControllerStore, resume: bool) -> None:
         """Take over the stored emotion on a resume within the window; otherwise store a neutral start."""
@@ -141,7 +151,6 @@ class EmotionSystem:
         self._apply_time_decay()
         if before.distance(self.pad) >= 0.005 or self._name(self.emotion) != self.emotion:
             self._changed()
-        self.node.clock.call_later(TIME_DECAY_TICK, self._tick)
 
     def _changed(self) -> None:
         previous = self.emotion

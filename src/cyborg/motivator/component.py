@@ -41,6 +41,7 @@ from cyborg.motivator.logic import (
 )
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Node
+from cyborg.transport.clock import Periodic
 from cyborg.transport.messages import EmotionalFeedback, EmotionalState, String, SystemState
 
 log = logging.getLogger(__name__)
@@ -140,7 +141,13 @@ class Motivator:
         node.subscribe(topics.STATE_CHANGE, SystemState, self._on_state)
         node.subscribe(topics.EMOTIONAL_STATE, EmotionalState, self._on_emotion)
         node.subscribe(topics.REGISTER_EVENT, String, self._on_event, queue_size=100)
-        node.clock.call_later(settings.rate_seconds, self._tick)
+        self._ticks: Periodic = node.clock.every(
+            settings.rate_seconds, self._decide, name="the motivator's decision", logger=log
+        )
+
+    def close(self) -> None:
+        """Stop deciding (the store is closed by whoever opened it)."""
+        self._ticks.cancel()
 
     def events_for(self, state: str) -> list[MotivationalEvent]:
         """Registered events of ``state`` that are transitions of it (others are ignored)."""
@@ -168,14 +175,6 @@ class Motivator:
             return  # the controller drops it; no handover follows
         if self._handover is None:
             self._handover = _Handover(name, info.sender, self.node.clock.monotonic())
-
-    def _tick(self) -> None:
-        try:
-            self._decide()
-        except Exception:
-            log.exception("motivator decision failed; trying again next tick")
-        finally:
-            self.node.clock.call_later(self.settings.rate_seconds, self._tick)
 
     def _handover_in_progress(self, now: float) -> str | None:
         """What the motivator waits for, or None when it may decide."""

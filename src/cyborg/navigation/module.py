@@ -119,7 +119,13 @@ class NavigationModule(BehaviourModule):
         self.serve(PLANNING_ACTION, self.planning)
         self.serve(MOVING_ACTION, self.moving)
         self.serve(TALKING_ACTION, self.talking)
-        node.clock.call_later(scheduler_interval, self._scheduler_tick)
+        self._scheduler = node.clock.every(
+            scheduler_interval, self._check_schedule, name="the navigation scheduler", logger=log
+        )
+
+    def close(self) -> None:
+        """Stop looking at the calendar."""
+        self._scheduler.cancel()
 
     # --- inputs ------------------------------------------------------------------------
 
@@ -171,14 +177,6 @@ class NavigationModule(BehaviourModule):
         if self.pose is None or place.position is None:
             return False
         return math.dist(self.pose, place.position) <= max(place.tolerance, AT_PLACE_DISTANCE)
-
-    def _scheduler_tick(self) -> None:
-        try:
-            self._check_schedule()
-        except Exception:
-            log.exception("navigation scheduler failed; trying again")
-        finally:
-            self.node.clock.call_later(self.scheduler_interval, self._scheduler_tick)
 
     def _check_schedule(self) -> None:
         ongoing = self.db.ongoing_events(self.node.clock.datetime())

@@ -55,6 +55,17 @@ class Robot:
     def start(self) -> None:
         self.controller.start()
 
+    def close(self) -> None:
+        """Stop the periodic work of the modules, the motivator and the emotion system, then close
+        the store (it makes a last try to write what a failing disk left in memory)."""
+        for component in self.components.values():
+            close = getattr(component, "close", None)
+            if callable(close):
+                close()
+        self.motivator.close()
+        self.emotion.close()
+        self.store.close()
+
 
 def build_controller(
     config: LoadedConfig, transport: Transport, data_dir: Path, *, resume: bool = False
@@ -68,7 +79,9 @@ def build_controller(
     """
     data_dir.mkdir(parents=True, exist_ok=True)
     settings = config.model
-    store = ControllerStore(data_dir / "controller.db", seed_events=settings.motivator.events)
+    store = ControllerStore(
+        data_dir / "controller.db", seed_events=settings.motivator.events, clock=transport.clock
+    )
     for entry in settings.motivator.events:
         store.add_event(entry)  # the YAML is the source; entries added to the database stay too
     controller = Controller(transport.node("cyborg_controller"), config.machine)

@@ -93,6 +93,7 @@ def _run(
         await robot.controller.stop()
         if stop_server is not None:
             await stop_server()
+        robot.close()
         transport.shutdown()
         if signalled.done():
             echo("stopped")

@@ -14,6 +14,7 @@ at a fixed multiple of real time instead (``--speed 10``).
 from __future__ import annotations
 
 import asyncio
+import logging
 import math
 import selectors
 import time
@@ -22,7 +23,11 @@ from collections.abc import Awaitable, Callable, Coroutine, Mapping
 from datetime import UTC, datetime
 from typing import Any, TypeVar
 
+from cyborg.errors import CyborgError
+
 T = TypeVar("T")
+
+log = logging.getLogger(__name__)
 
 DEFAULT_VIRTUAL_START = datetime(2026, 11, 23, 9, 0, tzinfo=UTC)
 
@@ -67,6 +72,21 @@ class Clock(ABC):
     def call_soon(self, callback: Callable[..., object], *args: Any) -> asyncio.Handle:
         return self.loop.call_soon(callback, *args)
 
+    def every(
+        self,
+        seconds: float,
+        callback: Callable[[], object],
+        *,
+        name: str,
+        logger: logging.Logger | None = None,
+    ) -> Periodic:
+        """Run ``callback`` every ``seconds`` (first after ``seconds``) until the handle is cancelled.
+
+        The one way periodic work runs (see :class:`Periodic`): a tick that raises does not stop
+        it, and a run of failures is logged once, as ``name`` (what the work is, for the log).
+        """
+        return Periodic(self, seconds, callback, name=name, logger=logger)
+
     def run(self, main: Coroutine[Any, Any, T]) -> T:
         """Run ``main`` to completion on this clock's loop."""
         return self.loop.run_until_complete(main)
@@ -82,6 +102,86 @@ class Clock(ABC):
         if pending:
             loop.run_until_complete(asyncio.gather(*pending, return_exceptions=True))
         loop.close()
+
+
+class Periodic:
+    """Work run every ``period`` clock seconds; :meth:`cancel` stops it (made by :meth:`Clock.every`).
+
+    The next tick is scheduled ``period`` after the end of the previous one, whatever that tick
+    did: one that raises does not stop the work. Failures come in episodes: the first failing
+    tick after a working one (or the start) logs a warning naming the work and the error (with its
+    traceback unless it is a :class:`~cyborg.errors.CyborgError`, which names its fix), further
+    failures in a row only at DEBUG, and the first tick that works again logs that it recovered.
+    """
+
+    def __init__(
+        self,
+        clock: Clock,
+        period: float,
+        callback: Callable[[], object],
+        *,
+        name: str,
+        logger: logging.Logger | None = None,
+    ) -> None:
+        if not (math.isfinite(period) and period > 0):
+            raise ValueError(f"the period of {name} must be a positive number of seconds, got {period!r}")
+        self.clock = clock
+        self.period = period
+        self.callback = callback
+        self.name = name
+        self.failures = 0
+        """Ticks that failed in a row (0 while the work works)."""
+        self.error: str | None = None
+        """The error of the first failing tick of the current episode (None while the work works)."""
+        self._log = logger or log
+        self._cancelled = False
+        self._handle: asyncio.TimerHandle | None = clock.call_later(period, self._run)
+
+    @property
+    def cancelled(self) -> bool:
+        return self._cancelled
+
+    def cancel(self) -> None:
+        """Stop the work: no tick runs after this (also when called from the tick itself)."""
+        self._cancelled = True
+        if self._handle is not None:
+            self._handle.cancel()
+            self._handle = None
+
+    def _run(self) -> None:
+        self._handle = None
+        try:
+            self.callback()
+        except Exception as exc:
+            self._failed(exc)
+        else:
+            if self.failures:
+                self._log.warning(
+                    "%s recovered: it works again after %d failed tick%s (%s)",
+                    self.name,
+                    self.failures,
+                    "" if self.failures == 1 else "s",
+                    self.error,
+                )
+                self.failures, self.error = 0, None
+        finally:
+            if not self._cancelled:
+                self._handle = self.clock.call_later(self.period, self._run)
+
+    def _failed(self, exc: Exception) -> None:
+        self.failures += 1
+        if self.failures > 1:
+            self._log.debug("%s failed again (%d in a row): %s", self.name, self.failures, exc)
+            return
+        self.error = f"{type(exc).__name__}: {exc}"
+        self._log.warning(
+            "%s failed: %s; it runs again every %g s, and says so here once it works again "
+            "(until then further failures are not logged)",
+            self.name,
+            self.error,
+            self.period,
+            exc_info=None if isinstance(exc, CyborgError) else exc,
+        )
 
 
 class RealClock(Clock):
