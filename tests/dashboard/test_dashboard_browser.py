@@ -497,6 +497,60 @@ def test_health_shows_feedback_age_and_an_unknown_emotion_switch(browser: Browse
     assert not errors, "the page logged errors:\n" + "\n".join(errors)
 
 
+def test_a_robot_that_cannot_save_says_so_and_says_when_it_saves_again(browser: Browser, sim: str) -> None:
+    """Issue 12, item 4: /api/health and an emotion command's answer as a robot on a full disk sends
+    them (tests/interfaces/test_full_disk.py has them from one); the rest is the real robot."""
+    disk = {"full": True}
+    problem = "could not save the PAD values in /data/controller.db: database or disk is full"
+    fix = "free some space on that disk (or give another folder with --data-dir)"
+
+    def health(route: Route) -> None:
+        answer = route.fetch().json()
+        assert answer["storage"]["saved"] is True  # the real robot saves
+        if disk["full"]:
+            answer["storage"].update(
+                saved=False, problem=problem, fix=fix, failed_writes=7, unsaved=["the PAD values"]
+            )
+        route.fulfill(json=answer)
+
+    def emotion_set(route: Route) -> None:
+        answer = route.fetch().json()
+        if disk["full"]:
+            answer.update(
+                saved=False,
+                warning=f"the robot is not saving its data ({problem}; fix: {fix}): it makes this change "
+                "in memory only, and saves it once writes work again",
+            )
+        route.fulfill(json=answer)
+
+    def intercept(tab: Page) -> None:
+        tab.route("**/api/health", health)
+        tab.route("**/api/emotion/set", emotion_set)
+
+    errors: list[str] = []
+    page = open_page(browser, sim + "/", errors, before=intercept)
+    try:
+        warning = page.locator("#storage-warning")
+        expect(warning).to_be_visible()
+        expect(warning).to_contain_text("not saved")
+        expect(page.locator("#storage-reason")).to_have_text("database or disk is full")
+        expect(warning).to_have_attribute("title", re.compile(f"goes on in memory.*Fix: {re.escape(fix)}"))
+        page.select_option("#emotion-select", "bored")
+        page.click("#emotion-set")
+        message = page.locator("#control-message")
+        expect(message).to_contain_text("emotion set to bored, but the robot is not saving its data")
+        expect(message).to_have_class(re.compile("error"))
+        expect(page.locator("#emotion-name")).to_have_text(re.compile("^bored"))  # made, in memory
+        page.screenshot(path=str(SHOTS / "cyborg-dashboard-not-saved.png"))
+
+        disk["full"] = False
+        expect(warning).to_be_hidden()
+        expect(message).to_contain_text("saving again: the robot's data is written to")
+    finally:
+        page.context.close()
+    assert not errors, "the page logged errors:\n" + "\n".join(errors)
+
+
 def test_layout_at_1280x800_shows_every_module_and_a_readable_log(browser: Browser, sim: str) -> None:
     errors: list[str] = []
     page = open_page(browser, sim + "/", errors, size=SMALL)

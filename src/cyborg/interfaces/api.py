@@ -161,6 +161,22 @@ class RobotAPI:
     async def get_status(self, request: web.Request) -> web.Response:
         return web.json_response(self.current_status())
 
+    async def _unsaved(self) -> dict[str, Any]:
+        """What an emotion command's answer adds while the robot cannot save its data (``storage``
+        in the status says so): the change is made in memory only. Nothing where that is not known.
+
+        It first lets the loop run once: an emotion system in this process (the embedded transport
+        delivers with ``call_soon``) has then applied the command and tried to save it."""
+        await asyncio.sleep(0)
+        storage = self.extra_status().get("storage") if self.extra_status is not None else None
+        if not isinstance(storage, dict) or storage.get("saved") is not False:
+            return {}
+        return {
+            "saved": False,
+            "warning": f"the robot is not saving its data ({storage.get('problem')}; fix: {storage.get('fix')}): "
+            "it makes this change in memory only, and saves it once writes work again",
+        }
+
     async def post_event(self, request: web.Request) -> web.Response:
         name = self._text_field(await self._json(request), "name")
         self._events.publish(String(data=name))
@@ -187,7 +203,7 @@ class RobotAPI:
             except ValueError as exc:
                 raise CommandError(str(exc)) from None
         self._set_emotion.publish(String(data=name))
-        return web.json_response({"sent": name})
+        return web.json_response({"sent": name, **await self._unsaved()})
 
     async def post_emotion_values(self, request: web.Request) -> web.Response:
         body = await self._json(request)
@@ -204,7 +220,10 @@ class RobotAPI:
             values.append(float(value))
         self._set_values.publish(EmotionalFeedback(*values))
         return web.json_response(
-            {"sent": dict(zip(("pleasure", "arousal", "dominance"), values, strict=True))}
+            {
+                "sent": dict(zip(("pleasure", "arousal", "dominance"), values, strict=True)),
+                **await self._unsaved(),
+            }
         )
 
     async def post_emotion_switch(self, request: web.Request) -> web.Response:
@@ -213,7 +232,7 @@ class RobotAPI:
         if not isinstance(on, bool):
             raise CommandError("'on' must be true or false")
         self._switch.publish(String(data="on" if on else "off"))
-        return web.json_response({"sent": "on" if on else "off"})
+        return web.json_response({"sent": "on" if on else "off", **await self._unsaved()})
 
     async def get_records(self, request: web.Request) -> web.Response:
         try:

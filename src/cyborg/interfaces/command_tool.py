@@ -53,6 +53,12 @@ def _request(base: str, path: str, body: dict[str, Any] | None = None, token: st
         ) from None
 
 
+def _warning(answer: Any) -> str | None:
+    """The robot's warning in a command's answer (e.g. that it cannot save its data), if any."""
+    warning = answer.get("warning") if isinstance(answer, dict) else None
+    return warning if isinstance(warning, str) else None
+
+
 class HttpLink:
     """The robot's local HTTP API (``cyborg sim``, or the ``cyborg_api`` ROS node)."""
 
@@ -73,14 +79,15 @@ class HttpLink:
     def say(self, text: str) -> None:
         self._call("/api/say", {"text": text})
 
-    def set_emotion(self, name: str) -> None:
-        self._call("/api/emotion/set", {"name": name})
+    def set_emotion(self, name: str) -> str | None:
+        return _warning(self._call("/api/emotion/set", {"name": name}))
 
-    def set_values(self, pleasure: float, arousal: float, dominance: float) -> None:
-        self._call("/api/emotion/values", {"pleasure": pleasure, "arousal": arousal, "dominance": dominance})
+    def set_values(self, pleasure: float, arousal: float, dominance: float) -> str | None:
+        body = {"pleasure": pleasure, "arousal": arousal, "dominance": dominance}
+        return _warning(self._call("/api/emotion/values", body))
 
-    def switch(self, on: bool) -> None:
-        self._call("/api/emotion/switch", {"on": on})
+    def switch(self, on: bool) -> str | None:
+        return _warning(self._call("/api/emotion/switch", {"on": on}))
 
     def status(self) -> dict[str, Any]:
         answer: dict[str, Any] = self._call("/api/status")
@@ -103,9 +110,9 @@ class RobotLink(Protocol):
     def close(self) -> None: ...
     def send_event(self, name: str) -> bool | None: ...
     def say(self, text: str) -> None: ...
-    def set_emotion(self, name: str) -> None: ...
-    def set_values(self, pleasure: float, arousal: float, dominance: float) -> None: ...
-    def switch(self, on: bool) -> None: ...
+    def set_emotion(self, name: str) -> str | None: ...
+    def set_values(self, pleasure: float, arousal: float, dominance: float) -> str | None: ...
+    def switch(self, on: bool) -> str | None: ...
     def status(self) -> dict[str, Any]: ...
     def follow(self, status: dict[str, Any], show: Callable[[dict[str, Any]], None]) -> None: ...
 
@@ -154,12 +161,26 @@ def link_options(command: Callable[..., None]) -> Callable[..., None]:
 def format_status(status: dict[str, Any]) -> str:
     enabled = status.get("emotion_enabled")
     switch = "unknown" if enabled is None else "on" if enabled else "OFF (feedback is ignored)"
-    return (
+    line = (
         f"{status.get('previous_state') or '-'} --{status.get('event') or '-'}--> {status.get('state') or '-'}   "
         f"emotion {status.get('emotion')} (P {status.get('pleasure', 0):+.2f} "
         f"A {status.get('arousal', 0):+.2f} D {status.get('dominance', 0):+.2f})   "
         f"emotion system {switch}"
     )
+    storage = status.get("storage")
+    if isinstance(storage, dict) and storage.get("saved") is False:
+        unsaved = " and ".join(storage.get("unsaved") or []) or "its data"
+        line += (
+            f"\n  NOT SAVED: {storage.get('problem')}; the robot goes on in memory ({unsaved} not saved, "
+            f"{storage.get('failed_writes', 0)} failed writes); fix: {storage.get('fix')}"
+        )
+    return line
+
+
+def _echo_done(done: str, warning: str | None) -> None:
+    click.echo(done)
+    if warning:
+        click.secho(f"warning: {warning}", fg="yellow", err=True)
 
 
 def format_gatekeeper(name: str, counts: dict[str, Any]) -> str:
@@ -205,8 +226,7 @@ def emotion_group() -> None:
 @link_options
 def emotion_set(name: str, link: RobotLink) -> None:
     """Set the emotion by name (its prototype's PAD values)."""
-    link.set_emotion(name)
-    click.echo(f"emotion set to {name}")
+    _echo_done(f"emotion set to {name}", link.set_emotion(name))
 
 
 def _pad_value(ctx: click.Context, param: click.Parameter, value: float) -> float:
@@ -222,24 +242,22 @@ def _pad_value(ctx: click.Context, param: click.Parameter, value: float) -> floa
 @link_options
 def emotion_values(pleasure: float, arousal: float, dominance: float, link: RobotLink) -> None:
     """Set the PAD values (each in [-1, 1])."""
-    link.set_values(pleasure, arousal, dominance)
-    click.echo(f"PAD set to ({pleasure:+.2f}, {arousal:+.2f}, {dominance:+.2f})")
+    warning = link.set_values(pleasure, arousal, dominance)
+    _echo_done(f"PAD set to ({pleasure:+.2f}, {arousal:+.2f}, {dominance:+.2f})", warning)
 
 
 @emotion_group.command("on")
 @link_options
 def emotion_on(link: RobotLink) -> None:
     """Switch the emotion system on."""
-    link.switch(True)
-    click.echo("emotion system on")
+    _echo_done("emotion system on", link.switch(True))
 
 
 @emotion_group.command("off")
 @link_options
 def emotion_off(link: RobotLink) -> None:
     """Switch the emotion system off: feedback is ignored until it is on again."""
-    link.switch(False)
-    click.echo("emotion system off (feedback is ignored)")
+    _echo_done("emotion system off (feedback is ignored)", link.switch(False))
 
 
 @click.command("status")
@@ -252,6 +270,7 @@ def status_command(follow: bool, link: RobotLink) -> None:
     for name, counts in (status.get("gatekeepers") or {}).items():
         click.echo(format_gatekeeper(name, counts))
     if follow:
+        status.pop("storage", None)  # not on the live stream: shown above, and by `cyborg status` again
 
         def show(current: dict[str, Any]) -> None:
             click.echo(format_status(current))

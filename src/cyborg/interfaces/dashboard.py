@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 from cyborg.interfaces.api import RobotAPI
 from cyborg.sim.maps import Cell, OccupancyMap
 from cyborg.sim.robot import Robot
+from cyborg.storage import SaveStatus
 
 STATIC_DIR = Path(__file__).resolve().parent / "static"
 BASE_NODE = "rosarnl_node"
@@ -191,6 +192,12 @@ class Dashboard:
         enabled = getattr(self.robot.emotion, "enabled", True)
         return None if enabled is None else bool(enabled)
 
+    def _storage(self) -> dict[str, Any] | None:
+        """Whether the robot's data is being saved (see storage.SaveStatus); None where not known."""
+        store = getattr(self.robot, "store", None)
+        status = getattr(store, "save_status", None)
+        return status.as_json() if isinstance(status, SaveStatus) else None
+
     def _motivator_settings(self) -> dict[str, Any]:
         """The configured selection rule and rate, which the page shows with the motivator's decisions."""
         settings = getattr(getattr(self.robot.config, "model", None), "motivator", None)
@@ -232,6 +239,7 @@ class Dashboard:
         """The controller, each module, the emotion switch and the motivator's rule, for the page.
 
         ``emotion_enabled`` is null where it is not known (under ROS before any on/off was seen);
+        so is ``storage`` (whether the controller's data is saved, and if not why) under ROS;
         a module has ``last_feedback_at`` / ``seconds_since_feedback`` only where something reports it.
         """
         controller = self.robot.controller
@@ -275,6 +283,7 @@ class Dashboard:
                 "seconds_in_state": round(now - self.state_since, 2),
                 "stats": dataclasses.asdict(controller.stats),
                 "emotion_enabled": self._emotion_enabled(),
+                "storage": self._storage(),
                 "motivator": self._motivator_settings(),
                 "has_base": self._map() is not None,
                 "modules": modules,

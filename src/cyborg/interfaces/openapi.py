@@ -12,7 +12,8 @@ def _command(summary: str, schema: dict[str, Any]) -> dict[str, Any]:
             "requestBody": {"required": True, "content": {"application/json": {"schema": schema}}},
             "responses": {
                 "200": {
-                    "description": "sent",
+                    "description": "sent; an emotion command's answer has saved false and a 'warning' "
+                    "while the robot cannot save its data (the change is made in memory only)",
                     "content": {"application/json": {"schema": {"type": "object"}}},
                 },
                 "400": {"description": "bad input; the body's 'error' names the problem"},
@@ -39,6 +40,21 @@ STATUS_SCHEMA: dict[str, Any] = {
         "dominance": {"type": "number"},
         "valid_events": {"type": "array", "items": {"type": "string"}},
         "time": {"type": "number", "description": "robot clock, seconds since the epoch"},
+        "storage": {
+            "type": "object",
+            "nullable": True,
+            "description": "whether the controller's data (emotion, switch, saturations) is saved; "
+            "saved false: 'problem' and 'fix' say why, 'unsaved' what is kept in memory until a "
+            "write works (then it is written); absent where not known (under ROS)",
+            "properties": {
+                "path": {"type": "string"},
+                "saved": {"type": "boolean"},
+                "problem": {"type": "string", "nullable": True},
+                "fix": {"type": "string", "nullable": True},
+                "failed_writes": {"type": "integer"},
+                "unsaved": {"type": "array", "items": {"type": "string"}},
+            },
+        },
     },
 }
 

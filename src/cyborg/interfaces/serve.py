@@ -40,6 +40,7 @@ def serve_api(
             extra_status=lambda: {
                 "gatekeepers": {name: g.report() for name, g in gatekeepers.items()},
                 "emotion_enabled": robot.emotion.enabled,
+                "storage": robot.store.save_status.as_json(),
             },
             access=access,
         )

@@ -351,6 +351,7 @@
     $("top-time").textContent = fmtClock(dash.t);
     $("top-phase").textContent = health.phase;
     showEmotionSwitch(health.emotion_enabled);
+    showStorage(health.storage);
     $("health-caption").textContent =
       `${health.active_state || "–"} for ${health.seconds_in_state.toFixed(0)} s · goal ${health.goal_status || "none"}`;
 
@@ -403,6 +404,23 @@
       else showNoBase();
     }
     scheduleDraw();
+  }
+
+  // Whether the robot's data is saved: a warning with the reason and the fix while it is not
+  // (the robot goes on in memory), a message once it is saved again; nothing where not known (ROS).
+  function showStorage(storage) {
+    const box = $("storage-warning");
+    const unsaved = Boolean(storage && storage.saved === false);
+    if (unsaved) {
+      const reason = String(storage.problem || "writes fail").split(": ").pop();
+      $("storage-reason").textContent = reason;
+      const what = (storage.unsaved || []).join(" and ") || "its data";
+      box.title = `${storage.problem}. The robot goes on in memory (${what} not saved, ` +
+        `${storage.failed_writes} failed writes) and saves once writes work again. Fix: ${storage.fix}`;
+    } else if (!box.hidden) {
+      say(`saving again: the robot's data is written to ${storage ? storage.path : "its data folder"}`);
+    }
+    box.hidden = !unsaved;
   }
 
   // true / false, or null where the robot cannot tell (the ROS API node has seen no on/off message yet).
@@ -1082,8 +1100,8 @@
     $("emotion-set").addEventListener("click", async () => {
       const name = $("emotion-select").value;
       try {
-        await post("/api/emotion/set", { name });
-        say(`emotion set to ${name}`);
+        const reply = await post("/api/emotion/set", { name });
+        say(reply.warning ? `emotion set to ${name}, but ${reply.warning}` : `emotion set to ${name}`, Boolean(reply.warning));
       } catch (error) {
         say(`emotion not set: ${error.message}`, true);
       }
@@ -1091,8 +1109,9 @@
     $("emotion-switch").addEventListener("change", async (event) => {
       const on = event.target.checked;
       try {
-        await post("/api/emotion/switch", { on });
-        say(`emotion system switched ${on ? "on" : "off"}`);
+        const reply = await post("/api/emotion/switch", { on });
+        const done = `emotion system switched ${on ? "on" : "off"}`;
+        say(reply.warning ? `${done}, but ${reply.warning}` : done, Boolean(reply.warning));
       } catch (error) {
         say(`not switched: ${error.message}`, true);
       }
