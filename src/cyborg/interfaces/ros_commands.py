@@ -318,8 +318,7 @@ def run_node(
             url = await api.start(host, port)
             for text, colour in announcement(url, host, api.port or port, api.token, generated=not given):
                 click.secho(text, fg=colour, err=True)
-        if part.controller is not None:
-            part.controller.start()
+        controller_task = part.controller.start() if part.controller is not None else None
         click.echo(f"node {name} running", err=True)
         if driver is not None:
             run = asyncio.ensure_future(driver.play())
@@ -332,7 +331,17 @@ def run_node(
             run.result()
             click.echo(f"node {name}: script ended, {len(driver.records)} records", err=True)
             return 0
-        await stop.wait()
+        waiter = asyncio.ensure_future(stop.wait())
+        await asyncio.wait(
+            {waiter, *([controller_task] if controller_task else [])}, return_when=asyncio.FIRST_COMPLETED
+        )
+        waiter.cancel()
+        if controller_task is not None and controller_task.done():
+            # It logged why (critical). Leave, so that `cyborg launch` (or roslaunch's respawn) starts it again.
+            click.echo(f"node {name}: the controller stopped; ending this node with exit code 1", err=True)
+            if api is not None:
+                await api.stop()
+            return 1
         if part.controller is not None:
             await part.controller.stop()
         if api is not None:

@@ -4,6 +4,12 @@ A master is started when none answers at ``ROS_MASTER_URI``; each part runs as `
 (:mod:`cyborg.interfaces.ros_commands`). With a speed, the launch sets ``/use_sim_time`` and fixes
 the shared origin of virtual time once every node is ready. ``cyborg sim --ros --script FILE``
 adds the ``cyborg_scenario`` node, which plays the script and writes the transcript.
+
+``cyborg launch`` keeps the robot running when a node stops: it says so and starts that node again
+(as roslaunch's ``respawn``), after RESPAWN_DELAY seconds, doubled for each stop within
+RESPAWN_STEADY seconds of its start, up to RESPAWN_MAX_DELAY. The controller comes back without
+``--fresh``, so it resumes the emotion it stored. A roscore the launch started is started again on
+its port; every node registers again with it (:mod:`cyborg.transport.ros`).
 """
 
 from __future__ import annotations
@@ -47,6 +53,17 @@ from cyborg.sim.nodes import API, CONTROLLER, NodeContext, build_part, part_name
 from cyborg.sim.script import Script
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, VirtualClock
 
+RESPAWN_DELAY = 1.0  # seconds before a stopped node is started again
+RESPAWN_STEADY = 10.0  # a node that ran this long before it stopped is started again after RESPAWN_DELAY
+RESPAWN_MAX_DELAY = 30.0  # a node stopping again and again waits at most this long
+
+
+def _how(code: int | None) -> str:
+    if code is not None and code < 0:
+        with contextlib.suppress(ValueError):
+            return f"killed by {signal.Signals(-code).name}"
+    return f"exit code {code}"
+
 
 def start_master(port: int, log_dir: Path) -> subprocess.Popen[bytes]:
     log_dir.mkdir(parents=True, exist_ok=True)
@@ -70,6 +87,7 @@ class Launch:
 
     With ``speed``: /use_sim_time is set (and put back afterwards), the parts share one origin
     of virtual time (fixed once all are ready) and the clock publisher starts first.
+    With ``respawn``: once started, a node that stops is started again (see the module's doc).
     """
 
     config_path: Path
@@ -86,11 +104,17 @@ class Launch:
     say: Callable[[str], None] = click.echo
     master: subprocess.Popen[bytes] | None = None
     processes: dict[str, subprocess.Popen[bytes]] = field(default_factory=dict)
+    respawn: bool = False
     _namespace: str | None = None
+    _clock_owner: str | None = None
+    _epoch: float | None = None
+    _started_at: dict[str, float] = field(default_factory=dict)
+    _respawn_delay: dict[str, float] = field(default_factory=dict)
+    _respawn_at: dict[str, float] = field(default_factory=dict)
     _saved_sim_time: Any = None
     _touched_sim_time: bool = False
 
-    def command(self, name: str, clock_owner: str | None) -> list[str]:
+    def command(self, name: str, clock_owner: str | None, *, fresh: bool = True) -> list[str]:
         command = [
             sys.executable,
             "-m",
@@ -108,7 +132,7 @@ class Launch:
             command += ["--map", str(self.map_path)]
         if name == API:
             command += ["--port", str(self.port)]
-        if name == CONTROLLER:
+        if name == CONTROLLER and fresh:
             command += ["--fresh"]  # a launch is a fresh start: neutral, emotion system on
         if self.speed is not None:
             assert self._namespace is not None
@@ -141,10 +165,9 @@ class Launch:
         elif self._saved_sim_time:
             master.set(USE_SIM_TIME, False)  # left over from a simulated run: nodes would wait for /clock
             self._touched_sim_time = True
+        self._clock_owner = clock_owner
         for name in self.parts:
-            self.processes[name] = subprocess.Popen(
-                self.command(name, clock_owner), stdout=None if self.echo else subprocess.DEVNULL
-            )
+            self._spawn(name, fresh=True)
         self.say(f"launched {len(self.processes)} nodes: {', '.join(self.parts)}")
         if self.speed is not None:
             self._start_virtual_time(master)
@@ -164,12 +187,61 @@ class Launch:
                     "fix: check their output above"
                 )
             time.sleep(0.05)
-        epoch = time.time() + EPOCH_MARGIN
+        epoch = self._epoch = time.time() + EPOCH_MARGIN
         master.set(f"{self._namespace}/epoch", epoch)
         self.say(
             f"virtual time: {self.start.isoformat()} at speed {self.speed:g}, "
             f"starting at {datetime.fromtimestamp(epoch, UTC):%H:%M:%S.%f} UTC"
         )
+
+    def _spawn(self, name: str, *, fresh: bool) -> subprocess.Popen[bytes]:
+        process = subprocess.Popen(
+            self.command(name, self._clock_owner, fresh=fresh),
+            stdout=None if self.echo else subprocess.DEVNULL,
+        )
+        self.processes[name] = process
+        self._started_at[name] = time.monotonic()
+        return process
+
+    def supervise(self, ignore: Sequence[str] = ()) -> None:
+        """Start again the master this launch started and each node that stopped (not ``ignore``)."""
+        if self.master is not None and self.master.poll() is not None and not master_running():
+            self._restart_master()  # (roscore alone gone while its rosmaster answers: nothing to do)
+        now = time.monotonic()
+        for name, process in list(self.processes.items()):
+            if name in ignore or process.poll() is None:
+                continue
+            due = self._respawn_at.get(name)
+            if due is None:
+                ran = now - self._started_at.get(name, now)
+                previous = self._respawn_delay.get(name)
+                steady = previous is None or ran >= RESPAWN_STEADY
+                delay = RESPAWN_DELAY if previous is None or steady else min(previous * 2, RESPAWN_MAX_DELAY)
+                self._respawn_delay[name], self._respawn_at[name] = delay, now + delay
+                self.say(
+                    f"node {name} stopped ({_how(process.returncode)}) after {ran:.1f} s; the robot runs "
+                    f"on; starting {name} again in {delay:g} s"
+                    + ("" if steady else " (it stopped soon after its last start: see its output above)")
+                )
+            elif now >= due:
+                del self._respawn_at[name]
+                started = self._spawn(name, fresh=False)
+                resumes = " without --fresh: it resumes the emotion it stored" if name == CONTROLLER else ""
+                self.say(f"started node {name} again (pid {started.pid}){resumes}")
+
+    def _restart_master(self) -> None:
+        assert self.master is not None
+        port = urllib.parse.urlparse(master_uri()).port or 11311
+        self.say(
+            f"roscore stopped ({_how(self.master.returncode)}); starting it again at {master_uri()}; "
+            "the nodes register again by themselves"
+        )
+        self.master = start_master(port, self.data_dir / "ros")
+        master = Master()
+        if self.speed is not None:  # a new master holds no parameters: ours again, for nodes started later
+            master.set(USE_SIM_TIME, True)
+            if self._epoch is not None:
+                master.set(f"{self._namespace}/epoch", self._epoch)
 
     def check_alive(self, ignore: Sequence[str] = ()) -> None:
         failed = [n for n, p in self.processes.items() if n not in ignore and p.poll() is not None]
@@ -177,12 +249,16 @@ class Launch:
             raise CyborgError(f"node(s) stopped: {', '.join(failed)}; the whole robot is stopped too")
 
     def wait(self, *, until: str | None = None, timeout: float | None = None) -> int | None:
-        """Until a node stops (an error), node ``until`` ends (its exit code) or ``timeout`` real seconds pass."""
+        """Until node ``until`` ends (its exit code), ``timeout`` real seconds pass or (without
+        ``respawn``) another node stops (an error)."""
         deadline = None if timeout is None else time.monotonic() + timeout
         while True:
             if until is not None and self.processes[until].poll() is not None:
                 return self.processes[until].returncode
-            self.check_alive(ignore=[until] if until else [])
+            if self.respawn:
+                self.supervise(ignore=[until] if until else [])
+            else:
+                self.check_alive(ignore=[until] if until else [])
             if deadline is not None and time.monotonic() > deadline:
                 return None
             time.sleep(0.1)
@@ -239,7 +315,18 @@ def launch(
         raise KeyboardInterrupt
 
     signal.signal(signal.SIGTERM, stop_on_term)  # `kill` and `timeout` stop the nodes too
-    robot = Launch(config_path, config, list(parts), data_dir, map_path, port, echo, speed=speed, start=start)
+    robot = Launch(
+        config_path,
+        config,
+        list(parts),
+        data_dir,
+        map_path,
+        port,
+        echo,
+        speed=speed,
+        start=start,
+        respawn=True,
+    )
     try:
         robot.start_all()
         real_duration = None if duration is None else duration / (speed or 1.0)

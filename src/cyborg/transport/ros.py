@@ -1019,15 +1019,37 @@ class _RosActionClient(ActionClient[G, R, F]):
         self.action_type = action_type
         self._goal_cls = ros_class(action_type.goal.ros_type)
         self._order = goal_order(self._goal_cls, action_type.goal)  # the public package's 'order'
-        self._client = _WatchedActionClient(name, _action_classes(action_type))
+        self._classes = _action_classes(action_type)
+        self._client: Any = None
         self._active: set[_RosClientGoalHandle[G, R, F]] = set()
         self._watchdog: asyncio.TimerHandle | None = None
+        self._make_client()
+
+    def _make_client(self) -> bool:
+        """Make actionlib's client, unless made already. actionlib asks the master for parameters
+        while it makes one: while the master is away it cannot, and what it made so far is undone;
+        the client is made at a later look for the server (``server_available``)."""
+        if self._client is not None:
+            return True
+        client = _WatchedActionClient.__new__(_WatchedActionClient)
+        try:
+            actionlib.ActionClient.__init__(client, self.name, self._classes)
+        except UNREACHABLE as exc:
+            for part in ("pub_goal", "pub_cancel", "status_sub", "result_sub", "feedback_sub"):
+                if (made := getattr(client, part, None)) is not None:
+                    made.unregister()
+            _WATCH.missed(f"make the action client {self.name}", exc)
+            return False
+        self._client = client
+        return True
 
     def server_available(self) -> bool:
         """The server is reporting its status and connected both ways, as actionlib's own
         ``wait_for_server`` checks: goal and cancel reach it, its results and feedback reach us.
         (A result published before our result subscriber is connected is lost, and the goal
         would wait for it forever.)"""
+        if not self._make_client():
+            return False
         client = self._client
         last = client.last_status_msg
         if last is None or time.monotonic() - client.last_status_time > SERVER_SILENCE_LIMIT:
@@ -1111,4 +1133,5 @@ class _RosActionClient(ActionClient[G, R, F]):
     def close(self) -> None:
         if self._watchdog is not None:
             self._watchdog.cancel()
-        self._client.stop()
+        if self._client is not None:
+            self._client.stop()
