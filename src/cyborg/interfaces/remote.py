@@ -21,6 +21,7 @@ from typing import Any
 
 from cyborg.controller.config import LoadedConfig
 from cyborg.controller.runtime import Controller, ControllerStats, Phase
+from cyborg.errors import TransportError
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Node, Publisher
 from cyborg.transport.messages import PoseWithCovarianceStamped, String, SystemState
@@ -96,7 +97,11 @@ class EmotionSwitchMirror:
 
     @property
     def enabled(self) -> bool | None:
-        value = self.node.get_param(topics.EMOTION_ENABLED_PARAM, None)
+        """None too while it cannot be read (the ROS master is away): the status is served anyway."""
+        try:
+            value = self.node.get_param(topics.EMOTION_ENABLED_PARAM, None)
+        except TransportError:
+            return None
         return value if isinstance(value, bool) else None
 
 
