@@ -28,6 +28,23 @@ def contains_in_order(sequence: list[Any], expected: list[Any]) -> bool:
     return all(any(item == wanted for item in it) for wanted in expected)
 
 
+def assert_in_order(sequence: list[Any], expected: list[Any]) -> None:
+    """``expected`` is a subsequence of ``sequence``; the message names the first item missing."""
+    it = iter(sequence)
+    for wanted in expected:
+        if not any(item == wanted for item in it):
+            raise AssertionError(f"{wanted} is missing after the items before it in {expected}")
+
+
+QUESTIONS = {"joke", "weather", "selfie", "follower", "simon_says"}
+
+
+def in_conversation(states: list[tuple[str, str, str]]) -> list[tuple[str, str, str]]:
+    """The transitions with a question state counted as the conversation it is asked in: what the
+    user says while the robot asks its own question is acted on from there (docs/scenarios.md)."""
+    return [("conversation" if f in QUESTIONS else f, e, t) for f, e, t in states]
+
+
 def emotion_at(records: list[Record], index: int) -> str:
     for record in reversed(records[:index]):
         if record["type"] == "emotion":
@@ -143,7 +160,7 @@ def check_scenario_a(records: list[Record]) -> None:
         if r["t"] < greeted
     ]
     # observation 1 and 2: it wanders on its own, then plays music
-    assert contains_in_order(
+    assert_in_order(
         before_user,
         [
             ("idle", "navigation_emotional", "navigation_planning"),
@@ -161,8 +178,8 @@ def check_scenario_a(records: list[Record]) -> None:
     )
     assert_wandering_ends_once_no_longer_bored_unconcerned_or_curious(records)
     # observation 3: the user
-    assert contains_in_order(
-        states,
+    assert_in_order(
+        in_conversation(states),
         [
             ("idle", "conversation_interest", "conversation"),
             ("conversation", "navigation_feedback", "navigation_talking"),
@@ -178,7 +195,7 @@ def check_scenario_a(records: list[Record]) -> None:
             ("navigation_talking", "succeeded", "idle"),
         ],
     )
-    assert contains_in_order(
+    assert_in_order(
         said(records),
         [
             "I think I know where that is, would you like me to show you?",
@@ -206,8 +223,8 @@ def check_scenario_b(records: list[Record]) -> None:
             assert emotion_when(records, record) == "curious", ("before a later wander", record)
     wandering_done = [r for r in state_records(records) if r["event"] == "navigation_wandering_completed"]
     assert all(emotion_when(records, r) == "elated" for r in wandering_done), "each wander ends elated"
-    assert contains_in_order(
-        states,
+    assert_in_order(
+        in_conversation(states),
         [
             ("idle", "music_play", "music"),
             ("music", "conversation_interest", "conversation"),  # the user interrupts the music
@@ -218,7 +235,7 @@ def check_scenario_b(records: list[Record]) -> None:
             ("navigation_talking", "succeeded", "idle"),
         ],
     )
-    assert contains_in_order(
+    assert_in_order(
         said(records),
         ["I think I know where that is, would you like me to show you?", "At once.", "Human, this is el6"],
     )
@@ -228,8 +245,8 @@ def check_scenario_c(records: list[Record]) -> None:
     """Thesis 10.2.3: the calendar sends it to the cafeteria, and back after a user took it away."""
     states = transitions(records)
     assert states[1] == ("idle", "navigation_scheduler", "navigation_planning")
-    assert contains_in_order(
-        states,
+    assert_in_order(
+        in_conversation(states),
         [
             ("idle", "navigation_scheduler", "navigation_planning"),
             ("navigation_planning", "navigation_start_moving", "navigation_moving"),
@@ -245,7 +262,7 @@ def check_scenario_c(records: list[Record]) -> None:
         ],
     )
     sentences = said(records)
-    assert contains_in_order(sentences, ["Human, this is el6"])
+    assert_in_order(sentences, ["Human, this is el6"])
     about_cafeteria = [s for s in sentences if "cafeteria" in s]
     assert len(about_cafeteria) >= 2, "it talks about the cafeteria on both arrivals"
     first = next(r for r in records if r["type"] == "say" and "cafeteria" in r["text"])
