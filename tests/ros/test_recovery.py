@@ -305,6 +305,11 @@ def test_launch_restarts_a_killed_node_and_the_robot_keeps_running(
     )
     assert launch.process.poll() is None, launch.log()[-3000:]
     assert "node cyborg_test_worker stopped" in launch.log()
+    wait_until(
+        lambda: launch.log().count("node cyborg_test_worker running") == 2,
+        timeout=60,
+        what="the restarted worker serving its action",
+    )
     events = observe.events()
     events.wait_connected()
     mark = changes.mark()

@@ -159,6 +159,10 @@ class _MasterWatch:
         self._thread = threading.Thread(target=self._run, name="ROS master watch", daemon=True)
         self._thread.start()
 
+    @property
+    def running(self) -> bool:
+        return self._thread is not None
+
     # what this process set and follows (any thread)
     def want(self, key: str, value: Any) -> None:
         with self._lock:
@@ -178,11 +182,16 @@ class _MasterWatch:
                 if changed.startswith(wanted + "/") or (wanted + "/").startswith(changed):
                     del self._wanted[wanted]
 
+    def _went_away(self) -> bool:
+        """Note that the master does not answer; True for the first notice of this outage."""
+        with self._lock:
+            first, self.away = not self.away, True
+        return first
+
     def missed(self, what: str, exc: BaseException) -> None:
         """Something could not reach the master: it is sent when the master is back."""
-        first = not (self.away or self._out_of_sync.is_set())
         self._out_of_sync.set()
-        if first:
+        if self._went_away():
             rospy.logwarn(
                 "could not %s: the ROS master at %s does not answer (%s); this node carries on with "
                 "the connections it has and sends it when the master is back; fix: start roscore "
@@ -191,7 +200,6 @@ class _MasterWatch:
                 rosgraph.get_master_uri(),
                 exc,
             )
-            self.away = True
 
     # the thread
     def _run(self) -> None:
@@ -210,8 +218,7 @@ class _MasterWatch:
         try:
             pid = int(_value(proxy.getPid(rospy.get_name()), "give its pid"))
         except UNREACHABLE as exc:
-            if not self.away:
-                self.away = True
+            if self._went_away():
                 rospy.logwarn(
                     "the ROS master at %s does not answer (%s); this node carries on with the "
                     "connections it has and registers again when the master is back; fix: start "
@@ -288,6 +295,7 @@ def _register_once() -> None:
     thread that made the publisher (in our nodes the event loop: a controller entering a state
     during an outage would stop there) and under rospy's topic lock. This one calls it once; if the
     master does not answer, :class:`_MasterWatch` registers it with everything else when it is back.
+    (In a process without a RosTransport, where no watch runs, rospy's own way is kept.)
     """
     from rospy.impl.registration import Registration, RegManager  # type: ignore[import-not-found]
 
@@ -296,8 +304,8 @@ def _register_once() -> None:
         return
 
     def reg_added(self: Any, resolved_name: str, data_type_or_uri: str, reg_type: str) -> None:
-        if not self.master_uri:
-            original(self, resolved_name, data_type_or_uri, reg_type)  # logs rospy's own error
+        if not self.master_uri or not _WATCH.running:  # (plain rospy use: nobody would register it later)
+            original(self, resolved_name, data_type_or_uri, reg_type)
             return
         proxy = _master_proxy(self.master_uri)
         args = (rospy.names.get_caller_id(), resolved_name, data_type_or_uri, self.uri)
