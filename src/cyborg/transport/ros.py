@@ -204,8 +204,10 @@ class _MasterWatch:
     # the thread
     def _run(self) -> None:
         proxy = _master_proxy()
-        while not rospy.core.is_shutdown():
+        while True:
             time.sleep(MASTER_CHECK_PERIOD)
+            if rospy.core.is_shutdown():
+                return
             try:
                 self._check(proxy)
             except Exception:  # the watch must outlive any surprise
