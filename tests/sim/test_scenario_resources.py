@@ -68,11 +68,15 @@ def test_a_second_sim_on_the_same_data_folder_is_refused_naming_the_first(tmp_pa
     )
     try:
         lock = data / "sim.lock"
-        while first.poll() is None and f"process {first.pid}" not in (
-            lock.read_text() if lock.exists() else ""
+        give_up = time.monotonic() + 120  # a guard, not a speed check: it holds the folder within seconds
+        while (
+            first.poll() is None and time.monotonic() < give_up and f"process {first.pid}" not in held(lock)
         ):
-            time.sleep(0.1)  # until the first one holds the folder
+            time.sleep(0.1)
         assert first.poll() is None, first.stderr.read() if first.stderr else ""
+        assert f"cyborg sim --script (process {first.pid})" in held(lock), (
+            "the first sim does not hold the folder"
+        )
 
         second = CliRunner().invoke(
             cli, ["sim", "--script", str(script), "--speed", "max", "--data-dir", str(data)]
@@ -89,6 +93,10 @@ def test_a_second_sim_on_the_same_data_folder_is_refused_naming_the_first(tmp_pa
         cli, ["sim", "--script", str(script), "--speed", "max", "--data-dir", str(data)]
     )
     assert after.exit_code == 0, after.output  # the lock went with the first process
+
+
+def held(lock: Path) -> str:
+    return lock.read_text(encoding="utf-8") if lock.exists() else ""
 
 
 def test_a_full_disk_at_start_is_one_line_naming_the_fix(
