@@ -7,7 +7,8 @@ exactly the names existing Cyborg modules use.
 REGISTER_EVENT = "/cyborg_controller/register_event"
 STATE_CHANGE = "/cyborg_controller/state_change"
 STATE_RESOURCES_PARAM = "/state_resources"
-CONTROLLER_STATS = "/cyborg_controller/stats"  # ours, not the thesis's: the counters as JSON (std_msgs/String)
+# Ours, not the thesis's: the controller's counters as JSON (std_msgs/String).
+CONTROLLER_STATS = "/cyborg_controller/stats"
 
 EMOTIONAL_FEEDBACK = "/cyborg_controller/emotional_feedback"
 EMOTIONAL_STATE = "/cyborg_controller/emotional_state"
