@@ -175,7 +175,9 @@ class SimulatedBase:
         while done < 1.0:
             await clock.sleep(min(TICK, max(0.0, duration - (clock.monotonic() - start))))
             elapsed = clock.monotonic() - start
-            fraction = 1.0 if elapsed >= duration - 1e-9 else elapsed / duration
+            # within a millisecond of the end counts as there: a clock far from its origin may
+            # not move at all for a sleep of a few nanoseconds
+            fraction = 1.0 if elapsed >= duration - 1e-3 else elapsed / duration
             self.x, self.y = sx + dx * fraction, sy + dy * fraction
             self.distance_travelled += length * (fraction - done)
             done = fraction
