@@ -144,6 +144,14 @@ def _check_duration(ctx: click.Context, param: click.Parameter, value: float | N
     return value
 
 
+def _check_data_folder(ctx: click.Context, param: click.Parameter, value: Path | None) -> Path | None:
+    if value is not None and value.exists() and not value.is_dir():
+        raise click.BadParameter(
+            f"{value} is a file, not a folder; fix: give a folder for the databases (it is made if missing)"
+        )
+    return value
+
+
 def _check_factor(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
     if value is not None and not (math.isfinite(value) and value <= MAX_SPEED):
         raise click.BadParameter(
@@ -412,6 +420,7 @@ _speed_help = "virtual time at this factor of real time (all nodes share one clo
     "data_dir",
     type=click.Path(path_type=Path),
     default=None,
+    callback=_check_data_folder,
     help="folder of the databases",
 )
 @click.option("--map", "map_path", type=click.Path(path_type=Path), help="map for the simulated base")
@@ -515,6 +524,7 @@ def node(
     "data_dir",
     type=click.Path(path_type=Path),
     default=None,
+    callback=_check_data_folder,
     help="folder of the databases",
 )
 @click.option("--map", "map_path", type=click.Path(path_type=Path), help="map for the simulated base")
