@@ -329,7 +329,7 @@ def run_node(
                 run.cancel()
                 return 1
             run.result()
-            click.echo(f"node {name}: script ended, {len(driver.records)} records", err=True)
+            click.echo(f"node {name}: script ended, {driver.driver.count} records", err=True)
             return 0
         waiter = asyncio.ensure_future(stop.wait())
         await asyncio.wait(
@@ -365,8 +365,8 @@ class _ScenarioNode:
         from cyborg.sim.script import load_script
 
         self.script = load_script(files.script)
-        self.driver = ScenarioDriver(node, self.script)
-        self.records = self.driver.records
+        # With a transcript file the records go there as they come and none is kept (flat memory).
+        self.driver = ScenarioDriver(node, self.script, keep_records=files.transcript is None)
         self._out: IO[str] | None = None
         if files.transcript is not None:
             self._out = files.transcript.open("w", encoding="utf-8")
