@@ -294,7 +294,12 @@ def test_launch_restarts_a_killed_node_and_the_robot_keeps_running(
     processes.wait_ready(launch)
     changes.wait_state("idle", event="start", timeout=60)
 
-    wait_until(lambda: node_pid(uri, "/cyborg_test_worker"), timeout=60, what="the worker running")
+    wait_until(lambda: node_pid(uri, "/cyborg_test_worker"), timeout=60, what="the worker registered")
+    # killed only once it serves its action: a worker killed earlier never says it runs, and the
+    # count of "running" lines below would then wait for a second line that cannot come
+    wait_until(
+        lambda: "node cyborg_test_worker running" in launch.log(), timeout=60, what="the worker running"
+    )
     worker = node_pid(uri, "/cyborg_test_worker")
     assert worker is not None
     os.kill(worker, signal.SIGKILL)
