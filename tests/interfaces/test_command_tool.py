@@ -86,6 +86,10 @@ def test_event_say_emotion_and_status(running_sim: str) -> None:
     assert tool(url, "emotion", "values", "0.5", "0.4", "0.2").returncode == 0
     time.sleep(0.3)
     assert "P +0.50 A +0.40 D +0.20" in tool(url, "status").stdout
+    said = tool(url, "emotion", "set", "sadness").stdout  # table 2.2's bracketed word
+    assert said.strip() == "emotion set to inhibited (you typed sadness)"
+    time.sleep(0.3)
+    assert "emotion inhibited (P -0.54" in tool(url, "status").stdout
 
 
 def test_bad_input_is_refused_with_the_reason(running_sim: str) -> None:

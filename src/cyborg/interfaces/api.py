@@ -194,16 +194,17 @@ class RobotAPI:
 
     async def post_emotion_set(self, request: web.Request) -> web.Response:
         name = self._text_field(await self._json(request), "name")
+        emotion = name
         if self.emotions:  # the emotion system would only log a warning: say so to the sender
             try:
                 settings = EmotionSettings.model_validate(
                     {"prototypes": self.emotions, "aliases": self.emotion_aliases}
                 )
-                settings.resolve(name[:100])
+                emotion = settings.resolve(name[:100])  # an alias names its emotion
             except ValueError as exc:
                 raise CommandError(str(exc)) from None
         self._set_emotion.publish(String(data=name))
-        return web.json_response({"sent": name, **await self._unsaved()})
+        return web.json_response({"sent": name, "emotion": emotion, **await self._unsaved()})
 
     async def post_emotion_values(self, request: web.Request) -> web.Response:
         body = await self._json(request)

@@ -79,8 +79,10 @@ class HttpLink:
     def say(self, text: str) -> None:
         self._call("/api/say", {"text": text})
 
-    def set_emotion(self, name: str) -> str | None:
-        return _warning(self._call("/api/emotion/set", {"name": name}))
+    def set_emotion(self, name: str) -> tuple[str, str | None]:
+        answer = self._call("/api/emotion/set", {"name": name})
+        emotion = answer.get("emotion") if isinstance(answer, dict) else None
+        return (emotion if isinstance(emotion, str) else name), _warning(answer)
 
     def set_values(self, pleasure: float, arousal: float, dominance: float) -> str | None:
         body = {"pleasure": pleasure, "arousal": arousal, "dominance": dominance}
@@ -110,7 +112,9 @@ class RobotLink(Protocol):
     def close(self) -> None: ...
     def send_event(self, name: str) -> bool | None: ...
     def say(self, text: str) -> None: ...
-    def set_emotion(self, name: str) -> str | None: ...
+    def set_emotion(self, name: str) -> tuple[str, str | None]:
+        """The emotion the robot calls ``name`` (an alias names its emotion), and any warning."""
+
     def set_values(self, pleasure: float, arousal: float, dominance: float) -> str | None: ...
     def switch(self, on: bool) -> str | None: ...
     def status(self) -> dict[str, Any]: ...
@@ -226,7 +230,9 @@ def emotion_group() -> None:
 @link_options
 def emotion_set(name: str, link: RobotLink) -> None:
     """Set the emotion by name (its prototype's PAD values)."""
-    _echo_done(f"emotion set to {name}", link.set_emotion(name))
+    emotion, warning = link.set_emotion(name)
+    typed = "" if emotion == name else f" (you typed {name})"
+    _echo_done(f"emotion set to {emotion}{typed}", warning)
 
 
 def _pad_value(ctx: click.Context, param: click.Parameter, value: float) -> float:

@@ -81,8 +81,9 @@ class RosLink:
     def say(self, text: str) -> None:
         self._run(self._publish(topics.TEXT_FROM_SPEECH, String(text)))
 
-    def set_emotion(self, name: str) -> None:
+    def set_emotion(self, name: str) -> tuple[str, str | None]:
         self._run(self._publish(topics.SET_EMOTIONAL_STATE, String(name)))
+        return name, None  # the emotion system resolves aliases; this tool has no configuration
 
     def set_values(self, pleasure: float, arousal: float, dominance: float) -> None:
         self._run(self._publish(topics.SET_EMOTIONAL_VALUES, EmotionalFeedback(pleasure, arousal, dominance)))
