@@ -23,11 +23,6 @@ def said(records: list[Record]) -> list[str]:
     return [r["text"] for r in records if r["type"] == "say"]
 
 
-def contains_in_order(sequence: list[Any], expected: list[Any]) -> bool:
-    it = iter(sequence)
-    return all(any(item == wanted for item in it) for wanted in expected)
-
-
 def assert_in_order(sequence: list[Any], expected: list[Any]) -> None:
     """``expected`` is a subsequence of ``sequence``; the message names the first item missing."""
     it = iter(sequence)

@@ -62,6 +62,11 @@ class RobotAPI:
         self.machine = machine
         self.emotions = emotions or {}
         self.emotion_aliases = emotion_aliases or {}
+        self._emotion_settings = (
+            EmotionSettings.model_validate({"prototypes": self.emotions, "aliases": self.emotion_aliases})
+            if self.emotions
+            else None
+        )  # to refuse a name the emotion system does not know, as it would only log a warning
         self._graph: asyncio.Future[tuple[bytes, str]] | None = None  # laid out once, shared by all requests
         self._dot: subprocess.Popen[bytes] | None = None
         self.guard = Guard(access or Access())
@@ -195,12 +200,9 @@ class RobotAPI:
     async def post_emotion_set(self, request: web.Request) -> web.Response:
         name = self._text_field(await self._json(request), "name")
         emotion = name
-        if self.emotions:  # the emotion system would only log a warning: say so to the sender
+        if self._emotion_settings is not None:
             try:
-                settings = EmotionSettings.model_validate(
-                    {"prototypes": self.emotions, "aliases": self.emotion_aliases}
-                )
-                emotion = settings.resolve(name[:100])  # an alias names its emotion
+                emotion = self._emotion_settings.resolve(name[:100])  # an alias names its emotion
             except ValueError as exc:
                 raise CommandError(str(exc)) from None
         self._set_emotion.publish(String(data=name))

@@ -152,6 +152,15 @@ def _check_data_folder(ctx: click.Context, param: click.Parameter, value: Path |
     return value
 
 
+duration_option = click.option(
+    "--duration",
+    type=float,
+    default=None,
+    callback=_check_duration,
+    help="stop after this many (virtual) seconds",
+)
+
+
 def _check_factor(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
     if value is not None and not (math.isfinite(value) and value <= MAX_SPEED):
         raise click.BadParameter(
@@ -187,13 +196,7 @@ def _os_problem(exc: OSError) -> CyborgError:
     help="map for the simulated base: ARNL .map or map_server .yaml",
 )
 @click.option("--speed", default=None, help="virtual time: a factor (10) or 'max'; default real time")
-@click.option(
-    "--duration",
-    type=float,
-    default=None,
-    callback=_check_duration,
-    help="stop after this many (virtual) seconds",
-)
+@duration_option
 @click.option("--host", default="127.0.0.1", show_default=True, help="address the API and dashboard bind to")
 @click.option(
     "--port",
@@ -542,13 +545,7 @@ def node(
     "--speed", type=float, default=None, callback=_check_factor, help=_speed_help + "; sets /use_sim_time"
 )
 @click.option("--start", "start_at", default=None, help="with --speed: virtual start, ISO date-time (UTC)")
-@click.option(
-    "--duration",
-    type=float,
-    default=None,
-    callback=_check_duration,
-    help="stop after this many (virtual) seconds",
-)
+@duration_option
 def launch_command(
     config_path: Path | None,
     data_dir: Path | None,
