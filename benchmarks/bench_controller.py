@@ -13,7 +13,7 @@ import time
 
 from _machine import machine_line, percentile
 
-from cyborg.controller.config import parse_config
+from cyborg.app.config import parse_config
 from cyborg.controller.runtime import Controller, Phase
 from cyborg.transport import topics
 from cyborg.transport.base import GoalStatus, Node, ServerGoalHandle

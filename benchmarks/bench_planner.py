@@ -26,7 +26,7 @@ import numpy as np
 from _machine import machine_line, percentile
 
 from cyborg.errors import PlanningError
-from cyborg.sim.maps import NamedPose, OccupancyMap, load_map
+from cyborg.maps import NamedPose, OccupancyMap, load_map
 from cyborg.sim.planner import Route, RoutePlanner
 
 PROJECT = Path(__file__).resolve().parent.parent

@@ -114,7 +114,7 @@ def machine_yaml(resources: bool) -> str:
 
 
 def role_controller() -> None:
-    from cyborg.controller.config import parse_config
+    from cyborg.app.config import parse_config
     from cyborg.controller.runtime import Controller
     from cyborg.transport.clock import RealClock
     from cyborg.transport.ros import RosTransport

@@ -12,7 +12,7 @@ from typing import Any
 import pytest
 import yaml
 
-from cyborg.controller.config import load_config, parse_config
+from cyborg.app.config import load_config, parse_config
 from cyborg.errors import ConfigError
 
 VALID = """
@@ -323,10 +323,10 @@ def test_duplicate_event_advice_is_not_the_state_advice() -> None:
 
 def test_doc_pointer_is_true_and_the_doc_names_every_key() -> None:
     """Errors point to docs/configuration.md; it must exist and describe what the models accept."""
-    from cyborg.controller.config import ConfigModel, GatekeeperModel, StateModel, TimeoutsModel
+    from cyborg.app.config import ConfigModel, GatekeeperModel, StateModel, TimeoutsModel
+    from cyborg.app.kinds import MODULE_KINDS
     from cyborg.emotion.model import EmotionSettings, HalfLives
     from cyborg.motivator.logic import MotivationalEvent, MotivatorSettings
-    from cyborg.sim.kinds import MODULE_KINDS
 
     doc_path = Path(__file__).resolve().parents[2] / "docs" / "configuration.md"
     doc = doc_path.read_text(encoding="utf-8")

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from cyborg.controller.config import parse_config
+from cyborg.app.config import parse_config
 
 NESTED = """
 initial: idle

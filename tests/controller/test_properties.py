@@ -22,7 +22,7 @@ from typing import Any
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from cyborg.controller.config import parse_config
+from cyborg.app.config import parse_config
 from cyborg.controller.machine import ABORTED, SUCCEEDED, MachineSpec
 from cyborg.controller.runtime import Controller, Phase
 from cyborg.transport import topics

@@ -8,7 +8,7 @@ from typing import Any
 
 import pytest
 
-from cyborg.controller.config import parse_config
+from cyborg.app.config import parse_config
 from cyborg.controller.runtime import Controller
 from cyborg.modules.helper import Abort, BehaviourModule, GoalContext
 from cyborg.transport import topics

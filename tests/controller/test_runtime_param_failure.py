@@ -9,7 +9,7 @@ from typing import Any
 import pytest
 from test_runtime import MACHINE, Modules, Recorder
 
-from cyborg.controller.config import parse_config
+from cyborg.app.config import parse_config
 from cyborg.controller.runtime import Controller
 from cyborg.transport.clock import VirtualClock
 from cyborg.transport.embedded import EmbeddedTransport

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 from aiohttp import ClientSession
 
-from cyborg.controller.config import load_config
+from cyborg.app.config import load_config
+from cyborg.app.robot import Robot, build_robot
 from cyborg.emotion.model import EmotionSettings
 from cyborg.emotion.system import EmotionSystem
 from cyborg.interfaces.api import RobotAPI
@@ -26,9 +27,8 @@ from cyborg.interfaces.dashboard import (
     route_points,
 )
 from cyborg.interfaces.remote import remote_robot
+from cyborg.maps import Cell, KeepOutZone, NamedPose, OccupancyMap
 from cyborg.modules.helper import HEARTBEAT_SECONDS
-from cyborg.sim.maps import Cell, KeepOutZone, NamedPose, OccupancyMap
-from cyborg.sim.robot import Robot, build_robot
 from cyborg.transport import topics
 from cyborg.transport.clock import RealClock
 from cyborg.transport.embedded import EmbeddedTransport

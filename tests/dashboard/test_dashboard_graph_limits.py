@@ -16,7 +16,7 @@ from pathlib import Path
 import aiohttp
 import pytest
 
-from cyborg.controller.config import load_config
+from cyborg.app.config import load_config
 from cyborg.interfaces import api as api_module
 from cyborg.interfaces.api import RobotAPI
 from cyborg.transport.clock import RealClock

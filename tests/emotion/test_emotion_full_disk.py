@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 
 from cyborg.emotion.model import EmotionSettings, HalfLives
-from cyborg.emotion.store import ControllerStore
 from cyborg.emotion.system import EmotionSystem
+from cyborg.motivator.store import ControllerStore
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo
 from cyborg.transport.clock import VirtualClock

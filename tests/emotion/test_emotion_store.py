@@ -9,9 +9,9 @@ from pathlib import Path
 import pytest
 
 from cyborg.emotion.model import PAD
-from cyborg.emotion.store import ControllerStore
 from cyborg.errors import DatabaseError
 from cyborg.motivator.logic import MotivationalEvent
+from cyborg.motivator.store import ControllerStore
 
 NAVIGATION = MotivationalEvent(
     state="idle", event="navigation_emotional", reward_arousal=0.05, reward_dominance=-0.01

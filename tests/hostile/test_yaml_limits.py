@@ -8,7 +8,7 @@ from subprocess import CompletedProcess
 
 import pytest
 
-from cyborg.controller.config import parse_config
+from cyborg.app.config import parse_config
 from cyborg.errors import ConfigError
 from cyborg.limits import MAX_YAML_BYTES
 from cyborg.sim.script import parse_script

@@ -13,7 +13,7 @@ import aiohttp
 import pytest
 from aiohttp import ClientSession, WSServerHandshakeError
 
-from cyborg.controller.config import load_config
+from cyborg.app.config import load_config
 from cyborg.interfaces.api import RobotAPI
 from cyborg.interfaces.security import Access, Limits
 from cyborg.transport import topics

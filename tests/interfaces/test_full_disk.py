@@ -17,11 +17,11 @@ from typing import Any
 import pytest
 from aiohttp import ClientSession
 
-from cyborg.controller.config import load_config
-from cyborg.emotion.store import ControllerStore
+from cyborg.app.config import load_config
+from cyborg.app.robot import build_robot
 from cyborg.interfaces.cli import packaged_config
 from cyborg.interfaces.serve import serve_api
-from cyborg.sim.robot import build_robot
+from cyborg.motivator.store import ControllerStore
 from cyborg.transport.clock import RealClock, wait_until
 from cyborg.transport.embedded import EmbeddedTransport
 from full_disk import Disk

@@ -7,7 +7,7 @@ from typing import Any
 
 from test_gatekeeper_speech import MACHINE, Talker, build
 
-from cyborg.controller.config import parse_config
+from cyborg.app.config import parse_config
 from cyborg.controller.runtime import Controller
 from cyborg.errors import TransportError
 from cyborg.modules.gatekeeper import READ_RETRY

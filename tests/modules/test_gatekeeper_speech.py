@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import itertools
 
-from cyborg.controller.config import parse_config
+from cyborg.app.config import parse_config
 from cyborg.controller.runtime import Controller
 from cyborg.modules.gatekeeper import Gatekeeper
 from cyborg.modules.helper import BehaviourModule, GoalContext

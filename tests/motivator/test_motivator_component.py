@@ -8,11 +8,10 @@ from pathlib import Path
 
 import pytest
 
-from cyborg.controller.config import parse_config
-from cyborg.emotion.store import ControllerStore
-from cyborg.motivator.component import controller_busy
-from cyborg.motivator.idle_day import IdleDay, IdleDayReport, idle_spells, run_idle_day
-from cyborg.sim.robot import Robot, build_robot
+from cyborg.app.config import parse_config
+from cyborg.app.robot import Robot, build_robot, controller_busy
+from cyborg.motivator.store import ControllerStore
+from cyborg.sim.idle_day import IdleDay, IdleDayReport, idle_spells, run_idle_day
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo
 from cyborg.transport.clock import VirtualClock

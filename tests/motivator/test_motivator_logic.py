@@ -8,7 +8,7 @@ import math
 import pytest
 from pydantic import ValidationError
 
-from cyborg.controller.config import load_config
+from cyborg.app.config import load_config
 from cyborg.emotion.model import PAD
 from cyborg.interfaces.cli import packaged_config
 from cyborg.motivator.logic import (

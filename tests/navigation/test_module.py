@@ -23,9 +23,12 @@ from zoneinfo import ZoneInfo
 import pytest
 import yaml
 
-from cyborg.controller.config import LoadedConfig, parse_config
+from cyborg.app.config import LoadedConfig, parse_config
+from cyborg.app.kinds import BaseSettings, BuildContext, ModuleKind, NavigationSettings
+from cyborg.app.robot import build_robot
 from cyborg.emotion.model import NEUTRAL, TABLE_2_2
 from cyborg.interfaces.cli import packaged_config
+from cyborg.maps import Cell, OccupancyMap, Point, default_map_path, load_map
 from cyborg.modules.speech import SPOKEN_TOPIC, estimated_duration
 from cyborg.navigation.database import (
     DEFAULT_RESPONSES,
@@ -36,10 +39,7 @@ from cyborg.navigation.database import (
 )
 from cyborg.navigation.module import WANDER_CHECK, WANDER_DEBOUNCE, NavigationModule
 from cyborg.sim.base import PathState, SimulatedBase
-from cyborg.sim.kinds import BaseSettings, BuildContext, ModuleKind, NavigationSettings
-from cyborg.sim.maps import Cell, OccupancyMap, Point, default_map_path, load_map
 from cyborg.sim.planner import RoutePlanner
-from cyborg.sim.robot import build_robot
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Node
 from cyborg.transport.clock import VirtualClock

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from cyborg.emotion.model import PAD
-from cyborg.emotion.store import ControllerStore
+from cyborg.motivator.store import ControllerStore
 
 if TYPE_CHECKING:
     from conftest import Observers, Processes

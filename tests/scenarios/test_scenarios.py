@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 from expectations import CHECKS, Record
 
-from cyborg.controller.config import load_config
+from cyborg.app.config import load_config
 from cyborg.interfaces.cli import packaged_config
 from cyborg.sim.scenario import run_scenario
 from cyborg.sim.script import load_script
@@ -44,7 +44,7 @@ def test_same_script_same_transcript(tmp_path: Path) -> None:
 def test_a_script_run_starts_fresh_whatever_its_data_folder_holds(tmp_path: Path) -> None:
     """Observation 0 of every scenario: neutral, with the emotion system on (it was left angry and off)."""
     from cyborg.emotion.model import PAD
-    from cyborg.emotion.store import ControllerStore
+    from cyborg.motivator.store import ControllerStore
 
     store = ControllerStore(tmp_path / "controller.db")
     store.save_emotion(PAD(-0.51, 0.59, 0.25), 0.0)

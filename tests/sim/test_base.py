@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from cyborg.errors import PlanningError
+from cyborg.maps import Cell, NamedPose, OccupancyMap, Point, default_map_path, load_map
 from cyborg.sim.base import PathState, SimulatedBase, pose_stamped, quaternion_to_yaw
-from cyborg.sim.maps import Cell, NamedPose, OccupancyMap, Point, default_map_path, load_map
 from cyborg.sim.planner import RoutePlanner
 from cyborg.transport import topics
 from cyborg.transport.base import ClientGoalHandle, GoalStatus, MessageInfo

@@ -11,7 +11,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from cyborg.errors import MapError
-from cyborg.sim.maps import (
+from cyborg.maps import (
     Cell,
     OccupancyMap,
     Point,
@@ -366,10 +366,10 @@ def test_a_map_without_goals_leaves_the_last_maps_places_behind(tmp_path: Path) 
     """The same data folder, first the campus map, then Willow (no goals): no campus place is a target."""
     import random
 
-    from cyborg.controller.config import load_config
+    from cyborg.app.config import load_config
+    from cyborg.app.robot import build_robot
     from cyborg.interfaces.cli import packaged_config
     from cyborg.navigation.database import NavigationDatabase
-    from cyborg.sim.robot import build_robot
     from cyborg.transport.clock import VirtualClock
     from cyborg.transport.embedded import EmbeddedTransport
 

@@ -12,7 +12,7 @@ import pytest
 from numpy.typing import NDArray
 
 from cyborg.errors import PlanningError
-from cyborg.sim.maps import Cell, KeepOutZone, OccupancyMap, Point, default_map_path, load_map
+from cyborg.maps import Cell, KeepOutZone, OccupancyMap, Point, default_map_path, load_map
 from cyborg.sim.planner import Route, RoutePlanner
 
 MAPS = Path(__file__).resolve().parents[2].parent / "shared" / "maps"

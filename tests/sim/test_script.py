@@ -114,7 +114,7 @@ def test_calendar_entry_at_an_unknown_place_names_its_line(tmp_path: Path) -> No
 
 
 def test_transcript_ends_a_trip_with_the_arrival_pose(tmp_path: Path) -> None:
-    from cyborg.controller.config import load_config
+    from cyborg.app.config import load_config
     from cyborg.interfaces.cli import packaged_config
     from cyborg.sim.base import SimulatedBase
     from cyborg.sim.scenario import ScenarioRun

@@ -7,7 +7,7 @@ command tool can set the emotion by name or by values and switch the system
 on or off (while off, feedback is ignored).
 
 Every fresh start is neutral with the system on (thesis 8.2). The state is kept
-in the :class:`ControllerStore` so that a controller brought back after a crash
+in the :class:`EmotionMemory` so that a controller brought back after a crash
 while the rest of the robot runs on (``resume=True``) can resume it, if it was
 stored within ``resume_within_seconds``. While the store cannot write (a full
 disk) the emotion goes on in memory; the store says so and writes it once it can.
@@ -18,6 +18,7 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass
+from typing import Protocol
 
 from cyborg.emotion.model import (
     NEUTRAL,
@@ -30,7 +31,6 @@ from cyborg.emotion.model import (
     update,
     validate_feedback,
 )
-from cyborg.emotion.store import ControllerStore
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Node
 from cyborg.transport.clock import Periodic
@@ -55,6 +55,25 @@ class EmotionStats:
     ignored_while_off: int = 0
 
 
+@dataclass(frozen=True)
+class StoredEmotion:
+    """The persisted PAD point, the wall time of its last update and the on/off switch."""
+
+    pad: PAD
+    updated_at: float | None
+    enabled: bool
+
+
+class EmotionMemory(Protocol):
+    """Where the emotion system keeps its point and switch across restarts (the controller's store)."""
+
+    def get_emotion(self) -> StoredEmotion: ...
+
+    def save_emotion(self, pad: PAD, updated_at: float) -> bool: ...
+
+    def set_emotion_enabled(self, enabled: bool) -> bool: ...
+
+
 class EmotionSystem:
     """Holds the PAD point and the named emotion; publishes every change."""
 
@@ -62,7 +81,7 @@ class EmotionSystem:
         self,
         node: Node,
         settings: EmotionSettings,
-        store: ControllerStore | None = None,
+        store: EmotionMemory | None = None,
         *,
         resume: bool = False,
     ) -> None:
@@ -105,7 +124,7 @@ class EmotionSystem:
         if self._decay is not None:
             self._decay.cancel()
 
-    def _start_from(self, store: ControllerStore, resume: bool) -> None:
+    def _start_from(self, store: EmotionMemory, resume: bool) -> None:
         """Take over the stored emotion on a resume within the window; otherwise store a neutral start."""
         stored = store.get_emotion()
         now = self.node.clock.now()

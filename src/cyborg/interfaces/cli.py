@@ -15,7 +15,7 @@ from pathlib import Path
 
 import click
 
-from cyborg.controller.config import LoadedConfig, load_config
+from cyborg.app.config import LoadedConfig, load_config
 from cyborg.errors import ConfigError, CyborgError
 from cyborg.interfaces.security import Access, access_options
 from cyborg.limits import MAX_SCRIPT_SECONDS, MAX_SPEED
@@ -38,7 +38,7 @@ def _load(path: Path | None) -> LoadedConfig:
 
 def check_modules(loaded: LoadedConfig) -> None:
     """Validate the ``modules:`` section against the known module kinds."""
-    from cyborg.sim.kinds import MODULE_KINDS, parse_module_settings
+    from cyborg.app.kinds import MODULE_KINDS, parse_module_settings
 
     problems: list[str] = []
     for name, raw in loaded.model.modules.items():
@@ -607,7 +607,7 @@ def launch_command(
 
 def _add_tool_commands() -> None:
     from cyborg.interfaces.command_tool import COMMANDS
-    from cyborg.navigation.db_cli import db_group
+    from cyborg.interfaces.db_cli import db_group
 
     for command in COMMANDS:
         cli.add_command(command)

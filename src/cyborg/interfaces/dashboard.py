@@ -25,9 +25,9 @@ import numpy as np
 from aiohttp import web
 from numpy.typing import NDArray
 
+from cyborg.app.robot import Robot
 from cyborg.interfaces.api import RobotAPI
-from cyborg.sim.maps import Cell, OccupancyMap
-from cyborg.sim.robot import Robot
+from cyborg.maps import Cell, OccupancyMap
 from cyborg.storage import SaveStatus
 
 STATIC_DIR = Path(__file__).resolve().parent / "static"

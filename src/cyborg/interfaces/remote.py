@@ -19,7 +19,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from cyborg.controller.config import LoadedConfig
+from cyborg.app.config import LoadedConfig
 from cyborg.controller.runtime import Controller, ControllerStats, Phase
 from cyborg.errors import TransportError
 from cyborg.transport import topics
@@ -128,7 +128,7 @@ class BaseMirror:
 
 @dataclass
 class RemoteRobot:
-    """The attributes of :class:`cyborg.sim.robot.Robot` the dashboard reads."""
+    """The attributes of :class:`cyborg.app.robot.Robot` the dashboard reads."""
 
     config: LoadedConfig
     controller: ControllerMirror

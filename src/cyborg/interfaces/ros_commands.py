@@ -36,10 +36,10 @@ from typing import IO, Any
 
 import click
 
-from cyborg.controller.config import LoadedConfig
+from cyborg.app.config import LoadedConfig
+from cyborg.app.parts import API, CONTROLLER, NodeContext, Part, build_part
 from cyborg.errors import CyborgError
 from cyborg.interfaces.security import Access, announcement
-from cyborg.sim.nodes import API, CONTROLLER, NodeContext, Part, build_part
 from cyborg.transport import topics
 from cyborg.transport.base import Node, Publisher
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, Clock, RealClock, VirtualClock

@@ -34,7 +34,8 @@ from typing import Any
 
 import click
 
-from cyborg.controller.config import LoadedConfig
+from cyborg.app.config import LoadedConfig
+from cyborg.app.parts import API, CONTROLLER, NodeContext, build_part, part_names
 from cyborg.errors import CyborgError
 from cyborg.interfaces.ros_commands import (
     EPOCH_MARGIN,
@@ -49,7 +50,6 @@ from cyborg.interfaces.ros_commands import (
     master_uri,
     require_ros,
 )
-from cyborg.sim.nodes import API, CONTROLLER, NodeContext, build_part, part_names
 from cyborg.sim.script import Script
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, VirtualClock
 

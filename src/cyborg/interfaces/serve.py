@@ -5,12 +5,12 @@ from __future__ import annotations
 from collections.abc import Awaitable, Callable
 from typing import Any
 
+from cyborg.app.robot import Robot
 from cyborg.errors import CyborgError
 from cyborg.interfaces.api import RobotAPI
 from cyborg.interfaces.dashboard import register as register_dashboard
 from cyborg.interfaces.security import Access, announcement
 from cyborg.modules.gatekeeper import Gatekeeper
-from cyborg.sim.robot import Robot
 from cyborg.transport.base import Transport
 
 Stop = Callable[[], Awaitable[None]]

@@ -23,9 +23,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from cyborg.controller.machine import MachineSpec
-from cyborg.controller.runtime import Controller, Phase
 from cyborg.emotion.model import PAD
-from cyborg.emotion.store import ControllerStore
 from cyborg.motivator.logic import (
     Decision,
     DecisionStatus,
@@ -39,6 +37,7 @@ from cyborg.motivator.logic import (
     should_reset,
     waiting_for_handover,
 )
+from cyborg.motivator.store import ControllerStore
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Node
 from cyborg.transport.clock import Periodic
@@ -71,20 +70,6 @@ def decision_json(decision: Decision, state: str | None) -> str:
     )
 
 
-def controller_busy(controller: Controller) -> Callable[[], bool]:
-    """A check for :class:`Motivator`: true unless ``controller`` is running a module that has not finished.
-
-    It covers what the event topic does not show: the cancel wait, entering a state, and a
-    module's result (succeeded / aborted) that is about to become a handover.
-    """
-
-    def busy() -> bool:
-        status = controller.goal_status
-        return controller.phase is not Phase.ACTIVE or (status is not None and status.is_terminal)
-
-    return busy
-
-
 @dataclass(frozen=True)
 class _Handover:
     event: str
@@ -103,7 +88,7 @@ class _Sent:
 class Motivator:
     """Chooses motivational events on a timer; counts what it chose.
 
-    ``controller_busy`` (see :func:`controller_busy`) lets a motivator in the controller's
+    ``controller_busy`` (see :func:`cyborg.app.robot.controller_busy`) lets a motivator in the controller's
     process also wait for handovers it cannot see on the topics.
     """
 

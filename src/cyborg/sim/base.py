@@ -19,7 +19,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from cyborg.errors import PlanningError
-from cyborg.sim.maps import NamedPose, OccupancyMap, Point
+from cyborg.maps import NamedPose, OccupancyMap, Point
 from cyborg.sim.planner import RoutePlanner
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Node, ServerGoalHandle

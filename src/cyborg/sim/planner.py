@@ -1,6 +1,6 @@
-"""Route planning for the simulated robot base on an :class:`~cyborg.sim.maps.OccupancyMap`.
+"""Route planning for the simulated robot base on an :class:`~cyborg.maps.OccupancyMap`.
 
-Part of the simulation layer, between the map (:mod:`cyborg.sim.maps`) and the
+Part of the simulation layer, between the map (:mod:`cyborg.maps`) and the
 simulated base that drives along the result. At construction the planner grows
 every wall and keep-out zone by the robot's radius and labels the connected
 free areas; a query then asks ``pyastar2d`` (A* in C++) for a grid path and
@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from scipy import ndimage
 
 from cyborg.errors import PlanningError
-from cyborg.sim.maps import Cell, KeepOutZone, NamedPose, OccupancyMap, Point, segment_cells
+from cyborg.maps import Cell, KeepOutZone, NamedPose, OccupancyMap, Point, segment_cells
 
 Location = Point | NamedPose
 """Where a route starts or ends: a world point in metres, or a named pose from the map."""

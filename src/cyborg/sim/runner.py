@@ -10,8 +10,8 @@ from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import Any
 
-from cyborg.controller.config import LoadedConfig
-from cyborg.sim.robot import Robot, build_robot
+from cyborg.app.config import LoadedConfig
+from cyborg.app.robot import Robot, build_robot
 from cyborg.storage import lock_data_dir
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Transport

@@ -19,10 +19,10 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import IO
 
-from cyborg.controller.config import LoadedConfig
+from cyborg.app.config import LoadedConfig
+from cyborg.app.robot import Robot, build_robot
 from cyborg.errors import ConfigError, CyborgError
 from cyborg.sim.records import Record, RecordStream
-from cyborg.sim.robot import Robot, build_robot
 from cyborg.sim.script import CalendarEntry, Match, Script, Step, check_against
 from cyborg.storage import lock_data_dir
 from cyborg.transport import topics

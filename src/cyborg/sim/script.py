@@ -157,7 +157,7 @@ class Script(BaseModel):
 
 def _item_lines(text: str, key: str) -> list[int]:
     """Line numbers (1-based) of each entry of the top-level list ``key`` (``steps``, ``calendar``)."""
-    from cyborg.controller.config import yaml_loader
+    from cyborg.app.config import yaml_loader
 
     try:
         root = yaml.compose(text, Loader=yaml_loader(text))
@@ -201,7 +201,7 @@ def check_against(script: Script, events: set[str], emotions: set[str]) -> None:
 
 def load_script(path: str | Path) -> Script:
     path = Path(path)
-    from cyborg.controller.config import read_text_file
+    from cyborg.app.config import read_text_file
 
     try:
         text = read_text_file(path)
@@ -213,7 +213,7 @@ def load_script(path: str | Path) -> Script:
 
 
 def parse_script(text: str, source: str = "<script>") -> Script:
-    from cyborg.controller.config import load_yaml
+    from cyborg.app.config import load_yaml
 
     data = load_yaml(text, source)
     if not isinstance(data, dict):

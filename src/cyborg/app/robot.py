@@ -14,13 +14,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from cyborg.controller.config import LoadedConfig
-from cyborg.controller.runtime import Controller
-from cyborg.emotion.store import ControllerStore
+from cyborg.app.config import LoadedConfig
+from cyborg.app.kinds import MODULE_KINDS, ModuleKind, parse_module_settings
+from cyborg.controller.runtime import Controller, Phase
 from cyborg.emotion.system import EmotionSystem
 from cyborg.modules.gatekeeper import Gatekeeper
-from cyborg.motivator.component import Motivator, controller_busy
-from cyborg.sim.kinds import MODULE_KINDS, ModuleKind, parse_module_settings
+from cyborg.motivator.component import Motivator
+from cyborg.motivator.store import ControllerStore
 from cyborg.transport.base import Transport
 
 log = logging.getLogger(__name__)
@@ -47,7 +47,7 @@ class Robot:
     def occupancy_map(self) -> Any:
         """The map of the simulated world (``--map`` or the packaged campus), loaded once."""
         if self._map is None:
-            from cyborg.sim.maps import default_map_path, load_map
+            from cyborg.maps import default_map_path, load_map
 
             self._map = load_map(self.map_path or default_map_path())
         return self._map
@@ -154,3 +154,17 @@ def _served_actions(robot: Robot) -> set[str]:
         servers = getattr(component, "servers", {})
         served.update(name.lstrip("/") for name in servers)
     return served
+
+
+def controller_busy(controller: Controller) -> Callable[[], bool]:
+    """A check for :class:`Motivator`: true unless ``controller`` is running a module that has not finished.
+
+    It covers what the event topic does not show: the cancel wait, entering a state, and a
+    module's result (succeeded / aborted) that is about to become a handover.
+    """
+
+    def busy() -> bool:
+        status = controller.goal_status
+        return controller.phase is not Phase.ACTIVE or (status is not None and status.is_terminal)
+
+    return busy

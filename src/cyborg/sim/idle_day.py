@@ -13,8 +13,8 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from cyborg.controller.config import parse_config
-from cyborg.sim.robot import build_robot
+from cyborg.app.config import parse_config
+from cyborg.app.robot import build_robot
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo
 from cyborg.transport.clock import VirtualClock

@@ -274,7 +274,7 @@ def load_map_server(yaml_path: str | Path) -> OccupancyMap:
 
 
 def _read_map_server_yaml(yaml_path: Path) -> dict[str, Any]:
-    from cyborg.controller.config import load_yaml, read_text_file
+    from cyborg.app.config import load_yaml, read_text_file
 
     try:
         raw = load_yaml(read_text_file(yaml_path), str(yaml_path))

@@ -352,10 +352,10 @@ def import_ics_command(ctx: click.Context, file: Path, default_location: str | N
 
 def _map_loader() -> Callable[[Path], Any]:
     try:
-        from cyborg.sim.maps import load_map
+        from cyborg.maps import load_map
     except ImportError as exc:
         raise InputError(
-            f"the map reader cyborg.sim.maps is not available ({exc}); "
+            f"the map reader cyborg.maps is not available ({exc}); "
             "update cyborg, or add the locations with `cyborg db locations add`"
         ) from exc
     return load_map

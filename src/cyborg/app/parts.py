@@ -15,12 +15,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from cyborg.controller.config import LoadedConfig
+from cyborg.app.config import LoadedConfig
+from cyborg.app.kinds import MODULE_KINDS, parse_module_settings
+from cyborg.app.robot import build_controller
 from cyborg.controller.runtime import Controller
 from cyborg.errors import ConfigError
 from cyborg.modules.gatekeeper import Gatekeeper
-from cyborg.sim.kinds import MODULE_KINDS, parse_module_settings
-from cyborg.sim.robot import build_controller
 from cyborg.transport.base import Transport
 
 log = logging.getLogger(__name__)
@@ -43,7 +43,7 @@ class NodeContext:
 
     def occupancy_map(self) -> Any:
         if self._map is None:
-            from cyborg.sim.maps import default_map_path, load_map
+            from cyborg.maps import default_map_path, load_map
 
             self._map = load_map(self.map_path or default_map_path())
         return self._map

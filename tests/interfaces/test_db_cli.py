@@ -11,9 +11,9 @@ from zoneinfo import ZoneInfo
 import pytest
 from click.testing import CliRunner, Result
 
-from cyborg.navigation import db_cli
+from cyborg.interfaces import db_cli
+from cyborg.interfaces.db_cli import db_group
 from cyborg.navigation.database import NavigationDatabase, ResponseType
-from cyborg.navigation.db_cli import db_group
 
 
 @pytest.fixture
@@ -244,10 +244,10 @@ def test_import_map_without_the_map_module_exits_2(
 ) -> None:
     map_file = tmp_path / "x.map"
     map_file.write_text("")
-    monkeypatch.setitem(sys.modules, "cyborg.sim.maps", None)  # makes the import fail
+    monkeypatch.setitem(sys.modules, "cyborg.maps", None)  # makes the import fail
     result = run(db_path, "import-map", str(map_file))
     assert result.exit_code == 2
-    assert "cyborg.sim.maps is not available" in result.output
+    assert "cyborg.maps is not available" in result.output
 
 
 def test_default_path_follows_cyborg_data_dir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -261,7 +261,7 @@ def test_default_path_follows_cyborg_data_dir(tmp_path: Path, monkeypatch: pytes
 
 
 def test_import_map_reads_goals_of_a_real_arnl_map(db_path: Path, tmp_path: Path) -> None:
-    pytest.importorskip("cyborg.sim.maps")
+    pytest.importorskip("cyborg.maps")
     map_file = tmp_path / "hall.map"
     map_file.write_text(
         "2D-Map\nMinPos: 0 0\nMaxPos: 10000 5000\n"

@@ -21,12 +21,13 @@ import logging
 import math
 import sqlite3
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 
 from pydantic import ValidationError
 
 from cyborg.emotion.model import DIMENSIONS, PAD, clamp
+from cyborg.emotion.system import StoredEmotion
 from cyborg.motivator.logic import MotivationalEvent
 from cyborg.storage import NotSaved, SaveStatus, SQLiteFile, Unusable, transaction
 from cyborg.transport.clock import Clock, Periodic
@@ -64,15 +65,6 @@ _COLUMNS: dict[str, list[str]] = {
         "event_cost",
     ],
 }
-
-
-@dataclass(frozen=True)
-class StoredEmotion:
-    """The persisted PAD point, the wall time of its last update and the on/off switch."""
-
-    pad: PAD
-    updated_at: float | None
-    enabled: bool
 
 
 Write = Callable[[sqlite3.Connection], object]
