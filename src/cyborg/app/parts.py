@@ -1,52 +1,39 @@
-"""Run one part of the robot as its own process: a ROS node (``cyborg node NAME``).
+"""Build one part of the robot for its own process: a ROS node (``cyborg node NAME``).
 
 Parts: ``cyborg_controller`` (state machine, emotion system and motivator, as in
 the thesis), every module of the YAML's ``modules:`` section by its node name,
 every gatekeeper by its name, and ``cyborg_api`` (the HTTP API and dashboard).
-``cyborg launch`` starts them all, one process each.
+``cyborg launch`` starts them all, one process each. A part is built from the same
+pieces as the in-process robot (:mod:`cyborg.app.robot`), and a module's part imports
+only its own kind.
 """
 
 from __future__ import annotations
 
-import logging
-import random
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 from cyborg.app.config import LoadedConfig
-from cyborg.app.kinds import MODULE_KINDS, parse_module_settings
-from cyborg.app.robot import build_controller
+from cyborg.app.registry import KindRegistry, module_kinds
+from cyborg.app.robot import BuildPlace, build_controller, build_gatekeeper, calendar_of
 from cyborg.controller.runtime import Controller
 from cyborg.errors import ConfigError
-from cyborg.modules.gatekeeper import Gatekeeper
+from cyborg.modules.kind import CalendarEntry, Component
 from cyborg.transport.base import Transport
 
-log = logging.getLogger(__name__)
+__all__ = ["API", "CONTROLLER", "NodeContext", "Part", "build_part", "part_names"]
 
 CONTROLLER = "cyborg_controller"
 API = "cyborg_api"
 
 
 @dataclass
-class NodeContext:
-    """The BuildContext of one process."""
+class NodeContext(BuildPlace):
+    """The build context of one process."""
 
-    data_dir: Path
-    rng: random.Random
-    map_path: Path | None = None
-    calendar: Callable[[Any], None] | None = None
     resume: bool = True
     """The controller takes over an emotion stored recently (``cyborg node`` without ``--fresh``)."""
-    _map: Any = field(default=None, repr=False)
-
-    def occupancy_map(self) -> Any:
-        if self._map is None:
-            from cyborg.maps import default_map_path, load_map
-
-            self._map = load_map(self.map_path or default_map_path())
-        return self._map
 
 
 def part_names(config: LoadedConfig) -> list[str]:
@@ -56,13 +43,33 @@ def part_names(config: LoadedConfig) -> list[str]:
 
 @dataclass
 class Part:
+    """The components of one process; the controller's is also in ``controller``."""
+
     name: str
-    components: list[object]
+    components: list[Component] = field(default_factory=list)
     controller: Controller | None = None
     stop: Callable[[], Any] | None = None
 
+    @property
+    def calendar(self) -> Callable[[CalendarEntry], None] | None:
+        """Adds a calendar entry to this part's module that keeps the calendar, if any."""
+        return calendar_of(self.components)
 
-def build_part(name: str, config: LoadedConfig, transport: Transport, context: NodeContext) -> Part:
+    def close(self) -> None:
+        """Close every component and shut its node down."""
+        for component in self.components:
+            component.close()
+            component.node.shutdown()
+
+
+def build_part(
+    name: str,
+    config: LoadedConfig,
+    transport: Transport,
+    context: NodeContext,
+    *,
+    kinds: KindRegistry | None = None,
+) -> Part:
     """Build the components of part ``name`` on ``transport`` (not started)."""
     model = config.model
     if name == CONTROLLER:
@@ -71,14 +78,11 @@ def build_part(name: str, config: LoadedConfig, transport: Transport, context: N
         )
         return Part(name, [controller, emotion, motivator], controller=controller)
     if name in model.modules:
-        kind, settings = parse_module_settings(name, model.modules[name], MODULE_KINDS, config.source)
+        kind, settings = (kinds or module_kinds()).parse(name, model.modules[name], source=config.source)
         return Part(name, [kind.build(transport.node(name), settings, context)])
-    for gate in model.gatekeepers:
-        if gate.name == name:
-            keeper = Gatekeeper(
-                transport.node(name), input_topic=gate.input, output_topic=gate.output, resource=gate.resource
-            )
-            return Part(name, [keeper])
+    keeper = build_gatekeeper(config, transport, name)
+    if keeper is not None:
+        return Part(name, [keeper])
     if name == API:
         return Part(name, [])  # built by the interface layer, which owns the HTTP server
     raise ConfigError(

@@ -1,34 +1,62 @@
-"""Assemble a robot from a configuration: the controller plus its modules.
+"""Build the in-process robot from its configuration: the controller trio plus its modules.
 
-This is where the layers meet: it builds the controller and every module the
-YAML's ``modules:`` section names, on one transport and one clock. ``cyborg
-sim`` runs the result; tests build it on a virtual clock.
+Every part runs on one transport and one clock: the controller, emotion system and
+motivator with their store (:func:`build_controller`), each module of the YAML's
+``modules:`` section (its kind found in the :class:`~cyborg.app.registry.KindRegistry`)
+and each gatekeeper. ``cyborg sim`` runs the result; tests build it on a virtual clock.
+The ROS nodes are built from the same pieces, one part per process (:mod:`cyborg.app.parts`).
 """
 
 from __future__ import annotations
 
 import logging
 import random
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from cyborg.app.config import LoadedConfig
-from cyborg.app.kinds import MODULE_KINDS, ModuleKind, parse_module_settings
+from cyborg.app.registry import KindRegistry, module_kinds
+from cyborg.app.view import BaseView
 from cyborg.controller.runtime import Controller, Phase
 from cyborg.emotion.system import EmotionSystem
 from cyborg.modules.gatekeeper import Gatekeeper
+from cyborg.modules.kind import CalendarEntry, Component, KeepsCalendar, ServesStates
 from cyborg.motivator.component import Motivator
 from cyborg.motivator.store import ControllerStore
+from cyborg.storage import SaveStatus
 from cyborg.transport.base import Transport
 
+if TYPE_CHECKING:
+    from cyborg.maps import OccupancyMap
+
 log = logging.getLogger(__name__)
+
+__all__ = ["BuildPlace", "Robot", "build_controller", "build_gatekeeper", "build_robot", "controller_busy"]
+
+
+@dataclass
+class BuildPlace:
+    """What module factories may use besides their node (a :class:`~cyborg.modules.kind.BuildContext`)."""
+
+    data_dir: Path
+    rng: random.Random = field(default_factory=lambda: random.Random(0))
+    map_path: Path | None = None
+    _map: OccupancyMap | None = field(default=None, repr=False)
+
+    def occupancy_map(self) -> OccupancyMap:
+        """The map of the world (``--map`` or the packaged campus), loaded once."""
+        if self._map is None:
+            from cyborg.maps import default_map_path, load_map
+
+            self._map = load_map(self.map_path or default_map_path())
+        return self._map
 
 
 @dataclass
 class Robot:
-    """Everything running on one transport."""
+    """Everything running on one transport: the controller trio, the modules and the gatekeepers."""
 
     transport: Transport
     config: LoadedConfig
@@ -36,35 +64,75 @@ class Robot:
     emotion: EmotionSystem
     motivator: Motivator
     store: ControllerStore
-    data_dir: Path
-    rng: random.Random
-    map_path: Path | None = None
-    components: dict[str, object] = field(default_factory=dict)
-    calendar: Callable[[Any], None] | None = None  # set by the navigation module: adds a calendar entry
+    place: BuildPlace
+    components: dict[str, Component] = field(default_factory=dict)
+    """Modules and gatekeepers by node name."""
 
-    _map: Any = None
+    @property
+    def data_dir(self) -> Path:
+        return self.place.data_dir
 
-    def occupancy_map(self) -> Any:
-        """The map of the simulated world (``--map`` or the packaged campus), loaded once."""
-        if self._map is None:
-            from cyborg.maps import default_map_path, load_map
+    @property
+    def rng(self) -> random.Random:
+        return self.place.rng
 
-            self._map = load_map(self.map_path or default_map_path())
-        return self._map
+    def occupancy_map(self) -> OccupancyMap:
+        return self.place.occupancy_map()
+
+    @property
+    def calendar(self) -> Callable[[CalendarEntry], None] | None:
+        """Adds a calendar entry to the module that keeps the calendar (None if none does)."""
+        return calendar_of(self.components.values())
 
     def start(self) -> None:
         self.controller.start()
 
-    def close(self) -> None:
-        """Stop the periodic work of the modules, the motivator and the emotion system, then close
-        the store (it makes a last try to write what a failing disk left in memory)."""
+    # --- the RobotView the dashboard reads (cyborg.app.view) --------------------------------
+
+    def emotion_enabled(self) -> bool:
+        return self.emotion.enabled
+
+    def save_status(self) -> SaveStatus:
+        return self.store.save_status
+
+    def base(self) -> BaseView | None:
         for component in self.components.values():
-            close = getattr(component, "close", None)
-            if callable(close):
-                close()
-        self.motivator.close()
-        self.emotion.close()
+            if isinstance(component, BaseView):
+                return component
+        return None
+
+    def module_actions(self) -> dict[str, list[str]]:
+        return {
+            name: sorted(action.lstrip("/") for action in component.servers)
+            if isinstance(component, ServesStates)
+            else []
+            for name, component in self.components.items()
+        }
+
+    def close(self) -> None:
+        """Close every component (modules, gatekeepers, then the controller trio), shut their
+        nodes down, and close the store (it makes a last try to write what a failing disk left)."""
+        trio: list[Component] = [self.motivator, self.emotion, self.controller]
+        for component in [*self.components.values(), *trio]:
+            try:
+                component.close()
+            except Exception:
+                log.exception("closing %s failed; closing the rest", component.node.name)
+            component.node.shutdown()
         self.store.close()
+
+
+def calendar_of(components: Iterable[object]) -> Callable[[CalendarEntry], None] | None:
+    """The calendar of the first component that keeps one."""
+    for component in components:
+        if isinstance(component, KeepsCalendar):
+            return component.add_calendar_entry
+    return None
+
+
+def served_actions(components: Iterable[object]) -> set[str]:
+    """The action names (without leading slash) the components serve."""
+    return {name.lstrip("/") for c in components if isinstance(c, ServesStates) for name in c.servers}
 
 
 def build_controller(
@@ -98,6 +166,16 @@ def build_controller(
     return store, controller, emotion, motivator
 
 
+def build_gatekeeper(config: LoadedConfig, transport: Transport, name: str) -> Gatekeeper | None:
+    """The gatekeeper called ``name`` of ``config`` on its own node, or None if there is none."""
+    for gate in config.model.gatekeepers:
+        if gate.name == name:
+            return Gatekeeper(
+                transport.node(name), input_topic=gate.input, output_topic=gate.output, resource=gate.resource
+            )
+    return None
+
+
 def build_robot(
     config: LoadedConfig,
     transport: Transport,
@@ -105,37 +183,34 @@ def build_robot(
     data_dir: Path,
     rng: random.Random | None = None,
     map_path: Path | None = None,
-    kinds: dict[str, ModuleKind] | None = None,
+    kinds: KindRegistry | None = None,
 ) -> Robot:
-    """Create the controller (state machine, emotion system, motivator) and the configured modules.
+    """Create the controller (state machine, emotion system, motivator), the configured modules and
+    the gatekeepers. ``kinds`` defaults to every installed kind (:func:`module_kinds`).
 
     ``data_dir`` holds the databases (created on first use). Nothing runs until ``start()``.
     """
-    factories = {**MODULE_KINDS, **(kinds or {})}
-    settings = config.model
+    registry = kinds or module_kinds()
     store, controller, emotion, motivator = build_controller(config, transport, data_dir)
-    robot = Robot(
-        transport=transport,
-        config=config,
-        controller=controller,
-        emotion=emotion,
-        motivator=motivator,
-        store=store,
-        data_dir=data_dir,
-        rng=rng or random.Random(0),
-        map_path=map_path,
-    )
-    for name, raw in config.model.modules.items():
-        kind, module_settings = parse_module_settings(name, raw, factories, config.source)
-        robot.components[name] = kind.build(transport.node(name), module_settings, robot)
-    for gate in settings.gatekeepers:
-        robot.components[gate.name] = Gatekeeper(
-            transport.node(gate.name),
-            input_topic=gate.input,
-            output_topic=gate.output,
-            resource=gate.resource,
-        )
-    served = _served_actions(robot)
+    place = BuildPlace(data_dir=data_dir, rng=rng or random.Random(0), map_path=map_path)
+    robot = Robot(transport, config, controller, emotion, motivator, store, place)
+    try:
+        for name, raw in config.model.modules.items():
+            kind, settings = registry.parse(name, raw, source=config.source)
+            robot.components[name] = kind.build(transport.node(name), settings, place)
+        for gate in config.model.gatekeepers:
+            keeper = build_gatekeeper(config, transport, gate.name)
+            assert keeper is not None
+            robot.components[gate.name] = keeper
+    except BaseException:
+        robot.close()  # what was built so far: no timer or database left open
+        raise
+    warn_unserved(config, served_actions(robot.components.values()))
+    return robot
+
+
+def warn_unserved(config: LoadedConfig, served: set[str]) -> None:
+    """Log each state whose action no configured module serves (an external module may)."""
     for leaf in config.machine.leaves():
         assert leaf.action is not None
         if leaf.action.lstrip("/") not in served:
@@ -145,15 +220,6 @@ def build_robot(
                 leaf.action,
                 leaf.name,
             )
-    return robot
-
-
-def _served_actions(robot: Robot) -> set[str]:
-    served: set[str] = set()
-    for component in robot.components.values():
-        servers = getattr(component, "servers", {})
-        served.update(name.lstrip("/") for name in servers)
-    return served
 
 
 def controller_busy(controller: Controller) -> Callable[[], bool]:

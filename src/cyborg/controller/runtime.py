@@ -113,6 +113,11 @@ class Controller:
             self._task.add_done_callback(self._on_task_done)
         return self._task
 
+    def close(self) -> None:
+        """Stop handling events; the module in control keeps its goal (the robot is being stopped)."""
+        if self._task is not None and not self._task.done():
+            self._task.cancel()
+
     def _on_task_done(self, task: asyncio.Task[None]) -> None:
         if not task.cancelled() and (error := task.exception()) is not None:
             log.critical(

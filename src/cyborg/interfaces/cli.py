@@ -37,17 +37,10 @@ def _load(path: Path | None) -> LoadedConfig:
 
 
 def check_modules(loaded: LoadedConfig) -> None:
-    """Validate the ``modules:`` section against the known module kinds."""
-    from cyborg.app.kinds import MODULE_KINDS, parse_module_settings
+    """Validate the ``modules:`` section against the installed module kinds."""
+    from cyborg.app.registry import module_kinds
 
-    problems: list[str] = []
-    for name, raw in loaded.model.modules.items():
-        try:
-            parse_module_settings(name, raw, MODULE_KINDS, loaded.source)
-        except ConfigError as exc:
-            problems.extend(exc.problems)
-    if problems:
-        raise ConfigError(problems, source=loaded.source)
+    module_kinds().check(loaded.model.modules, source=loaded.source)
 
 
 def _fail(exc: CyborgError) -> None:

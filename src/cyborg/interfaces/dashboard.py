@@ -17,7 +17,7 @@ import itertools
 import math
 import struct
 import zlib
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -25,10 +25,11 @@ import numpy as np
 from aiohttp import web
 from numpy.typing import NDArray
 
-from cyborg.app.robot import Robot
+from cyborg.app.view import BaseStatus, RobotView
+from cyborg.errors import InvalidValueError
 from cyborg.interfaces.api import RobotAPI
 from cyborg.maps import Cell, OccupancyMap
-from cyborg.storage import SaveStatus
+from cyborg.transport.messages import SystemState
 
 STATIC_DIR = Path(__file__).resolve().parent / "static"
 BASE_NODE = "rosarnl_node"
@@ -49,9 +50,11 @@ MAP_COLOURS: dict[Cell, tuple[int, int, int, int]] = {
 def png_bytes(grid: NDArray[np.uint8], palette: Sequence[tuple[int, int, int, int]]) -> bytes:
     """Encode a 2-D array of palette indices (top row first) as an indexed-colour PNG."""
     if grid.ndim != 2 or grid.size == 0:
-        raise ValueError(f"png_bytes needs a non-empty 2-D array, got shape {grid.shape}")
+        raise InvalidValueError(f"png_bytes needs a non-empty 2-D array, got shape {grid.shape}")
     if not 0 < len(palette) <= 256 or int(grid.max()) >= len(palette):
-        raise ValueError(f"grid values reach {int(grid.max())} but the palette has {len(palette)} colours")
+        raise InvalidValueError(
+            f"grid values reach {int(grid.max())} but the palette has {len(palette)} colours"
+        )
     height, width = grid.shape
     rows = np.zeros((height, width + 1), dtype=np.uint8)  # a filter-type byte (0: none) before each row
     rows[:, 1:] = grid
@@ -111,26 +114,22 @@ def _finite(value: Any) -> float | None:
     return round(number, 3) if math.isfinite(number) else None
 
 
-def route_points(route: Any) -> list[list[float]] | None:
-    """A route as ``[[x, y], ...]``: accepts a list of (x, y) pairs or an object with ``waypoints``."""
+def route_points(route: Iterable[Sequence[float]] | None) -> list[list[float]] | None:
+    """A route as ``[[x, y], ...]`` (points that are not finite are left out)."""
     if route is None:
         return None
-    waypoints: Iterable[Any] = getattr(route, "waypoints", route)
     points: list[list[float]] = []
-    try:
-        for point in waypoints:
-            x, y = _finite(point[0]), _finite(point[1])
-            if x is not None and y is not None:
-                points.append([x, y])
-    except (TypeError, IndexError, KeyError):
-        return None
+    for point in route:
+        x, y = _finite(point[0]), _finite(point[1])
+        if x is not None and y is not None:
+            points.append([x, y])
     return points
 
 
 class Dashboard:
     """The dashboard's routes for one robot and its API."""
 
-    def __init__(self, api: RobotAPI, robot: Robot) -> None:
+    def __init__(self, api: RobotAPI, robot: RobotView) -> None:
         self.api = api
         self.robot = robot
         self.clock = robot.controller.node.clock
@@ -154,11 +153,7 @@ class Dashboard:
     # --- bookkeeping ----------------------------------------------------------------------
 
     def _modules_by_action(self) -> dict[str, str]:
-        found: dict[str, str] = {}
-        for name, component in self.robot.components.items():
-            for action in getattr(component, "servers", {}) or {}:
-                found[str(action).lstrip("/")] = name
-        return found
+        return {action: name for name, actions in self.robot.module_actions().items() for action in actions}
 
     def _module_of_state(self, state: str | None) -> str | None:
         if not state or state not in self.robot.config.machine.states:
@@ -166,60 +161,36 @@ class Dashboard:
         action = self.robot.config.machine.states[state].action
         return self._module_of.get(action.lstrip("/")) if action else None
 
-    def _on_state_change(self, change: Any) -> None:
+    def _on_state_change(self, change: SystemState) -> None:
         now = self.clock.monotonic()
-        left = self._module_of_state(getattr(change, "from_system_state", None))
+        left = self._module_of_state(change.from_system_state)
         if left is not None:
             self.left_at[left] = now
         self.state_since = now
 
-    def _base(self) -> Any:
-        """The simulated base component, if this robot has one."""
-        base = self.robot.components.get(BASE_NODE)
-        if base is not None:
-            return base
-        for component in self.robot.components.values():
-            if isinstance(getattr(component, "map", None), OccupancyMap):
-                return component
-        return None
-
     def _map(self) -> OccupancyMap | None:
-        occupancy = getattr(self._base(), "map", None)
-        return occupancy if isinstance(occupancy, OccupancyMap) else None
-
-    def _emotion_enabled(self) -> bool | None:
-        """Whether the emotion system is on; None where that is not known (see remote.EmotionSwitchMirror)."""
-        enabled = getattr(self.robot.emotion, "enabled", True)
-        return None if enabled is None else bool(enabled)
+        base = self.robot.base()
+        return base.map if base is not None else None
 
     def _storage(self) -> dict[str, Any] | None:
         """Whether the robot's data is being saved (see storage.SaveStatus); None where not known."""
-        store = getattr(self.robot, "store", None)
-        status = getattr(store, "save_status", None)
-        return status.as_json() if isinstance(status, SaveStatus) else None
+        status = self.robot.save_status()
+        return status.as_json() if status is not None else None
 
     def _motivator_settings(self) -> dict[str, Any]:
         """The configured selection rule and rate, which the page shows with the motivator's decisions."""
-        settings = getattr(getattr(self.robot.config, "model", None), "motivator", None)
-        rule = getattr(settings, "selection", None)
-        return {
-            "selection": getattr(rule, "value", rule),
-            "rate_seconds": _finite(getattr(settings, "rate_seconds", None)),
-        }
+        settings = self.robot.config.model.motivator
+        return {"selection": settings.selection.value, "rate_seconds": _finite(settings.rate_seconds)}
 
-    def _last_feedback_at(self, name: str, component: object, servers: Sequence[str]) -> float | None:
-        """When module ``name`` last sent feedback, in clock seconds (``clock.now()``), if anything says.
-
-        Read from the controller's ``last_feedback_at`` (a mapping by module name or action name)
-        or from the module's own ``last_feedback_at``; None if neither knows.
-        """
-        known = getattr(self.robot.controller, "last_feedback_at", None)
-        if isinstance(known, Mapping):
-            for key in (name, *servers, *(f"/{server}" for server in servers)):
-                value = _finite(known.get(key))
-                if value is not None:
-                    return value
-        return _finite(getattr(component, "last_feedback_at", None))
+    def _last_feedback_at(self, name: str, servers: Sequence[str]) -> float | None:
+        """When module ``name`` last sent feedback, in clock seconds (``clock.now()``), if the controller
+        says (by module name or action name); None if it does not."""
+        known = self.robot.controller.last_feedback_at
+        for key in (name, *servers, *(f"/{server}" for server in servers)):
+            value = _finite(known.get(key))
+            if value is not None:
+                return value
+        return None
 
     def _robot_time(self) -> float:
         """Seconds since the API's record stream started: the ``t`` of records."""
@@ -247,8 +218,8 @@ class Dashboard:
         active_module = self._module_of_state(controller.active_state)
         goal = controller.goal_status
         modules = []
-        for name, component in self.robot.components.items():
-            servers = sorted(str(action).lstrip("/") for action in getattr(component, "servers", {}) or {})
+        for name, actions in self.robot.module_actions().items():
+            servers = sorted(actions)
             states = [
                 st.name
                 for st in self.robot.config.machine.states.values()
@@ -265,7 +236,7 @@ class Dashboard:
                 if active
                 else (round(now - left, 1) if left is not None else None),
             }
-            feedback_at = self._last_feedback_at(name, component, servers)
+            feedback_at = self._last_feedback_at(name, servers)
             if feedback_at is not None:
                 module["last_feedback_at"] = feedback_at
                 module["seconds_since_feedback"] = round(max(0.0, self.clock.now() - feedback_at), 1)
@@ -282,7 +253,7 @@ class Dashboard:
                 "active_module": active_module,
                 "seconds_in_state": round(now - self.state_since, 2),
                 "stats": dataclasses.asdict(controller.stats),
-                "emotion_enabled": self._emotion_enabled(),
+                "emotion_enabled": self.robot.emotion_enabled(),
                 "storage": self._storage(),
                 "motivator": self._motivator_settings(),
                 "has_base": self._map() is not None,
@@ -345,12 +316,12 @@ class Dashboard:
         )
 
     async def route(self, request: web.Request) -> web.Response:
-        base = self._base()
-        if self._map() is None:
+        base = self.robot.base()
+        if base is None:
             return web.json_response({"error": NO_BASE, "has_base": False}, status=404)
-        pose = self._pose(base)
-        planned = route_points(getattr(base, "route", None))
-        path_state = getattr(base, "path_state", None)
+        status = base.status()
+        pose = self._pose(status)
+        planned = route_points(status.route)
         return web.json_response(
             {
                 "has_base": True,
@@ -360,18 +331,17 @@ class Dashboard:
                 "remaining": remaining_route(planned, (pose["x"], pose["y"]))
                 if planned and pose
                 else planned,
-                "path_state": getattr(path_state, "value", path_state),
-                "wandering": getattr(base, "wandering", None),
-                "distance_travelled": _finite(getattr(base, "distance_travelled", None)),
+                "path_state": status.path_state,
+                "wandering": status.wandering,
+                "distance_travelled": _finite(status.distance_travelled),
             }
         )
 
-    def _pose(self, base: Any) -> dict[str, float] | None:
+    def _pose(self, status: BaseStatus) -> dict[str, float] | None:
         """The base's live pose if it shows one, else the last pose record (those come at most 1/s)."""
-        live = [_finite(getattr(base, key, None)) for key in ("x", "y", "theta")]
-        if all(value is not None for value in live):
-            x, y, theta = (float(value) for value in live if value is not None)
-            return {"t": self._robot_time(), "x": x, "y": y, "theta": theta}
+        if status.has_pose:
+            assert status.x is not None and status.y is not None and status.theta is not None
+            return {"t": self._robot_time(), "x": status.x, "y": status.y, "theta": status.theta}
         record = next((r for r in reversed(self.api.records) if r["type"] == "pose"), None)
         return {k: record[k] for k in ("t", "x", "y", "theta")} if record else None
 
@@ -394,6 +364,6 @@ def remaining_route(route: list[list[float]], position: tuple[float, float]) -> 
     return ahead[1:] if len(ahead) > 1 and ahead[0] == ahead[1] else ahead
 
 
-def register(api: RobotAPI, robot: Robot) -> None:
+def register(api: RobotAPI, robot: RobotView) -> None:
     """Add the dashboard's page, static files and endpoints to ``api`` (an entry of serve.EXTENSIONS)."""
     api.app.add_routes(Dashboard(api, robot).routes())

@@ -16,14 +16,17 @@ import dataclasses
 import json
 import logging
 import math
-from dataclasses import dataclass, field
-from typing import Any
+from collections.abc import Callable
+from dataclasses import dataclass
 
 from cyborg.app.config import LoadedConfig
+from cyborg.app.view import BaseStatus, BaseView
 from cyborg.controller.runtime import Controller, ControllerStats, Phase
 from cyborg.errors import TransportError
+from cyborg.maps import OccupancyMap
+from cyborg.storage import SaveStatus
 from cyborg.transport import topics
-from cyborg.transport.base import MessageInfo, Node, Publisher
+from cyborg.transport.base import GoalStatus, MessageInfo, Node, Publisher
 from cyborg.transport.messages import PoseWithCovarianceStamped, String, SystemState
 
 log = logging.getLogger(__name__)
@@ -52,9 +55,10 @@ class ControllerMirror:
         self.active_state: str | None = None
         self.previous_state = ""
         self.last_event = ""
-        self.goal_status = None
+        self.goal_status: GoalStatus | None = None
         self.stats = ControllerStats()
-        self._listeners: list[Any] = []
+        self.last_feedback_at: dict[str, float] = {}  # not published under ROS
+        self._listeners: list[Callable[[SystemState], None]] = []
         node.subscribe(topics.STATE_CHANGE, SystemState, self._on_change, queue_size=1000)
         node.subscribe(topics.CONTROLLER_STATS, String, self._on_stats, queue_size=10)
 
@@ -62,7 +66,7 @@ class ControllerMirror:
     def phase(self) -> Phase:
         return Phase.ACTIVE if self.active_state else Phase.STOPPED
 
-    def add_state_listener(self, listener: Any) -> None:
+    def add_state_listener(self, listener: Callable[[SystemState], None]) -> None:
         self._listeners.append(listener)
 
     def _on_change(self, message: SystemState, info: MessageInfo) -> None:
@@ -108,13 +112,16 @@ class EmotionSwitchMirror:
 class BaseMirror:
     """Follows the base's pose and path state; ``map`` is loaded from the same file."""
 
-    def __init__(self, node: Node, occupancy_map: Any) -> None:
+    def __init__(self, node: Node, occupancy_map: OccupancyMap) -> None:
         self.map = occupancy_map
         self.x = self.y = self.theta = math.nan
-        self.route = None
         self.path_state: str | None = None
         node.subscribe(topics.AMCL_POSE, PoseWithCovarianceStamped, self._on_pose, queue_size=10)
         node.subscribe(topics.ARNL_PATH_STATE, String, self._on_path_state)
+
+    def status(self) -> BaseStatus:
+        """The last pose and path state heard (no route: ROSARNL does not publish it)."""
+        return BaseStatus(x=self.x, y=self.y, theta=self.theta, path_state=self.path_state)
 
     def _on_pose(self, message: PoseWithCovarianceStamped, info: MessageInfo) -> None:
         pose = message.pose.pose
@@ -128,16 +135,27 @@ class BaseMirror:
 
 @dataclass
 class RemoteRobot:
-    """The attributes of :class:`cyborg.app.robot.Robot` the dashboard reads."""
+    """The other nodes of a ROS robot as the dashboard reads them (a :class:`RobotView`)."""
 
     config: LoadedConfig
     controller: ControllerMirror
-    components: dict[str, object] = field(default_factory=dict)
-    emotion: Any = None
+    switch: EmotionSwitchMirror
+    base_mirror: BaseMirror | None = None
+
+    def emotion_enabled(self) -> bool | None:
+        return self.switch.enabled
+
+    def save_status(self) -> SaveStatus | None:
+        return None  # the store is the controller node's; it does not publish its state
+
+    def base(self) -> BaseView | None:
+        return self.base_mirror
+
+    def module_actions(self) -> dict[str, list[str]]:
+        return {"rosarnl_node": []} if self.base_mirror is not None else {}
 
 
-def remote_robot(node: Node, config: LoadedConfig, occupancy_map: Any | None) -> RemoteRobot:
-    robot = RemoteRobot(config=config, controller=ControllerMirror(node), emotion=EmotionSwitchMirror(node))
-    if occupancy_map is not None:
-        robot.components["rosarnl_node"] = BaseMirror(node, occupancy_map)
-    return robot
+def remote_robot(node: Node, config: LoadedConfig, occupancy_map: OccupancyMap | None) -> RemoteRobot:
+    """A mirror of the robot whose nodes run elsewhere, read over ``node``."""
+    base = BaseMirror(node, occupancy_map) if occupancy_map is not None else None
+    return RemoteRobot(config, ControllerMirror(node), EmotionSwitchMirror(node), base)

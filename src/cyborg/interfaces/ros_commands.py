@@ -312,8 +312,8 @@ def run_node(
                 for m in config.model.modules.values()
             )
             mirror = remote_robot(api_node, config, context.occupancy_map() if has_base else None)
-            api.extra_status = lambda: {"emotion_enabled": mirror.emotion.enabled}
-            dashboard.register(api, mirror)  # type: ignore[arg-type]
+            api.extra_status = lambda: {"emotion_enabled": mirror.emotion_enabled()}
+            dashboard.register(api, mirror)
             given = access is not None and access.token is not None
             url = await api.start(host, port)
             for text, colour in announcement(url, host, api.port or port, api.token, generated=not given):
@@ -364,6 +364,7 @@ class _ScenarioNode:
         from cyborg.sim.scenario import ScenarioDriver
         from cyborg.sim.script import load_script
 
+        self.node = node
         self.script = load_script(files.script)
         # With a transcript file the records go there as they come and none is kept (flat memory).
         self.driver = ScenarioDriver(node, self.script, keep_records=files.transcript is None)
@@ -382,6 +383,11 @@ class _ScenarioNode:
         assert self._out is not None
         self._out.write(json.dumps(record) + "\n")
         self._out.flush()
+
+    def close(self) -> None:
+        """Close the transcript (what was written stays)."""
+        if self._out is not None and not self._out.closed:
+            self._out.close()
 
     async def play(self) -> None:
         try:

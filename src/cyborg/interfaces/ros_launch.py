@@ -347,13 +347,16 @@ def prepare_calendar(config: LoadedConfig, data_dir: Path, map_path: Path | None
     context = NodeContext(data_dir=data_dir, rng=random.Random(0), map_path=map_path)
     clock = VirtualClock()
     transport = EmbeddedTransport(clock)
+    parts = []
     try:
         for name, raw in config.model.modules.items():
             if isinstance(raw, dict) and raw.get("kind") == "navigation":
-                build_part(name, config, transport, context)  # what the node will open
+                parts.append(build_part(name, config, transport, context))  # what the node will open
                 break
-        add_calendar(context.calendar, script)
+        add_calendar(parts[0].calendar if parts else None, script)
     finally:
+        for part in parts:
+            part.close()
         transport.shutdown()
         clock.close()
 

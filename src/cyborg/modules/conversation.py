@@ -7,14 +7,17 @@ states (joke, weather, selfie, follower, Simon says), each served by its own
 question module, which asks its question, waits for an answer and succeeds. A
 question left unanswered cools the robot down (less arousal: unconcerned, as in
 thesis 10.2.4); an answer pleases it. The conversation ends (succeeded) after a
-quiet spell.
+quiet spell. Registered as the module kinds ``conversation`` and ``question``.
 """
 
 from __future__ import annotations
 
 import re
 
+from pydantic import Field
+
 from cyborg.modules.helper import BehaviourModule, GoalContext
+from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
 from cyborg.transport.base import MessageInfo, Node
 
 GREETINGS = frozenset({"hello", "hi", "hey", "hallo", "hei", "greetings", "howdy", "yo"})
@@ -106,3 +109,36 @@ class QuestionModule(BehaviourModule):
         finally:
             self._asked_at = None
         self.send_emotion(*(self.answered_feedback if self._answered else self.unanswered_feedback))
+
+
+class ConversationSettings(ModuleSettings):
+    """Asks for the conversation state when someone greets the robot; ends after a quiet spell."""
+
+    action: str = Field(CONVERSATION_ACTION, description="action server of the conversation state")
+    quiet_seconds: float = Field(90.0, gt=0, description="seconds without speech that end the conversation")
+
+
+class QuestionSettings(ModuleSettings):
+    """Asks one question, waits for an answer, and tells the emotion system how it went."""
+
+    action: str = Field(description="action server of the question's state")
+    question: str = Field(min_length=1, description="what the robot asks")
+    answer_seconds: float = Field(6.0, ge=0, description="seconds it waits for an answer")
+    unanswered_feedback: tuple[float, float, float] = Field(
+        UNANSWERED_FEEDBACK, description="PAD change when nobody answers"
+    )
+    answered_feedback: tuple[float, float, float] = Field(
+        ANSWERED_FEEDBACK, description="PAD change when someone answers"
+    )
+
+
+def _conversation(node: Node, settings: ConversationSettings, context: BuildContext) -> ConversationModule:
+    return ConversationModule(node, quiet_seconds=settings.quiet_seconds, action=settings.action)
+
+
+def _question(node: Node, settings: QuestionSettings, context: BuildContext) -> QuestionModule:
+    return QuestionModule(node, **settings.model_dump())
+
+
+CONVERSATION_KIND = ModuleKind(ConversationSettings, _conversation)
+QUESTION_KIND = ModuleKind(QuestionSettings, _question)

@@ -57,6 +57,12 @@ class Gatekeeper:
         node.subscribe(topics.STATE_CHANGE, SystemState, self._on_state_change)
         node.subscribe(input_topic, msg_type, self._on_message, queue_size=100)
 
+    def close(self) -> None:
+        """Stop retrying to read the resources (the node's shutdown stops the relay)."""
+        if self._retry is not None:
+            self._retry.cancel()
+            self._retry = None
+
     def _on_state_change(self, message: SystemState, info: MessageInfo) -> None:
         if self._retry is not None:
             self._retry.cancel()

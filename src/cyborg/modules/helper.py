@@ -109,6 +109,12 @@ class StateServer:
     def active(self) -> bool:
         return self._current is not None and not self._current[0].status.is_terminal
 
+    def close(self) -> None:
+        """Stop the goal that runs (it ends as preempted) and withdraw the action server."""
+        if self._current is not None and not self._current[1].done():
+            self._current[1].cancel()
+        self.server.shutdown()
+
     def _on_goal(self, handle: _GoalHandle) -> None:
         self.goals_received += 1
         if self._current is not None:
@@ -191,6 +197,11 @@ class BehaviourModule:
         server = StateServer(self, name, execute, honour_cancel=honour_cancel)
         self.servers[name] = server
         return server
+
+    def close(self) -> None:
+        """Stop every goal this module runs and withdraw its action servers (see :class:`Component`)."""
+        for server in self.servers.values():
+            server.close()
 
     def publish_event(self, event: str) -> None:
         self._events.publish(String(data=event))

@@ -2,35 +2,48 @@
 
 While its state is active it sends a small negative PAD change every
 ``interval`` seconds (boredom), and stops the moment the controller preempts.
+Registered as the module kind ``idle``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from pydantic import Field
 
 from cyborg.modules.helper import BehaviourModule, GoalContext
+from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
 from cyborg.transport.base import Node
 
 IDLE_ACTION = "cyborg_idle/idle"
 
 
-@dataclass(frozen=True)
-class IdleSettings:
-    interval: float = 8.0
-    boredom: tuple[float, float, float] = (-0.05, -0.05, -0.05)
+class IdleSettings(ModuleSettings):
+    """The idle state (thesis 9.1): waits, sending a little boredom now and then."""
+
+    action: str = Field(IDLE_ACTION, description="action server of the idle state")
+    interval: float = Field(8.0, gt=0, description="seconds between two boredom feedbacks")
+    boredom: tuple[float, float, float] = Field(
+        (-0.05, -0.05, -0.05), description="PAD change sent every interval"
+    )
 
 
 class IdleModule(BehaviourModule):
-    def __init__(self, node: Node, settings: IdleSettings | None = None, action: str = IDLE_ACTION) -> None:
+    """Serves the idle state: sends ``boredom`` every ``interval`` seconds until preempted."""
+
+    def __init__(self, node: Node, settings: IdleSettings | None = None) -> None:
         super().__init__(node)
-        if settings is not None and settings.interval <= 0:
-            raise ValueError(f"idle interval must be positive, got {settings.interval}")
-        self.settings = settings or IdleSettings()
+        self.settings = settings or IdleSettings.model_validate({})
         self.feedback_sent = 0
-        self.serve(action, self.idle)
+        self.serve(self.settings.action, self.idle)
 
     async def idle(self, ctx: GoalContext) -> None:
         while True:
             await ctx.sleep(self.settings.interval)
             self.send_emotion(*self.settings.boredom)
             self.feedback_sent += 1
+
+
+def _build(node: Node, settings: IdleSettings, context: BuildContext) -> IdleModule:
+    return IdleModule(node, settings)
+
+
+KIND = ModuleKind(IdleSettings, _build)

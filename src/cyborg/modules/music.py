@@ -3,7 +3,7 @@
 The tune is synthesised into a WAV file (numpy + the standard ``wave``
 module). With an audio device and a player (aplay, paplay or ffplay) it is
 played for real; otherwise the state simply lasts the tune's duration on the
-injected clock.
+injected clock. Registered as the module kind ``music``.
 """
 
 from __future__ import annotations
@@ -17,8 +17,10 @@ import wave
 from pathlib import Path
 
 import numpy as np
+from pydantic import Field
 
 from cyborg.modules.helper import BehaviourModule, GoalContext
+from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
 from cyborg.modules.speech import audio_device_present
 from cyborg.transport.base import Node
 
@@ -115,3 +117,27 @@ class MusicModule(BehaviourModule):
             if process.returncode is None:
                 with contextlib.suppress(ProcessLookupError):
                     process.kill()
+                await process.wait()  # gone before the preemption is acknowledged, even on a loaded machine
+
+
+class MusicSettings(ModuleSettings):
+    """Plays a short generated tune (on the speakers when there are any); stops when preempted."""
+
+    action: str = Field(MUSIC_ACTION, description="action server of the music state")
+    play_audio: bool | None = Field(
+        None, description="play on the speakers (default: when an audio device is present)"
+    )
+    feedback: tuple[float, float, float] = Field(MUSIC_FEEDBACK, description="PAD change when a tune starts")
+
+
+def _build(node: Node, settings: MusicSettings, context: BuildContext) -> MusicModule:
+    return MusicModule(
+        node,
+        action=settings.action,
+        tune_dir=context.data_dir,
+        play_audio=settings.play_audio,
+        feedback=settings.feedback,
+    )
+
+
+KIND = ModuleKind(MusicSettings, _build)

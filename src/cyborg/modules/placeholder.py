@@ -4,14 +4,18 @@ A placeholder serves one state: it may say a sentence, stays in control for a
 while (or until preempted when no duration is given) and then succeeds. The
 demo modules and the thesis's joke/weather/selfie/follower/Simon-says states
 are placeholders; a student replaces one with a real module by starting a node
-that offers the same action server.
+that offers the same action server. Registered as the module kind ``placeholder``.
 """
 
 from __future__ import annotations
 
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 
+from pydantic import Field
+
 from cyborg.modules.helper import BehaviourModule, GoalContext
+from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
 from cyborg.transport.base import Node
 
 
@@ -35,7 +39,7 @@ class PlaceholderModule(BehaviourModule):
         for spec in specs:
             self.serve(spec.action, self._make_execute(spec), honour_cancel=spec.honour_cancel)
 
-    def _make_execute(self, spec: PlaceholderSpec):  # type: ignore[no-untyped-def]
+    def _make_execute(self, spec: PlaceholderSpec) -> Callable[[GoalContext], Awaitable[None]]:
         async def execute(ctx: GoalContext) -> None:
             if spec.emotion is not None:
                 self.send_emotion(*spec.emotion)
@@ -47,3 +51,32 @@ class PlaceholderModule(BehaviourModule):
                 await ctx.sleep(spec.duration)
 
         return execute
+
+
+class PlaceholderServer(ModuleSettings):
+    """One state a placeholder serves."""
+
+    action: str = Field(description="action server of the state")
+    say: str = Field("", description="sentence said when the state starts")
+    duration: float | None = Field(
+        None, ge=0, description="seconds in control before succeeding (none: until preempted)"
+    )
+    emotion: tuple[float, float, float] | None = Field(
+        None, description="PAD change sent when the state starts"
+    )
+    honour_cancel: bool = Field(
+        True, description="false: ignore the controller's cancel (to test its timeout)"
+    )
+
+
+class PlaceholderSettings(ModuleSettings):
+    """Serves states from YAML alone: say a sentence, stay a while, succeed (no code needed)."""
+
+    servers: list[PlaceholderServer] = Field(min_length=1, description="the states it serves, one entry each")
+
+
+def _build(node: Node, settings: PlaceholderSettings, context: BuildContext) -> PlaceholderModule:
+    return PlaceholderModule(node, [PlaceholderSpec(**server.model_dump()) for server in settings.servers])
+
+
+KIND = ModuleKind(PlaceholderSettings, _build)

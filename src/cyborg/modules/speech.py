@@ -5,6 +5,7 @@ and published on ``/cyborg_tts/spoken`` (what the robot actually said, after
 the gatekeeper). With an audio device it speaks through espeak-ng; it can also
 write each sentence to a WAV file. A sentence occupies the speaker for its
 estimated duration on the injected clock, so virtual time behaves like real.
+Registered as the module kind ``tts``.
 """
 
 from __future__ import annotations
@@ -17,6 +18,9 @@ import shutil
 from collections import deque
 from pathlib import Path
 
+from pydantic import Field
+
+from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
 from cyborg.transport.base import MessageInfo, Node
 from cyborg.transport.messages import String
 
@@ -67,6 +71,10 @@ class TextToSpeech:
         node.subscribe(input_topic, String, self._on_text)
         self._task = node.clock.loop.create_task(self._speak_loop(), name="tts")
 
+    def close(self) -> None:
+        """Stop speaking; what is still queued is not said."""
+        self._task.cancel()
+
     def _on_text(self, message: String, info: MessageInfo) -> None:
         text = message.data.strip()
         if not text:
@@ -115,3 +123,27 @@ class TextToSpeech:
                 log.warning("espeak-ng failed (%s): %s", process.returncode, err.decode().strip())
         except OSError as exc:
             log.warning("espeak-ng could not run: %s", exc)
+
+
+class TtsSettings(ModuleSettings):
+    """Text-to-speech: says what passes the speech gatekeeper, one sentence at a time (espeak-ng)."""
+
+    queue_size: int = Field(10, ge=1, description="sentences waiting at most; the oldest is dropped")
+    play_audio: bool | None = Field(
+        None, description="speak on the speakers (default: when an audio device is present)"
+    )
+    wav_dir: str | None = Field(None, description="folder to write each sentence to as a WAV file")
+    voice: str = Field("en", description="espeak-ng voice")
+
+
+def _build(node: Node, settings: TtsSettings, context: BuildContext) -> TextToSpeech:
+    return TextToSpeech(
+        node,
+        queue_size=settings.queue_size,
+        play_audio=settings.play_audio,
+        wav_dir=Path(settings.wav_dir) if settings.wav_dir else None,
+        voice=settings.voice,
+    )
+
+
+KIND = ModuleKind(TtsSettings, _build)

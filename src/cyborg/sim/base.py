@@ -5,7 +5,8 @@ It offers the ROSARNL interface the navigation module uses: the action
 current pose), the services ``/rosarnl_node/wander`` and ``/rosarnl_node/stop``
 (std_srvs/Empty), the pose on ``/rosarnl_node/amcl_pose`` and the path state on
 ``/rosarnl_node/arnl_path_state``. Routes come from :class:`RoutePlanner`; the
-robot drives them at a set speed on the injected clock.
+robot drives them at a set speed on the injected clock. Registered as the module kind
+``simulated_base``.
 """
 
 from __future__ import annotations
@@ -18,8 +19,12 @@ import random
 from collections.abc import Sequence
 from typing import Any
 
-from cyborg.errors import PlanningError
+from pydantic import Field
+
+from cyborg.app.view import BaseStatus
+from cyborg.errors import InvalidValueError, PlanningError
 from cyborg.maps import NamedPose, OccupancyMap, Point
+from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
 from cyborg.sim.planner import RoutePlanner
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Node, ServerGoalHandle
@@ -118,6 +123,22 @@ class SimulatedBase:
         node.advertise_service(topics.STOP, EmptyService, self._on_stop)
         self._publish_pose()
         self._set_state(PathState.STOPPED)
+
+    def close(self) -> None:
+        """Stop driving (a goal under way ends as preempted)."""
+        self._halt()
+
+    def status(self) -> BaseStatus:
+        """Pose, route and path state, for the dashboard (a :class:`~cyborg.app.view.BaseView`)."""
+        return BaseStatus(
+            x=self.x,
+            y=self.y,
+            theta=self.theta,
+            route=[(float(p[0]), float(p[1])) for p in self.route] if self.route is not None else None,
+            path_state=self.path_state.value,
+            wandering=self.wandering,
+            distance_travelled=self.distance_travelled,
+        )
 
     # --- outputs ----------------------------------------------------------------------
 
@@ -282,3 +303,29 @@ def _default_start(occupancy_map: OccupancyMap) -> NamedPose | Point:
 
 def named_locations(occupancy_map: OccupancyMap) -> Sequence[NamedPose]:
     return [pose for pose in occupancy_map.poses if pose.kind in ("GoalWithHeading", "Goal")]
+
+
+class SimulatedBaseSettings(ModuleSettings):
+    """A simulated Pioneer LX on the robot's map, with ROSARNL's interface (stands in for the real base)."""
+
+    speed: float = Field(0.6, gt=0, description="driving speed in m/s")
+    robot_radius: float = Field(0.35, ge=0, description="metres kept from walls when planning")
+    start: str | None = Field(
+        None, description="named pose to start at (default: the information desk, else RobotHome or Dock)"
+    )
+
+
+def _build(node: Node, settings: SimulatedBaseSettings, context: BuildContext) -> SimulatedBase:
+    occupancy = context.occupancy_map()
+    start = occupancy.pose(settings.start) if settings.start else None
+    return SimulatedBase(
+        node,
+        occupancy,
+        rng=context.rng,
+        speed=settings.speed,
+        robot_radius=settings.robot_radius,
+        start=start,
+    )
+
+
+KIND = ModuleKind(SimulatedBaseSettings, _build)

@@ -1,0 +1,174 @@
+"""The module kinds this installation knows: every ``cyborg.module_kinds`` entry point.
+
+Built-in kinds and a student's pip-installed package register the same way, so
+``cyborg validate``, ``cyborg sim``, ``cyborg node``, ``cyborg launch`` and scenario
+runs all know the same kinds. A kind's code is imported only when a configuration
+uses it, so a node of one placeholder module loads the placeholder and nothing else.
+"""
+
+from __future__ import annotations
+
+import difflib
+import logging
+from collections.abc import Iterable, Mapping
+from importlib.metadata import EntryPoint, entry_points
+from typing import Any
+
+from pydantic import BaseModel, ValidationError
+
+from cyborg.errors import ConfigError
+from cyborg.modules.kind import ModuleKind, ModuleSettings
+
+log = logging.getLogger(__name__)
+
+__all__ = ["ENTRY_POINT_GROUP", "KindRegistry", "module_kinds"]
+
+ENTRY_POINT_GROUP = "cyborg.module_kinds"
+
+
+def _origin(entry: EntryPoint) -> str:
+    dist = entry.dist
+    package = f"{dist.name} {dist.version}" if dist is not None else "an unknown package"
+    return f"{package} ({entry.value})"
+
+
+class KindRegistry:
+    """Module kinds by name: entry points, loaded on first use, plus kinds given in code.
+
+    ``extra`` kinds (tests, embedding applications) win over entry points of the same name.
+    """
+
+    def __init__(
+        self,
+        entries: Iterable[EntryPoint] | None = None,
+        *,
+        extra: Mapping[str, ModuleKind[Any]] | None = None,
+    ) -> None:
+        self._entries: dict[str, EntryPoint] = {}
+        self._clashes: dict[str, list[str]] = {}
+        for entry in entries if entries is not None else entry_points(group=ENTRY_POINT_GROUP):
+            known = self._entries.get(entry.name)
+            if known is None:
+                self._entries[entry.name] = entry
+            elif known.value != entry.value:
+                self._clashes.setdefault(entry.name, [_origin(known)]).append(_origin(entry))
+        self._loaded: dict[str, ModuleKind[Any]] = dict(extra or {})
+
+    def names(self) -> list[str]:
+        """Every kind's name, sorted (nothing is imported to list them)."""
+        return sorted({*self._entries, *self._loaded})
+
+    def origin(self, name: str) -> str:
+        """Where kind ``name`` comes from: package, version and object, for messages and docs."""
+        if name in self._loaded and name not in self._entries:
+            return "given in code"
+        return _origin(self._entries[name])
+
+    def get(self, name: str, *, source: str | None = None) -> ModuleKind[Any]:
+        """The kind called ``name``, imported now if it was not yet.
+
+        Raises :class:`ConfigError` naming the fix when no package offers it, when two offer
+        it, or when its package fails to import or offers something that is no ModuleKind.
+        """
+        kind = self._loaded.get(name)
+        if kind is not None:
+            return kind
+        if name in self._clashes:
+            raise ConfigError(
+                f"module kind {name!r} is offered by several packages: {'; '.join(self._clashes[name])}; "
+                "fix: uninstall one of them, or rename the kind in one package's entry points",
+                source=source,
+            )
+        entry = self._entries.get(name)
+        if entry is None:
+            close = difflib.get_close_matches(name, self.names(), n=1)
+            hint = f"did you mean {close[0]!r}? " if close else ""
+            raise ConfigError(
+                f"unknown kind {name!r}; fix: {hint}use one of {', '.join(self.names())}, or pip install "
+                f"the package that offers it (it registers the kind in the entry-point group "
+                f"{ENTRY_POINT_GROUP!r})",
+                source=source,
+            )
+        try:
+            loaded = entry.load()
+        except Exception as exc:
+            raise ConfigError(
+                f"module kind {name!r} from {_origin(entry)} could not be imported: {exc!r}; "
+                "fix: repair or reinstall that package",
+                source=source,
+            ) from exc
+        if not isinstance(loaded, ModuleKind):
+            raise ConfigError(
+                f"module kind {name!r} from {_origin(entry)} is a {type(loaded).__name__}, not a ModuleKind; "
+                "fix: point the entry point at a cyborg.modules.ModuleKind(settings, build)",
+                source=source,
+            )
+        self._loaded[name] = loaded
+        return loaded
+
+    def parse(
+        self, node_name: str, raw: Any, *, source: str | None = None
+    ) -> tuple[ModuleKind[Any], ModuleSettings]:
+        """Validate one ``modules:`` block; errors name the module, the setting and the fix."""
+        if not isinstance(raw, dict) or "kind" not in raw:
+            raise ConfigError(
+                f"module {node_name!r}: needs 'kind:' (one of {', '.join(self.names())})", source=source
+            )
+        name = str(raw["kind"])
+        try:
+            kind = self.get(name, source=source)
+        except ConfigError as exc:
+            raise ConfigError([f"module {node_name!r}: {p}" for p in exc.problems], source=source) from exc
+        settings = {key: value for key, value in raw.items() if key != "kind"}
+        try:
+            return kind, kind.settings.model_validate(settings)
+        except ValidationError as exc:
+            where = f"module {node_name!r} > "
+            raise ConfigError(
+                [_problem(where, kind.settings, e) for e in exc.errors()], source=source
+            ) from exc
+
+    def check(self, modules: Mapping[str, Any], *, source: str | None = None) -> None:
+        """Validate every block of a ``modules:`` section; one ConfigError lists every problem."""
+        problems: list[str] = []
+        for node_name, raw in modules.items():
+            try:
+                self.parse(node_name, raw, source=source)
+            except ConfigError as exc:
+                problems.extend(exc.problems)
+        if problems:
+            raise ConfigError(problems, source=source)
+
+
+def _problem(prefix: str, settings: type[BaseModel], error: Any) -> str:
+    """One settings error: where, what is wrong and the fix."""
+    loc = [str(p) for p in error["loc"]]
+    where = f"{prefix}{'.'.join(loc)}"
+    if error["type"] == "extra_forbidden":
+        known = ", ".join(name for name in settings.model_fields)
+        return f"{where}: unknown setting; fix: remove it or use one of {known}"
+    field = settings.model_fields.get(loc[0]) if loc else None
+    meaning = f" ({field.description})" if field is not None and field.description else ""
+    message = str(error["msg"]).removeprefix("Value error, ")
+    if field is None:
+        return f"{where}: {message}"
+    expected = _READABLE_TYPES.get(str(error["type"]).split("_")[0], "value of the right type")
+    value = error.get("input")
+    return f"{where}: {message} (got {value!r}); fix: give {expected}{meaning}"
+
+
+_READABLE_TYPES = {
+    "float": "a number, e.g. 2.5",
+    "int": "a whole number, e.g. 3",
+    "bool": "true or false",
+    "string": "text in quotes",
+    "greater": "a larger number",
+    "less": "a smaller number",
+    "list": "a list, e.g. [a, b]",
+    "dict": "a mapping, e.g. {key: value}",
+}
+
+
+def module_kinds(extra: Mapping[str, ModuleKind[Any]] | None = None) -> KindRegistry:
+    """The kinds of every installed package (and ``extra``), read from the entry points now."""
+    return KindRegistry(extra=extra)

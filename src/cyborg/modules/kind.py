@@ -1,0 +1,122 @@
+"""What a module kind is: its settings, its factory, and the contract of what it builds.
+
+A *kind* is what a block of the YAML's ``modules:`` section names with ``kind:``. Each
+kind lives beside its module's code as a :class:`ModuleKind` and is registered through
+the ``cyborg.module_kinds`` entry-point group, so a package installed next to this one
+adds kinds exactly like the built-in ones::
+
+    # pyproject.toml of a student's package
+    [project.entry-points."cyborg.module_kinds"]
+    greeter = "greeter.module:KIND"
+
+The composition root (:mod:`cyborg.app`) validates a block against ``settings``, then calls
+``build`` with the module's own node, the validated settings and a :class:`BuildContext`.
+"""
+
+from __future__ import annotations
+
+import random
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Generic, Protocol, TypeVar, runtime_checkable
+
+from pydantic import BaseModel, ConfigDict
+
+from cyborg.transport.base import Node
+
+if TYPE_CHECKING:
+    from cyborg.maps import OccupancyMap
+
+__all__ = [
+    "BuildContext",
+    "CalendarEntry",
+    "Component",
+    "KeepsCalendar",
+    "ModuleKind",
+    "ModuleSettings",
+    "ServesStates",
+]
+
+
+class ModuleSettings(BaseModel):
+    """Base of a kind's settings: the keys of its YAML block besides ``kind:``.
+
+    Unknown keys are refused, and each field's ``description`` and default go into the
+    ``modules:`` table of ``docs/configuration.md``.
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+@runtime_checkable
+class Component(Protocol):
+    """A running part of the robot: it works on its own node and can be closed.
+
+    ``close()`` stops its periodic work and the goals it runs; the robot shuts the
+    node down afterwards (withdrawing its topics, services and action servers).
+    """
+
+    node: Node
+
+    def close(self) -> None: ...
+
+
+@runtime_checkable
+class ServesStates(Protocol):
+    """A component that serves states of the machine: ``servers`` maps action names to servers."""
+
+    @property
+    def servers(self) -> Mapping[str, object]: ...
+
+
+class CalendarEntry(Protocol):
+    """A calendar entry a scenario script adds (see :mod:`cyborg.sim.script`)."""
+
+    location: str
+    start: Any
+    end: Any
+    ignore: bool
+    recurrence: Any
+
+
+@runtime_checkable
+class KeepsCalendar(Protocol):
+    """A component with a calendar that scenario scripts can add entries to (the navigation module)."""
+
+    def add_calendar_entry(self, entry: CalendarEntry) -> None: ...
+
+
+class BuildContext(Protocol):
+    """What a factory may use besides its node and settings."""
+
+    @property
+    def data_dir(self) -> Path:
+        """The robot's data folder (databases, generated files)."""
+        ...
+
+    @property
+    def rng(self) -> random.Random:
+        """The robot's random source: seeded, so a simulated run repeats."""
+        ...
+
+    def occupancy_map(self) -> OccupancyMap:
+        """The map of the world the robot is in (``--map``, or the packaged one), loaded once."""
+        ...
+
+
+S = TypeVar("S", bound=ModuleSettings)
+
+
+@dataclass(frozen=True)
+class ModuleKind(Generic[S]):
+    """A module kind: the settings model of its YAML block and the factory of its component."""
+
+    settings: type[S]
+    build: Callable[[Node, S, BuildContext], Component]
+
+    @property
+    def summary(self) -> str:
+        """The first line of the settings model's docstring: what the kind does."""
+        doc = (self.settings.__doc__ or "").strip()
+        return doc.splitlines()[0] if doc else ""
