@@ -46,3 +46,19 @@ class MapError(CyborgError):
 
 class PlanningError(CyborgError):
     """No collision-free route exists between two poses."""
+
+
+class NavigationError(CyborgError, ValueError):
+    """A value given to the navigation module (a time, a match threshold) is unusable.
+
+    Also a ValueError, which callers of the navigation package caught before this class existed.
+    """
+
+
+class CalendarError(NavigationError):
+    """A calendar event, a time or a recurrence rule cannot be used; the message says which and the fix."""
+
+
+class RuleTooCostly(CalendarError):
+    """A recurrence rule that is valid RFC 5545 but would cost unbounded time, or repeats nothing."""
+

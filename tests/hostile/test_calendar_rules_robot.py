@@ -19,7 +19,8 @@ from subprocess import CompletedProcess
 import pytest
 
 from cyborg.navigation.calendar import import_ics
-from cyborg.navigation.database import CalendarEvent, NavigationDatabase
+from cyborg.navigation.database import NavigationDatabase
+from cyborg.navigation.records import CalendarEvent
 
 SCRIPT = """\
 start: 2026-11-23T12:00:00

@@ -13,7 +13,8 @@ from click.testing import CliRunner, Result
 
 from cyborg.interfaces import db_cli
 from cyborg.interfaces.db_cli import db_group
-from cyborg.navigation.database import NavigationDatabase, ResponseType
+from cyborg.navigation.database import NavigationDatabase
+from cyborg.navigation.records import ResponseType
 
 
 @pytest.fixture

@@ -25,7 +25,8 @@ from cyborg.navigation.behaviour import (
     talk_kind,
     trip_goes_on,
 )
-from cyborg.navigation.database import DEFAULT_LOCATIONS, Location
+from cyborg.navigation.content import DEFAULT_LOCATIONS
+from cyborg.navigation.records import Location
 
 EMOTIONS = sorted([NEUTRAL, *TABLE_2_2])
 PLACES = {place.name: place for place in DEFAULT_LOCATIONS}

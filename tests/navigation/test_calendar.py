@@ -19,7 +19,8 @@ from cyborg.navigation.calendar import (
     occurrences_between,
     ongoing_occurrence,
 )
-from cyborg.navigation.database import CalendarEvent, NavigationDatabase
+from cyborg.navigation.database import NavigationDatabase
+from cyborg.navigation.records import CalendarEvent
 
 OSLO = ZoneInfo("Europe/Oslo")
 

@@ -13,16 +13,11 @@ from zoneinfo import ZoneInfo
 import pytest
 
 from cyborg.errors import DatabaseError
-from cyborg.navigation import database
-from cyborg.navigation.database import (
-    SCHEMA_VERSION,
-    CalendarEvent,
-    Location,
-    NavigationDatabase,
-    Response,
-    ResponseType,
-)
+from cyborg.navigation import content, schema
+from cyborg.navigation.database import NavigationDatabase
 from cyborg.navigation.keywords import Intent, detect
+from cyborg.navigation.records import CalendarEvent, Location, Response, ResponseType
+from cyborg.navigation.schema import SCHEMA_VERSION
 
 OSLO = ZoneInfo("Europe/Oslo")
 
@@ -442,8 +437,8 @@ def test_older_schema_is_migrated_keeping_data(tmp_path: Path, monkeypatch: pyte
     with NavigationDatabase(path) as db:
         db.add_location(Location("gym"))
     step = ("CREATE TABLE visits (id INTEGER PRIMARY KEY)",)
-    monkeypatch.setattr(database, "_MIGRATIONS", (*database._MIGRATIONS, step))
-    monkeypatch.setattr(database, "SCHEMA_VERSION", SCHEMA_VERSION + 1)
+    monkeypatch.setattr(schema, "MIGRATIONS", (*schema.MIGRATIONS, step))
+    monkeypatch.setattr(schema, "SCHEMA_VERSION", SCHEMA_VERSION + 1)
     with NavigationDatabase(path) as db:
         assert db.find_location("gym") is not None
     with sqlite3.connect(path) as raw:
@@ -576,10 +571,10 @@ def test_the_map_in_use_persists_and_needs_a_name(tmp_path: Path) -> None:
 def old_file(path: Path, version: int) -> None:
     """A file as cyborg wrote it at schema ``version`` (1 or 2): default places at (0, 0) on no map."""
     with sqlite3.connect(path) as raw:
-        for step in database._MIGRATIONS[:version]:
+        for step in schema.MIGRATIONS[:version]:
             for sql in step:
                 raw.execute(sql)
-        for place in database.DEFAULT_LOCATIONS:
+        for place in content.DEFAULT_LOCATIONS:
             cursor = raw.execute(
                 "INSERT INTO locations (name, map, x, y, heading, tolerance, crowded, pleasantness) "
                 "VALUES (?, '', 0, 0, 0, ?, ?, ?)",
@@ -589,14 +584,10 @@ def old_file(path: Path, version: int) -> None:
                 "INSERT INTO location_aliases (alias, location_id) VALUES (?, ?)",
                 [(alias, cursor.lastrowid) for alias in place.aliases],
             )
-        later = {kind for v, kinds in database.NEW_RESPONSE_TYPES.items() if v > version for kind in kinds}
+        later = {kind for v, kinds in schema.NEW_RESPONSE_TYPES.items() if v > version for kind in kinds}
         raw.executemany(
             "INSERT INTO responses (sentence, type, emotion) VALUES (?, ?, ?)",
-            [
-                (r.sentence, r.type.value, r.emotion)
-                for r in database.DEFAULT_RESPONSES
-                if r.type not in later
-            ],
+            [(r.sentence, r.type.value, r.emotion) for r in content.DEFAULT_RESPONSES if r.type not in later],
         )
         raw.execute(f"PRAGMA user_version = {version}")
     raw.close()
@@ -661,7 +652,7 @@ def test_a_version_2_file_keeps_its_data_and_its_placeholder_poses_become_no_pos
         assert places["kiosk"].position == (2.5, -1.0)
         assert len(places) == 8 + 2
         assert {p.name for p in places.values() if p.position is None} == {
-            p.name for p in database.DEFAULT_LOCATIONS
+            p.name for p in content.DEFAULT_LOCATIONS
         } - {"el5"}
         assert [loc.name for loc in db.locations_on_map()] == ["dock", "el5"]
         assert db.current_map() == "campus"

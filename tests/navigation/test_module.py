@@ -30,14 +30,10 @@ from cyborg.emotion.model import NEUTRAL, TABLE_2_2
 from cyborg.interfaces.cli import packaged_config
 from cyborg.maps import Cell, OccupancyMap, Point, default_map_path, load_map
 from cyborg.modules.speech import SPOKEN_TOPIC, estimated_duration
-from cyborg.navigation.database import (
-    DEFAULT_RESPONSES,
-    CalendarEvent,
-    Location,
-    NavigationDatabase,
-    ResponseType,
-)
+from cyborg.navigation.content import DEFAULT_RESPONSES
+from cyborg.navigation.database import NavigationDatabase
 from cyborg.navigation.module import WANDER_CHECK, WANDER_DEBOUNCE, NavigationModule
+from cyborg.navigation.records import CalendarEvent, Location, ResponseType
 from cyborg.sim.base import PathState, SimulatedBase
 from cyborg.sim.planner import RoutePlanner
 from cyborg.transport import topics

@@ -10,7 +10,8 @@ from __future__ import annotations
 import itertools
 from typing import Any
 
-from cyborg.navigation.database import DEFAULT_RESPONSES, ResponseType
+from cyborg.navigation.content import DEFAULT_RESPONSES
+from cyborg.navigation.records import ResponseType
 
 Record = dict[str, Any]
 

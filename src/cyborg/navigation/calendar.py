@@ -30,19 +30,17 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from datetime import UTC, date, datetime, time, timedelta, tzinfo
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
 import icalendar
 from dateutil.relativedelta import relativedelta
 from dateutil.rrule import rrule, rruleset, rrulestr
 
-from cyborg.errors import DatabaseError
+from cyborg.errors import CalendarError, DatabaseError, RuleTooCostly
 from cyborg.limits import MAX_EVENT_DAYS, MAX_ICS_BYTES, MAX_OCCURRENCES_PER_QUERY, MAX_RULE_COUNT
 from cyborg.navigation.keywords import LocationMatcher
-
-if TYPE_CHECKING:
-    from cyborg.navigation.database import CalendarEvent, NavigationDatabase
+from cyborg.navigation.records import CalendarEvent, Location
 
 DEFAULT_TIMEZONE = "Europe/Oslo"
 """Zone of the Cyborg (Trondheim): used for floating times and all-day events in .ics files."""
@@ -74,7 +72,9 @@ def _parse_stamp(value: str, zone: tzinfo, start: datetime, *, end_of_day: bool 
     """An iCalendar DATE or DATE-TIME value as an aware datetime (floating values are in ``zone``)."""
     m = _STAMP.match(value.strip())
     if m is None:
-        raise ValueError(f"{value!r} is not an iCalendar date (YYYYMMDD) or date-time (YYYYMMDDTHHMMSS[Z])")
+        raise CalendarError(
+            f"{value!r} is not an iCalendar date (YYYYMMDD) or date-time (YYYYMMDDTHHMMSS[Z])"
+        )
     day = datetime.strptime(m.group(1), "%Y%m%d").date()
     if m.group(2) is None:
         clock = time(23, 59, 59) if end_of_day else start.astimezone(zone).time()
@@ -122,9 +122,9 @@ def normalise_recurrence(text: str, start: datetime, end: datetime | None = None
                 stamps = [_utc_stamp(_parse_stamp(v, line_zone, start)) for v in value.split(",")]
                 lines.append(f"{name}:{','.join(stamps)}")
             else:
-                raise ValueError(f"unsupported line {raw!r}; use RRULE, EXDATE or RDATE")
+                raise CalendarError(f"unsupported line {raw!r}; use RRULE, EXDATE or RDATE")
         if not any(line.startswith("RRULE:") for line in lines):
-            raise ValueError("it has no RRULE")
+            raise CalendarError("it has no RRULE")
         stored = "\n".join(lines)
         check_expansion(stored, start, None if end is None else end - start)
     except RuleTooCostly as exc:
@@ -140,16 +140,12 @@ def _short(text: str, limit: int = 120) -> str:
     return repr(text) if len(text) <= limit else repr(text[: limit - 3] + "...")
 
 
-class RuleTooCostly(ValueError):
-    """A rule that is valid RFC 5545 but would cost unbounded time, or repeats nothing; 'what; fix'."""
-
-
 def _normalise_rule(value: str, zone: tzinfo, start: datetime) -> str:
     parts = []
     for part in value.strip().split(";"):
         key, sep, val = part.partition("=")
         if not sep:
-            raise ValueError(f"rule part {part!r} is not KEY=VALUE")
+            raise CalendarError(f"rule part {part!r} is not KEY=VALUE")
         key = key.strip().upper()
         if key == "UNTIL":
             val = _utc_stamp(_parse_stamp(val, zone, start, end_of_day=True))
@@ -199,7 +195,8 @@ def _check_parts(parts: dict[str, str]) -> None:
 def check_expansion(recurrence: str, start: datetime, length: timedelta | None = None) -> None:
     """Refuse a stored-form ``recurrence`` that expands to nothing, overlaps itself or too far.
 
-    RuleTooCostly (a ValueError) says what and the fix; other ValueErrors come from dateutil.
+    RuleTooCostly (a CalendarError, so a ValueError) says what and the fix; other ValueErrors come
+    from dateutil.
     """
     rule_text = _rrule_text(recurrence)
     _check_parts(_rule_parts(rule_text))
@@ -229,7 +226,7 @@ def _rrule_text(recurrence: str) -> str:
     for line in recurrence.splitlines():
         if line.upper().startswith("RRULE:"):
             return line.partition(":")[2]
-    raise ValueError("it has no RRULE")
+    raise CalendarError("it has no RRULE")
 
 
 def _far_probe(rule_text: str, start: datetime) -> rrule:
@@ -385,7 +382,7 @@ def ongoing_occurrence(
 ) -> tuple[datetime, datetime] | None:
     """The occurrence with ``occ_start <= now < occ_end``, or None (the latest if several overlap)."""
     if now.tzinfo is None:
-        raise ValueError(
+        raise CalendarError(
             f"now={now.isoformat()} is naive; pass an aware time, e.g. datetime.now(timezone.utc)"
         )
     hits = [
@@ -397,6 +394,22 @@ def ongoing_occurrence(
 
 
 # --- .ics import -----------------------------------------------------------------------------
+
+
+class EventBook(Protocol):
+    """What :func:`import_ics` needs of the database: places, and checking and storing events.
+
+    :class:`~cyborg.navigation.database.NavigationDatabase` is one; this module does not import
+    it, because the database's event store imports this module's recurrence functions.
+    """
+
+    def get_location(self, name_or_alias: str) -> Location: ...
+
+    def matcher(self, threshold: float | None = None, *, on_map: bool = False) -> LocationMatcher: ...
+
+    def validate_event(self, event: CalendarEvent) -> CalendarEvent: ...
+
+    def upsert_events(self, events: Sequence[CalendarEvent]) -> list[tuple[CalendarEvent, bool]]: ...
 
 
 @dataclass(frozen=True)
@@ -417,7 +430,7 @@ class ImportReport:
 
 
 def import_ics(
-    db: NavigationDatabase,
+    db: EventBook,
     path: str | Path,
     default_location: str | None = None,
     *,
@@ -429,8 +442,6 @@ def import_ics(
     ``default_location`` is used when neither names one. Floating times and all-day
     events are read in ``local_tz``. Events that cannot be used are reported, not raised.
     """
-    from cyborg.navigation.database import CalendarEvent  # the database imports this module
-
     if default_location is not None:
         default_location = db.get_location(default_location).name
     zone = _zone(local_tz)
@@ -441,11 +452,13 @@ def import_ics(
     for vevent in calendar.walk("VEVENT"):
         summary = str(vevent.get("SUMMARY", "")).strip()
         try:
-            event = _convert(vevent, matcher, default_location, zone, CalendarEvent)
+            event = _convert(vevent, matcher, default_location, zone)
             event = db.validate_event(event)
             assert event.uid is not None
             if event.uid in pending:
-                raise ValueError(f"UID {event.uid!r} appears twice in the file; the first one was imported")
+                raise CalendarError(
+                    f"UID {event.uid!r} appears twice in the file; the first one was imported"
+                )
         except (ValueError, DatabaseError) as exc:
             report.skipped.append(SkippedEvent(summary or "(no summary)", str(exc)))
             continue
@@ -492,20 +505,19 @@ def _convert(
     matcher: LocationMatcher,
     default_location: str | None,
     zone: ZoneInfo,
-    make: type[CalendarEvent],
 ) -> CalendarEvent:
-    """One VEVENT as an (unchecked) CalendarEvent; ValueError says why it cannot be imported."""
+    """One VEVENT as an (unchecked) CalendarEvent; CalendarError says why it cannot be imported."""
     if vevent.get("RECURRENCE-ID") is not None:
-        raise ValueError("it changes one occurrence of a recurring event, which is not supported")
+        raise CalendarError("it changes one occurrence of a recurring event, which is not supported")
     if str(vevent.get("STATUS", "")).upper() == "CANCELLED":
-        raise ValueError("it is cancelled")
+        raise CalendarError("it is cancelled")
     start, end = _times(vevent, zone)
     summary = str(vevent.get("SUMMARY", "")).strip() or None
     place_text = str(vevent.get("LOCATION", "")).strip()
     location = _place(matcher, place_text, summary, default_location)
     recurrence = _recurrence(vevent, start)
     uid = str(vevent.get("UID", "")).strip() or _synthetic_uid(start, summary, place_text)
-    return make(location, start, end, recurrence=recurrence, summary=summary, uid=uid)
+    return CalendarEvent(location, start, end, recurrence=recurrence, summary=summary, uid=uid)
 
 
 def _as_aware(value: date | datetime, zone: ZoneInfo) -> datetime:
@@ -522,7 +534,7 @@ def _as_aware(value: date | datetime, zone: ZoneInfo) -> datetime:
 def _times(vevent: Any, zone: ZoneInfo) -> tuple[datetime, datetime]:
     dtstart = vevent.get("DTSTART")
     if dtstart is None:
-        raise ValueError("it has no DTSTART")
+        raise CalendarError("it has no DTSTART")
     start = _as_aware(dtstart.dt, zone)
     if vevent.get("DTEND") is not None:
         end = _as_aware(vevent.get("DTEND").dt, zone)
@@ -531,15 +543,15 @@ def _times(vevent: Any, zone: ZoneInfo) -> tuple[datetime, datetime]:
         try:
             end = start + duration
         except OverflowError:
-            raise ValueError(
+            raise CalendarError(
                 f"its DURATION ({duration.days} days) ends after the year 9999; fix: give a real DTEND or DURATION"
             ) from None
     elif not isinstance(dtstart.dt, datetime):
         end = start + timedelta(days=1)
     else:
-        raise ValueError("it has neither DTEND nor DURATION, so it never lasts")
+        raise CalendarError("it has neither DTEND nor DURATION, so it never lasts")
     if end - start > timedelta(days=MAX_EVENT_DAYS):
-        raise ValueError(
+        raise CalendarError(
             f"it lasts {(end - start).days} days, over the limit of {MAX_EVENT_DAYS}; fix: check its DTEND or "
             "DURATION"
         )
@@ -555,7 +567,7 @@ def _place(
             return match.location
     if default_location is not None:
         return default_location
-    raise ValueError(
+    raise CalendarError(
         f"neither LOCATION {place_text!r} nor SUMMARY {summary or ''!r} names a known place "
         f"({', '.join(matcher.names)}); add the place or pass a default location"
     )

@@ -20,6 +20,8 @@ from dataclasses import dataclass
 
 from rapidfuzz import fuzz
 
+from cyborg.errors import NavigationError
+
 DEFAULT_THRESHOLD = 80.0
 """Lowest rapidfuzz ratio (0-100) at which a span of text counts as a place name."""
 
@@ -151,7 +153,7 @@ class LocationMatcher:
     ) -> None:
         """``places`` is (stored name, aliases) pairs; ``threshold`` the lowest ratio that matches."""
         if not 0 < threshold <= 100:
-            raise ValueError(f"threshold={threshold} is outside (0, 100]; use e.g. {DEFAULT_THRESHOLD}")
+            raise NavigationError(f"threshold={threshold} is outside (0, 100]; use e.g. {DEFAULT_THRESHOLD}")
         self.threshold = threshold
         self._spoken: list[_Spoken] = []
         for name, aliases in places:

@@ -32,8 +32,9 @@ from cyborg.navigation.behaviour import (
     talk_kind,
     trip_goes_on,
 )
-from cyborg.navigation.database import Location, NavigationDatabase, ResponseType
+from cyborg.navigation.database import NavigationDatabase
 from cyborg.navigation.keywords import Intent, detect_answer, detect_navigation
+from cyborg.navigation.records import Location, ResponseType
 from cyborg.transport import topics
 from cyborg.transport.base import GoalStatus, MessageInfo, Node
 from cyborg.transport.messages import (
