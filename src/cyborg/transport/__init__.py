@@ -1,5 +1,11 @@
 """Transport layer: the interface components are written against, its in-process
-implementation, the message types and the injected clock."""
+implementation, the message types and the injected clock.
+
+:class:`EmbeddedTransport` is imported when first asked for, so that a process using only
+the ROS transport (``cyborg.transport.ros``) does not load it.
+"""
+
+from typing import TYPE_CHECKING, Any
 
 from cyborg.transport.base import (
     ActionClient,
@@ -15,7 +21,9 @@ from cyborg.transport.base import (
     Transport,
 )
 from cyborg.transport.clock import Clock, RealClock, VirtualClock
-from cyborg.transport.embedded import EmbeddedTransport
+
+if TYPE_CHECKING:
+    from cyborg.transport.embedded import EmbeddedTransport
 
 __all__ = [
     "ActionClient",
@@ -34,3 +42,11 @@ __all__ = [
     "Transport",
     "VirtualClock",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    if name == "EmbeddedTransport":
+        from cyborg.transport.embedded import EmbeddedTransport
+
+        return EmbeddedTransport
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

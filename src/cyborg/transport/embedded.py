@@ -13,12 +13,13 @@ import copy
 import inspect
 import itertools
 import logging
-from collections import deque
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from typing import Any, Generic, cast
 
 from cyborg.errors import ServiceTimeoutError, ServiceUnavailableError, TransportError
+from cyborg.transport._goals import ClientGoal
+from cyborg.transport._queue import CallbackRunner, SubscriptionQueue, check_queue_size
 from cyborg.transport.base import (
     DEFAULT_QUEUE_SIZE,
     ActionClient,
@@ -83,6 +84,13 @@ class EmbeddedTransport(Transport):
         self._nodes: dict[str, EmbeddedNode] = {}
         self._goal_ids = itertools.count(1)
         self._offer_waiters: set[asyncio.Future[None]] = set()  # woken when a service or action appears
+        self._run_callback = CallbackRunner(log, self._count_callback_error)
+
+    def _count_callback_error(self) -> None:
+        self.stats.callback_errors += 1
+
+    def _count_dropped(self) -> None:
+        self.stats.dropped_messages += 1
 
     async def _wait_for_offer(self, is_offered: Callable[[], bool], timeout: float) -> bool:
         """Wait until ``is_offered()`` or ``timeout`` clock seconds pass; no polling."""
@@ -159,25 +167,6 @@ class EmbeddedTransport(Transport):
         for subscription in topic.subscriptions:
             subscription._enqueue(delivered, info)
 
-    def _run_callback(self, callback: Callable[..., object], *args: Any) -> None:
-        try:
-            result = callback(*args)
-            if inspect.isawaitable(result):
-                task = asyncio.ensure_future(result)
-                task.add_done_callback(self._report_task_error)
-        except Exception:
-            self.stats.callback_errors += 1
-            log.exception("callback %s failed; the transport carries on", _describe(callback))
-
-    def _report_task_error(self, task: asyncio.Future[Any]) -> None:
-        if not task.cancelled() and task.exception() is not None:
-            self.stats.callback_errors += 1
-            log.error("callback task failed; the transport carries on", exc_info=task.exception())
-
-
-def _describe(callback: Callable[..., object]) -> str:
-    return getattr(callback, "__qualname__", repr(callback))
-
 
 class EmbeddedNode(Node):
     def __init__(self, transport: EmbeddedTransport, name: str) -> None:
@@ -207,8 +196,7 @@ class EmbeddedNode(Node):
         *,
         queue_size: int = DEFAULT_QUEUE_SIZE,
     ) -> Subscription[M]:
-        if queue_size < 1:
-            raise TransportError(f"queue_size must be at least 1, got {queue_size}")
+        check_queue_size(queue_size)
         t = self.transport._topic(self.resolve(topic), msg_type)
         sub: _EmbeddedSubscription[M] = _EmbeddedSubscription(self.transport, t, callback, queue_size)
         t.subscriptions.append(sub)
@@ -305,40 +293,21 @@ class _EmbeddedSubscription(Subscription[M]):
         callback: Callable[[M, MessageInfo], None],
         queue_size: int,
     ) -> None:
-        self._transport = transport
         self._topic = topic
         self.topic = topic.name
-        self._callback = callback
-        self._queue: deque[tuple[M, MessageInfo]] = deque()
-        self._queue_size = queue_size
-        self._dropped = 0
-        self._scheduled = False
-        self._active = True
+        self._queue = SubscriptionQueue(
+            transport.clock, callback, queue_size, transport._run_callback, transport._count_dropped
+        )
 
     @property
     def dropped(self) -> int:
-        return self._dropped
+        return self._queue.dropped
 
     def _enqueue(self, message: Message, info: MessageInfo) -> None:
-        if len(self._queue) >= self._queue_size:
-            self._queue.popleft()
-            self._dropped += 1
-            self._transport.stats.dropped_messages += 1
-        self._queue.append((cast(M, message), info))
-        if not self._scheduled:
-            self._scheduled = True
-            self._transport.clock.loop.call_soon(self._drain)
-
-    def _drain(self) -> None:
-        self._scheduled = False
-        queue = self._queue
-        while queue and self._active:
-            message, info = queue.popleft()
-            self._transport._run_callback(self._callback, message, info)
+        self._queue.put(cast(M, message), info)
 
     def unsubscribe(self) -> None:
-        self._active = False
-        self._queue.clear()
+        self._queue.close()
         if self in self._topic.subscriptions:
             self._topic.subscriptions.remove(self)
 
@@ -474,12 +443,12 @@ class _EmbeddedActionServer(ActionServer[G, R, F]):
                 goal.result = self.action_type.result()
         client = goal.client
         if client is not None:
-            self.node.clock.loop.call_soon(client._on_status, status, goal.result, goal.text)
+            self.node.clock.loop.call_soon(client.update_status, status, goal.result, goal.text)
 
     def _send_feedback(self, goal: _Goal[G, R, F], feedback: F) -> None:
         client = goal.client
         if client is not None:
-            self.node.clock.loop.call_soon(client._on_feedback, copy.deepcopy(feedback))
+            self.node.clock.loop.call_soon(client.deliver_feedback, copy.deepcopy(feedback))
 
     def shutdown(self) -> None:
         if not self.alive:
@@ -491,7 +460,9 @@ class _EmbeddedActionServer(ActionServer[G, R, F]):
         for goal in list(self._goals.values()):
             self._goals.pop(goal.goal_id, None)
             if goal.client is not None:
-                self.node.clock.loop.call_soon(goal.client._on_status, GoalStatus.LOST, None, "server gone")
+                self.node.clock.loop.call_soon(
+                    goal.client.update_status, GoalStatus.LOST, None, "server gone"
+                )
 
 
 _ALLOWED: dict[str, frozenset[GoalStatus]] = {
@@ -551,7 +522,7 @@ class _EmbeddedServerGoalHandle(ServerGoalHandle[G, R, F]):
         self._transition("canceled", target, result, text)
 
 
-class _EmbeddedClientGoalHandle(ClientGoalHandle[G, R, F]):
+class _EmbeddedClientGoalHandle(ClientGoal[G, R, F]):
     def __init__(
         self,
         client: _EmbeddedActionClient[G, R, F],
@@ -559,72 +530,22 @@ class _EmbeddedClientGoalHandle(ClientGoalHandle[G, R, F]):
         on_feedback: Callable[[F], None] | None,
         on_status: Callable[[GoalStatus], None] | None,
     ) -> None:
+        transport = client._node.transport
+        super().__init__(
+            goal.goal,
+            clock=client._node.clock,
+            run=transport._run_callback,
+            on_feedback=on_feedback,
+            on_status=on_status,
+        )
         self._client = client
         self._goal = goal
-        self.goal = goal.goal
-        self._status = GoalStatus.PENDING
-        self._result: R | None = None
-        self._text = ""
-        self._on_feedback_cb = on_feedback
-        self._on_status_cb = on_status
-        self._done_callbacks: list[Callable[[ClientGoalHandle[G, R, F]], None]] = []
-        self._waiters: list[asyncio.Future[GoalStatus]] = []
 
-    @property
-    def status(self) -> GoalStatus:
-        return self._status
-
-    @property
-    def result(self) -> R | None:
-        return self._result
-
-    @property
-    def text(self) -> str:
-        return self._text
-
-    def cancel(self) -> None:
-        if self._status.is_terminal:
-            return
+    def _request_cancel(self) -> None:
         server = self._client._server()
         if server is None:
             return
         self._client._node.clock.loop.call_soon(server._receive_cancel, self._goal.goal_id)
-
-    async def wait(self) -> GoalStatus:
-        if self._status.is_terminal:
-            return self._status
-        future: asyncio.Future[GoalStatus] = self._client._node.clock.loop.create_future()
-        self._waiters.append(future)
-        return await future
-
-    def add_done_callback(self, callback: Callable[[ClientGoalHandle[G, R, F]], None]) -> None:
-        if self._status.is_terminal:
-            self._client._node.clock.loop.call_soon(callback, self)
-        else:
-            self._done_callbacks.append(callback)
-
-    def _on_feedback(self, feedback: F) -> None:
-        if self._on_feedback_cb is not None and not self._status.is_terminal:
-            self._client._node.transport._run_callback(self._on_feedback_cb, feedback)
-
-    def _on_status(self, status: GoalStatus, result: R | None, text: str) -> None:
-        if self._status.is_terminal:
-            return
-        self._status = status
-        if status.is_terminal:
-            self._result = result
-            self._text = text
-        transport = self._client._node.transport
-        if self._on_status_cb is not None:
-            transport._run_callback(self._on_status_cb, status)
-        if status.is_terminal:
-            for waiter in self._waiters:
-                if not waiter.done():
-                    waiter.set_result(status)
-            self._waiters.clear()
-            callbacks, self._done_callbacks = self._done_callbacks, []
-            for callback in callbacks:
-                transport._run_callback(callback, self)
 
 
 class _EmbeddedActionClient(ActionClient[G, R, F]):
@@ -668,7 +589,7 @@ class _EmbeddedActionClient(ActionClient[G, R, F]):
         server = self._server()
         loop = self._node.clock.loop
         if server is None:
-            loop.call_soon(handle._on_status, GoalStatus.LOST, None, f"no action server at {self.name}")
+            loop.call_soon(handle.update_status, GoalStatus.LOST, None, f"no action server at {self.name}")
         else:
             loop.call_soon(server._receive_goal, record)
         return handle

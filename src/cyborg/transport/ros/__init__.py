@@ -1,0 +1,29 @@
+"""The ROS 1 transport: the same interface over rospy and actionlib.
+
+Each process is one ROS node (rospy allows no more); the components it hosts
+are logical nodes sharing it, so their messages carry the process's node name
+as sender (from the connection header's caller id), as in the thesis where the
+controller, emotion system and motivator form the one node ``cyborg_controller``.
+
+rospy calls back on its own threads; every callback is handed to the clock's
+event loop with ``call_soon_threadsafe``, so components still run one callback
+at a time. Messages are converted field by field between our dataclasses and
+the generated ROS classes (the names are the same by design).
+
+Its modules, one idea each:
+
+* :mod:`.transport`: :class:`RosTransport` and its nodes and parameters (start here);
+* :mod:`.topics`, :mod:`.services`, :mod:`.actions`: what a node hands out;
+* :mod:`.convert`: our messages to and from the generated ROS classes;
+* :mod:`.master`: calls to the master, and living through its outage or restart;
+* :mod:`.patches`: rospy's behaviour changed, installed when a RosTransport is made
+  (importing changes nothing).
+
+The subscription queue and the client's goal handle are the ones every transport
+shares (:mod:`cyborg.transport._queue`, :mod:`cyborg.transport._goals`). This package
+is the only place that imports rospy.
+"""
+
+from cyborg.transport.ros.transport import RosNode, RosTransport
+
+__all__ = ["RosNode", "RosTransport"]

@@ -1,0 +1,345 @@
+"""Actions of the ROS 1 transport: servers and clients on actionlib.
+
+Part of :mod:`cyborg.transport.ros`. The server side wraps actionlib's goal handles; the client
+side keeps each goal in the shared :class:`~cyborg.transport._goals.ClientGoal`, fed from
+actionlib's transition and feedback callbacks (rospy threads) on the clock's event loop. A
+server that stops reporting its status is gone: its goals end LOST (actionlib alone would wait
+forever).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import dataclasses
+import logging
+import threading
+import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import actionlib  # type: ignore[import-not-found]
+
+from cyborg.transport._goals import ClientGoal
+from cyborg.transport.base import (
+    ActionClient,
+    ActionServer,
+    ClientGoalHandle,
+    F,
+    G,
+    GoalStatus,
+    R,
+    ServerGoalHandle,
+)
+from cyborg.transport.messages import ActionType, Message
+from cyborg.transport.ros.convert import from_ros, ros_class, sender, to_ros
+from cyborg.transport.ros.master import UNREACHABLE, WATCH
+
+if TYPE_CHECKING:
+    from cyborg.transport.ros.transport import RosTransport
+
+__all__ = [
+    "ORDER_EXECUTE",
+    "ORDER_FIELD",
+    "SERVER_SILENCE_LIMIT",
+    "WATCHDOG_PERIOD",
+    "RosActionClient",
+    "RosActionServer",
+    "goal_order",
+]
+
+log = logging.getLogger(__name__)
+
+SERVER_SILENCE_LIMIT = 1.0  # seconds without a status message before an action server counts as gone
+WATCHDOG_PERIOD = 0.2
+
+# The published cyborg_controller package (scripts/install-ros --flavour public) has a fourth goal
+# field, ``string order``, which its controller always sets to EXECUTE: a goal sent with those
+# definitions installed carries it, so a module built against that package sees what it expects.
+ORDER_FIELD = "order"
+ORDER_EXECUTE = "EXECUTE"
+
+
+def goal_order(goal_cls: Any, goal_type: type[Message]) -> str | None:
+    """EXECUTE when the installed goal class has a string ``order`` field that ``goal_type`` lacks."""
+    slots = dict(zip(getattr(goal_cls, "__slots__", ()), getattr(goal_cls, "_slot_types", ()), strict=False))
+    if slots.get(ORDER_FIELD) != "string" or ORDER_FIELD in {f.name for f in dataclasses.fields(goal_type)}:
+        return None
+    return ORDER_EXECUTE
+
+
+def _action_classes(action_type: ActionType[Any, Any, Any]) -> Any:
+    return ros_class(action_type.ros_type)
+
+
+# --- the server side ----------------------------------------------------------------------
+
+
+class _RosServerGoalHandle(ServerGoalHandle[G, R, F]):
+    def __init__(self, server: RosActionServer[G, R, F], ros_handle: Any) -> None:
+        self._server = server
+        self._handle = ros_handle
+        goal_id = ros_handle.get_goal_id()
+        self.goal_id = str(goal_id.id)
+        self.goal = from_ros(ros_handle.get_goal(), server.action_type.goal)
+        self.sender = sender(ros_handle.get_goal()) or str(goal_id.id).split("-", 1)[0].lstrip("/")
+
+    @property
+    def status(self) -> GoalStatus:
+        return GoalStatus(int(self._handle.get_goal_status().status))
+
+    def _result(self, result: R | None) -> Any:
+        return to_ros(
+            result if result is not None else self._server.action_type.result(), self._server.result_cls
+        )
+
+    def accept(self) -> None:
+        self._guard(self._handle.set_accepted, "")
+
+    def reject(self, result: R | None = None, text: str = "") -> None:
+        self._guard(self._handle.set_rejected, self._result(result), text)
+
+    def publish_feedback(self, feedback: F) -> None:
+        if not self.status.is_terminal:
+            self._handle.publish_feedback(to_ros(feedback, self._server.feedback_cls))
+
+    def succeed(self, result: R | None = None, text: str = "") -> None:
+        self._guard(self._handle.set_succeeded, self._result(result), text)
+
+    def abort(self, result: R | None = None, text: str = "") -> None:
+        self._guard(self._handle.set_aborted, self._result(result), text)
+
+    def canceled(self, result: R | None = None, text: str = "") -> None:
+        self._guard(self._handle.set_canceled, self._result(result), text)
+
+    def _guard(self, method: Callable[..., None], *args: Any) -> None:
+        try:
+            method(*args)
+        except Exception:
+            log.warning(
+                "action %s: %s failed in status %s", self._server.name, method.__name__, self.status.name
+            )
+        if self.status.is_terminal:
+            self._server.forget(self.goal_id)
+
+
+class RosActionServer(ActionServer[G, R, F]):
+    def __init__(
+        self,
+        transport: RosTransport,
+        name: str,
+        action_type: ActionType[G, R, F],
+        on_goal: Callable[[ServerGoalHandle[G, R, F]], None],
+        on_cancel: Callable[[ServerGoalHandle[G, R, F]], None],
+    ) -> None:
+        self.name = name
+        self.action_type = action_type
+        self._transport = transport
+        self._on_goal = on_goal
+        self._on_cancel = on_cancel
+        self.result_cls = ros_class(action_type.result.ros_type)
+        self.feedback_cls = ros_class(action_type.feedback.ros_type)
+        self._handles: dict[str, _RosServerGoalHandle[G, R, F]] = {}
+        self._lock = threading.Lock()
+        self._server = actionlib.ActionServer(
+            name, _action_classes(action_type), self._goal_cb, self._cancel_cb, auto_start=False
+        )
+        self._server.start()
+
+    def _wrap(self, ros_handle: Any) -> _RosServerGoalHandle[G, R, F]:
+        key = str(ros_handle.get_goal_id().id)
+        with self._lock:
+            handle = self._handles.get(key)
+            if handle is None:
+                handle = self._handles[key] = _RosServerGoalHandle(self, ros_handle)
+            return handle
+
+    def forget(self, goal_id: str) -> None:
+        """Drop a finished goal's wrapper (a late cancel gets a fresh one, which sees it finished)."""
+        with self._lock:
+            self._handles.pop(goal_id, None)
+
+    def _goal_cb(self, ros_handle: Any) -> None:  # rospy thread
+        self._transport.to_loop(self._on_goal, self._wrap(ros_handle))
+
+    def _cancel_cb(self, ros_handle: Any) -> None:  # rospy thread
+        self._transport.to_loop(self._on_cancel, self._wrap(ros_handle))
+
+    def shutdown(self) -> None:
+        for attribute in ("status_pub", "result_pub", "feedback_pub"):
+            publisher = getattr(self._server, attribute, None)
+            if publisher is not None:
+                publisher.unregister()
+        for attribute in ("goal_sub", "cancel_sub"):
+            subscriber = getattr(self._server, attribute, None)
+            if subscriber is not None:
+                subscriber.unregister()
+        timer = getattr(self._server, "status_timer", None)
+        if timer is not None:
+            timer.shutdown()
+
+
+# --- the client side ----------------------------------------------------------------------
+
+
+class _WatchedActionClient(actionlib.ActionClient):  # type: ignore[misc]
+    """actionlib's client, remembering when the server last reported its status."""
+
+    last_status_time = 0.0
+
+    def _status_cb(self, msg: Any) -> None:
+        self.last_status_time = time.monotonic()
+        super()._status_cb(msg)
+
+
+class _RosClientGoalHandle(ClientGoal[G, R, F]):
+    """The shared client goal; a cancel goes through actionlib's goal handle once it was sent."""
+
+    def __init__(
+        self,
+        client: RosActionClient[G, R, F],
+        goal: G,
+        on_feedback: Callable[[F], None] | None,
+        on_status: Callable[[GoalStatus], None] | None,
+    ) -> None:
+        transport = client.transport
+        super().__init__(
+            goal,
+            clock=transport.clock,
+            run=transport._run_callback,
+            on_feedback=on_feedback,
+            on_status=on_status,
+        )
+        self._client = client
+        self._ros: Any = None
+
+    def _request_cancel(self) -> None:
+        if self._ros is not None:
+            self._ros.cancel()
+
+    def _finished(self) -> None:
+        self._client.forget(self)
+
+
+class RosActionClient(ActionClient[G, R, F]):
+    def __init__(self, transport: RosTransport, name: str, action_type: ActionType[G, R, F]) -> None:
+        self.name = name
+        self.transport = transport
+        self.action_type = action_type
+        self._goal_cls = ros_class(action_type.goal.ros_type)
+        self._order = goal_order(self._goal_cls, action_type.goal)  # the public package's 'order'
+        self._classes = _action_classes(action_type)
+        self._client: Any = None
+        self._active: set[_RosClientGoalHandle[G, R, F]] = set()
+        self._watchdog: asyncio.TimerHandle | None = None
+        self._make_client()
+
+    def _make_client(self) -> bool:
+        """Make actionlib's client, unless made already. actionlib asks the master for parameters
+        while it makes one: while the master is away it cannot, and what it made so far is undone;
+        the client is made at a later look for the server (``server_available``)."""
+        if self._client is not None:
+            return True
+        client = _WatchedActionClient.__new__(_WatchedActionClient)
+        try:
+            actionlib.ActionClient.__init__(client, self.name, self._classes)
+        except UNREACHABLE as exc:
+            for part in ("pub_goal", "pub_cancel", "status_sub", "result_sub", "feedback_sub"):
+                if (made := getattr(client, part, None)) is not None:
+                    made.unregister()
+            WATCH.missed(f"make the action client {self.name}", exc)
+            return False
+        self._client = client
+        return True
+
+    def server_available(self) -> bool:
+        """The server is reporting its status and connected both ways, as actionlib's own
+        ``wait_for_server`` checks: goal and cancel reach it, its results and feedback reach us.
+        (A result published before our result subscriber is connected is lost, and the goal
+        would wait for it forever.)"""
+        if not self._make_client():
+            return False
+        client = self._client
+        last = client.last_status_msg
+        if last is None or time.monotonic() - client.last_status_time > SERVER_SILENCE_LIMIT:
+            return False
+        server = last._connection_header["callerid"]
+        if not (
+            client.pub_goal.impl.has_connection(server) and client.pub_cancel.impl.has_connection(server)
+        ):
+            return False
+        return all(
+            any(connection.callerid_pub == server for connection in subscriber.impl.connections)
+            for subscriber in (client.result_sub, client.feedback_sub)
+        )
+
+    async def wait_for_server(self, timeout: float) -> bool:
+        deadline = time.monotonic() + timeout
+        while not self.server_available():
+            if time.monotonic() >= deadline:
+                return False
+            await asyncio.sleep(0.01)
+        return True
+
+    def send_goal(
+        self,
+        goal: G,
+        *,
+        on_feedback: Callable[[F], None] | None = None,
+        on_status: Callable[[GoalStatus], None] | None = None,
+    ) -> ClientGoalHandle[G, R, F]:
+        handle = _RosClientGoalHandle(self, goal, on_feedback, on_status)
+        transport = self.transport
+
+        def transition(ros_handle: Any) -> None:  # rospy thread
+            status = GoalStatus(int(ros_handle.get_goal_status()))
+            result = None
+            text = ""
+            if ros_handle.get_comm_state() == actionlib.CommState.DONE:
+                raw = ros_handle.get_result()
+                result = (
+                    from_ros(raw, self.action_type.result) if raw is not None else self.action_type.result()
+                )
+                text = str(ros_handle.get_goal_status_text())
+            elif status.is_terminal:
+                return  # wait for DONE to carry the result
+            transport.to_loop(handle.update_status, status, result, text)
+
+        def feedback(ros_handle: Any, ros_feedback: Any) -> None:  # rospy thread
+            transport.to_loop(handle.deliver_feedback, from_ros(ros_feedback, self.action_type.feedback))
+
+        if not self.server_available():
+            transport.clock.loop.call_soon(
+                handle.update_status, GoalStatus.LOST, None, f"no action server at {self.name}"
+            )
+            return handle
+        ros_goal = to_ros(goal, self._goal_cls)
+        if self._order is not None:
+            setattr(ros_goal, ORDER_FIELD, self._order)
+        handle._ros = self._client.send_goal(ros_goal, transition, feedback)
+        self._active.add(handle)
+        self._arm_watchdog()
+        return handle
+
+    def forget(self, handle: _RosClientGoalHandle[G, R, F]) -> None:
+        self._active.discard(handle)
+
+    def _arm_watchdog(self) -> None:
+        if self._watchdog is None:
+            self._watchdog = self.transport.clock.loop.call_later(WATCHDOG_PERIOD, self._check_server)
+
+    def _check_server(self) -> None:
+        """Goals of a vanished server end LOST (actionlib alone would wait forever)."""
+        self._watchdog = None
+        if not self._active:
+            return
+        if not self.server_available():
+            for handle in list(self._active):
+                handle.update_status(GoalStatus.LOST, None, "action server gone")
+            return
+        self._arm_watchdog()
+
+    def close(self) -> None:
+        if self._watchdog is not None:
+            self._watchdog.cancel()
+        if self._client is not None:
+            self._client.stop()

@@ -1,0 +1,79 @@
+"""Changes to rospy's own behaviour, made by :func:`install` when a RosTransport is created.
+
+Part of the ROS 1 transport (:mod:`cyborg.transport.ros`). Importing this module (or the
+transport) changes nothing; :func:`install` patches rospy's classes for the whole process, once
+(calling it again does nothing):
+
+* every subscriber, actionlib's own included, asks for TCP_NODELAY;
+* registering a new publisher, subscriber or service calls the master once instead of until it
+  answers, leaving the rest to :data:`~cyborg.transport.ros.master.WATCH`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import rospy  # type: ignore[import-not-found]
+
+from cyborg.transport.ros.master import UNREACHABLE, WATCH, answer, master_proxy
+
+__all__ = ["install"]
+
+
+def install() -> None:
+    """Patch rospy for this process (idempotent)."""
+    _ask_for_tcp_nodelay()
+    _register_once()
+
+
+def _ask_for_tcp_nodelay() -> None:
+    """Make every subscriber (actionlib's own included) ask for TCP_NODELAY.
+
+    Without it small messages wait for Nagle's algorithm: about 40 ms stalls per handover.
+    """
+    original = rospy.topics.Subscriber.__init__
+    if getattr(original, "_cyborg_nodelay", False):
+        return
+
+    def init(self: Any, *args: Any, tcp_nodelay: bool = True, **kwargs: Any) -> None:
+        original(self, *args, tcp_nodelay=tcp_nodelay, **kwargs)
+
+    init._cyborg_nodelay = True  # type: ignore[attr-defined]
+    rospy.topics.Subscriber.__init__ = init
+
+
+def _register_once() -> None:
+    """Make rospy register a new publisher, subscriber or service without waiting for the master.
+
+    rospy's ``RegManager.reg_added`` calls the master again every 0.2 s until it answers, on the
+    thread that made the publisher (in our nodes the event loop: a controller entering a state
+    during an outage would stop there) and under rospy's topic lock. This one calls it once; if the
+    master does not answer, the master watch registers it with everything else when it is back.
+    (In a process where no watch runs, i.e. no RosTransport made a node, rospy's own way is kept.)
+    """
+    from rospy.impl.registration import Registration, RegManager  # type: ignore[import-not-found]
+
+    original = RegManager.reg_added
+    if getattr(original, "_cyborg_once", False):
+        return
+
+    def reg_added(self: Any, resolved_name: str, data_type_or_uri: str, reg_type: str) -> None:
+        if not self.master_uri or not WATCH.running:  # (plain rospy use: nobody would register it later)
+            original(self, resolved_name, data_type_or_uri, reg_type)
+            return
+        proxy = master_proxy(self.master_uri)
+        args = (rospy.names.get_caller_id(), resolved_name, data_type_or_uri, self.uri)
+        try:
+            if reg_type == Registration.PUB:
+                answer(proxy.registerPublisher(*args), f"register publisher {resolved_name}")
+            elif reg_type == Registration.SUB:
+                publishers = answer(proxy.registerSubscriber(*args), f"register subscriber {resolved_name}")
+                if publishers:
+                    self.publisher_update(resolved_name, publishers)
+            elif reg_type == Registration.SRV:
+                answer(proxy.registerService(*args), f"register service {resolved_name}")
+        except UNREACHABLE as exc:
+            WATCH.missed(f"register {resolved_name}", exc)
+
+    reg_added._cyborg_once = True  # type: ignore[attr-defined]
+    RegManager.reg_added = reg_added

@@ -1,0 +1,249 @@
+"""The ROS 1 transport's entry point: :class:`RosTransport`, its nodes and parameters.
+
+Part of :mod:`cyborg.transport.ros`. Making a RosTransport installs the rospy patches
+(:mod:`.patches`); its first node initialises this process's one rospy node and starts the
+master watch (:mod:`.master`). A :class:`RosNode` hands out the topics (:mod:`.topics`),
+services (:mod:`.services`) and actions (:mod:`.actions`) of the ROS 1 transport. Callbacks
+arrive on rospy's threads and run on the clock's event loop (:meth:`RosTransport.to_loop`).
+"""
+
+from __future__ import annotations
+
+import copy
+import logging
+import threading
+from collections.abc import Awaitable, Callable
+from typing import Any
+
+import rosgraph  # type: ignore[import-not-found]
+import rospy  # type: ignore[import-not-found]
+
+from cyborg.errors import TransportError
+from cyborg.transport._queue import CallbackRunner
+from cyborg.transport.base import (
+    DEFAULT_QUEUE_SIZE,
+    ActionClient,
+    ActionServer,
+    F,
+    G,
+    M,
+    MessageInfo,
+    Node,
+    Publisher,
+    R,
+    Req,
+    Resp,
+    ServerGoalHandle,
+    ServiceProxy,
+    ServiceServer,
+    Subscription,
+    Transport,
+    normalize_node_name,
+)
+from cyborg.transport.clock import Clock
+from cyborg.transport.messages import ActionType, ServiceType
+from cyborg.transport.ros import patches
+from cyborg.transport.ros.actions import RosActionClient, RosActionServer
+from cyborg.transport.ros.master import UNREACHABLE, WATCH, listed_subscribers
+from cyborg.transport.ros.services import RosServiceProxy, RosServiceServer
+from cyborg.transport.ros.topics import RosPublisher, RosSubscription, check_topic_type
+
+__all__ = ["RosNode", "RosTransport"]
+
+log = logging.getLogger(__name__)
+
+_UNKNOWN = object()
+
+
+class RosTransport(Transport):
+    """Nodes of this process on a running ROS master (``ROS_MASTER_URI``)."""
+
+    def __init__(self, clock: Clock, *, process_name: str | None = None) -> None:
+        patches.install()
+        self.clock = clock
+        self.process_name = process_name
+        self.callback_errors = 0
+        self._run_callback = CallbackRunner(log, self._count_callback_error)
+        self._nodes: dict[str, RosNode] = {}
+        self._watched_params: set[str] = set()
+        self._param_values: dict[str, Any] = {}
+        self._params_lock = threading.Lock()
+        self._chained_notifier: Callable[[str, Any], None] | None = None
+
+    def _count_callback_error(self) -> None:
+        self.callback_errors += 1
+
+    def _ensure_init(self, first: str) -> None:
+        if not rospy.core.is_initialized():
+            rospy.init_node(self.process_name or first, anonymous=False, disable_signals=True)
+        WATCH.start(self)
+
+    @property
+    def ros_name(self) -> str:
+        return normalize_node_name(rospy.get_name())
+
+    def node(self, name: str) -> RosNode:
+        name = normalize_node_name(name)
+        if not name:
+            raise TransportError("node name is empty: give every component a name, e.g. 'cyborg_idle'")
+        if name in self._nodes:
+            raise TransportError(f"node name {name!r} is already in use in this process")
+        self._ensure_init(name)
+        node = RosNode(self, name)
+        self._nodes[name] = node
+        return node
+
+    def shutdown(self) -> None:
+        for node in list(self._nodes.values()):
+            node.shutdown()
+        self._nodes.clear()
+
+    def close(self, reason: str = "cyborg node stopped") -> None:
+        """Shut down every node of this process and leave the graph (rospy cannot rejoin it)."""
+        self.shutdown()
+        rospy.signal_shutdown(reason)
+
+    def subscribers_of(self, topic: str) -> list[str]:
+        """The nodes the master lists as subscribers of ``topic`` (empty if it does not answer)."""
+        return listed_subscribers(topic)
+
+    def _forget_node(self, node: RosNode) -> None:
+        if self._nodes.get(node.name) is node:
+            del self._nodes[node.name]
+
+    def set_param(self, key: str, value: Any) -> None:
+        """Set a parameter on the master, skipping the round trip when it already holds ``value``.
+
+        A master call is an XML-RPC request (about 1 ms on loopback) made on the loop, and the
+        controller sets ``/state_resources`` on every handover, often to the value it already has.
+        After its first set this process subscribes to the parameter, so the master reports
+        other nodes' changes to it (``paramUpdate``); such a change forgets the remembered value.
+
+        While the master does not answer, this logs it (once) and returns: the value is set when
+        the master is back, as is every parameter this process set last (a restarted master holds
+        none), unless another node set it since.
+        """
+        WATCH.want(key, value)  # first: our own set's update notice must find it ours
+        with self._params_lock:
+            known = self._param_values.get(key, _UNKNOWN)
+        if known is not _UNKNOWN and known == value:
+            return
+        try:
+            rospy.set_param(key, copy.deepcopy(value))  # rospy's cache keeps what it is given
+            if key not in self._watched_params:
+                self._watched_params.add(key)
+                WATCH.follow(key)
+                cache = rospy.impl.paramserver.get_param_server_cache()
+                if cache.notifier != self._on_param_update:
+                    self._chained_notifier = cache.notifier
+                    cache.set_notifier(self._on_param_update)
+                # Subscribes. An empty dict reads as "unset" in rospy's cache: hence the default.
+                rospy.get_param_cached(key, None)
+        except UNREACHABLE as exc:
+            WATCH.missed(f"set {key}", exc)
+            return
+        with self._params_lock:
+            self._param_values[key] = copy.deepcopy(value)
+
+    def _forget_param_values(self) -> None:  # the master watch's thread: a new master holds nothing
+        with self._params_lock:
+            self._param_values.clear()
+
+    def _on_param_update(self, key: str, value: Any) -> None:  # rospy thread, under the cache's lock
+        """A subscribed parameter changed (our own set comes here first, then records its value)."""
+        changed = key.rstrip("/") + "/"
+        with self._params_lock:
+            for watched in list(self._param_values):
+                if changed.startswith(watched + "/") or (watched + "/").startswith(changed):
+                    del self._param_values[watched]
+        WATCH.changed_elsewhere(key, value)
+        if self._chained_notifier is not None:
+            self._chained_notifier(key, value)
+
+    def to_loop(self, callback: Callable[..., object], *args: Any) -> None:
+        """Run ``callback(*args)`` on the loop (from a rospy thread), as every callback runs."""
+        loop = self.clock.loop
+        if not loop.is_closed():
+            loop.call_soon_threadsafe(self._run_callback, callback, *args)
+
+
+class RosNode(Node):
+    """One logical node: the components of a process share its one rospy node."""
+
+    def __init__(self, transport: RosTransport, name: str) -> None:
+        self.transport = transport
+        self.name = name
+        self.clock = transport.clock
+        self._closers: list[Callable[[], None]] = []
+
+    def publisher(
+        self, topic: str, msg_type: type[M], *, queue_size: int = DEFAULT_QUEUE_SIZE, latch: bool = False
+    ) -> Publisher[M]:
+        check_topic_type(self.resolve(topic), msg_type)
+        pub = RosPublisher[M](self.resolve(topic), msg_type, queue_size, latch)
+        self._closers.append(pub.unregister)
+        return pub
+
+    def subscribe(
+        self,
+        topic: str,
+        msg_type: type[M],
+        callback: Callable[[M, MessageInfo], None],
+        *,
+        queue_size: int = DEFAULT_QUEUE_SIZE,
+    ) -> Subscription[M]:
+        check_topic_type(self.resolve(topic), msg_type)
+        sub = RosSubscription(self.transport, self.resolve(topic), msg_type, callback, queue_size)
+        self._closers.append(sub.unsubscribe)
+        return sub
+
+    def advertise_service(
+        self,
+        name: str,
+        srv_type: ServiceType[Req, Resp],
+        handler: Callable[[Req, MessageInfo], Resp | Awaitable[Resp]],
+    ) -> ServiceServer:
+        server = RosServiceServer(self.transport, self.resolve(name), srv_type, handler)
+        self._closers.append(server.shutdown)
+        return server
+
+    def service_proxy(self, name: str, srv_type: ServiceType[Req, Resp]) -> ServiceProxy[Req, Resp]:
+        return RosServiceProxy(self.transport, self.resolve(name), srv_type)
+
+    def action_server(
+        self,
+        name: str,
+        action_type: ActionType[G, R, F],
+        on_goal: Callable[[ServerGoalHandle[G, R, F]], None],
+        on_cancel: Callable[[ServerGoalHandle[G, R, F]], None],
+    ) -> ActionServer[G, R, F]:
+        server = RosActionServer(self.transport, self.resolve(name), action_type, on_goal, on_cancel)
+        self._closers.append(server.shutdown)
+        return server
+
+    def action_client(self, name: str, action_type: ActionType[G, R, F]) -> ActionClient[G, R, F]:
+        client = RosActionClient(self.transport, self.resolve(name), action_type)
+        self._closers.append(client.close)
+        return client
+
+    def get_param(self, name: str, default: Any = None) -> Any:
+        key = self.resolve(name)
+        try:
+            return rospy.get_param(key, default)
+        except UNREACHABLE as exc:
+            raise TransportError(
+                f"could not read the parameter {key}: the ROS master at {rosgraph.get_master_uri()} does "
+                f"not answer ({exc}); fix: start roscore again on the same port (the nodes register again)"
+            ) from exc
+
+    def set_param(self, name: str, value: Any) -> None:
+        self.transport.set_param(self.resolve(name), value)
+
+    def shutdown(self) -> None:
+        for close in reversed(self._closers):
+            try:
+                close()
+            except Exception:
+                log.debug("closing failed", exc_info=True)
+        self._closers.clear()
+        self.transport._forget_node(self)  # the name is free again, as on the embedded transport
