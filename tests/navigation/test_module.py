@@ -14,6 +14,7 @@ import functools
 import itertools
 import math
 import random
+import typing
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from datetime import datetime, timedelta
@@ -24,17 +25,19 @@ import pytest
 import yaml
 
 from cyborg.app.config import LoadedConfig, parse_config
-from cyborg.app.kinds import BaseSettings, BuildContext, ModuleKind, NavigationSettings
+from cyborg.app.registry import module_kinds
 from cyborg.app.robot import build_robot
 from cyborg.emotion.model import NEUTRAL, TABLE_2_2
 from cyborg.interfaces.cli import packaged_config
 from cyborg.maps import Cell, OccupancyMap, Point, default_map_path, load_map
+from cyborg.modules.kind import BuildContext, ModuleKind
 from cyborg.modules.speech import SPOKEN_TOPIC, estimated_duration
 from cyborg.navigation.content import DEFAULT_RESPONSES
 from cyborg.navigation.database import NavigationDatabase
+from cyborg.navigation.kind import NavigationSettings
 from cyborg.navigation.module import WANDER_CHECK, WANDER_DEBOUNCE, NavigationModule
 from cyborg.navigation.records import CalendarEvent, Location, ResponseType
-from cyborg.sim.base import PathState, SimulatedBase
+from cyborg.sim.base import PathState, SimulatedBase, SimulatedBaseSettings
 from cyborg.sim.planner import RoutePlanner
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Node
@@ -79,7 +82,7 @@ def planner_for(source: str) -> RoutePlanner:
     return RoutePlanner(glassgarden_map() if source == str(GLASSGARDEN) else CAMPUS, 0.35)
 
 
-def simulated_base(node: Node, settings: BaseSettings, robot: BuildContext) -> SimulatedBase:
+def simulated_base(node: Node, settings: SimulatedBaseSettings, robot: BuildContext) -> SimulatedBase:
     """The ``simulated_base`` kind of cyborg.yaml, sharing one planner per map."""
     occupancy = robot.occupancy_map()
     planner = planner_for(occupancy.source)
@@ -111,7 +114,7 @@ class Cyborg:
         *,
         seed: int = 1,
         map_path: Path | None = None,
-        kinds: dict[str, ModuleKind] | None = None,
+        kinds: dict[str, ModuleKind[typing.Any]] | None = None,
     ) -> None:
         self.clock = clock
         self.transport = EmbeddedTransport(clock)
@@ -121,7 +124,9 @@ class Cyborg:
             data_dir=data_dir,
             rng=random.Random(seed),
             map_path=map_path,
-            kinds={"simulated_base": ModuleKind(BaseSettings, simulated_base), **(kinds or {})},
+            kinds=module_kinds(
+                {"simulated_base": ModuleKind(SimulatedBaseSettings, simulated_base), **(kinds or {})}
+            ),
         )
         self.map: OccupancyMap = self.robot.occupancy_map()
         nav = self.robot.components[NAV]

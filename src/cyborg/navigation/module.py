@@ -13,9 +13,11 @@ import asyncio
 import logging
 import math
 import random
+from datetime import UTC
 
 from cyborg.errors import CyborgError
 from cyborg.modules.helper import Abort, BehaviourModule, GoalContext
+from cyborg.modules.kind import CalendarEntry
 from cyborg.modules.speech import estimated_duration
 from cyborg.navigation.behaviour import (
     ANGRY,
@@ -34,7 +36,7 @@ from cyborg.navigation.behaviour import (
 )
 from cyborg.navigation.database import NavigationDatabase
 from cyborg.navigation.keywords import Intent, detect_answer, detect_navigation
-from cyborg.navigation.records import Location, ResponseType
+from cyborg.navigation.records import CalendarEvent, Location, ResponseType
 from cyborg.transport import topics
 from cyborg.transport.base import GoalStatus, MessageInfo, Node
 from cyborg.transport.messages import (
@@ -86,6 +88,8 @@ class NavigationModule(BehaviourModule):
     ) -> None:
         super().__init__(node)
         self.db = db
+        self.owns_db = False
+        """True when the module opened ``db`` itself (its kind's factory did): close() closes it."""
         self.rng = rng
         self.scheduler_interval = scheduler_interval
         self.scheduler_repeat = scheduler_repeat
@@ -125,8 +129,18 @@ class NavigationModule(BehaviourModule):
         )
 
     def close(self) -> None:
-        """Stop looking at the calendar."""
+        """Stop looking at the calendar and end the goal that runs; close the database if it opened it."""
         self._scheduler.cancel()
+        super().close()
+        if self.owns_db:
+            self.db.close()
+
+    def add_calendar_entry(self, entry: CalendarEntry) -> None:
+        """Put ``entry`` (from a scenario script) in the calendar; a naive time is taken as UTC."""
+        start, end = (t if t.tzinfo else t.replace(tzinfo=UTC) for t in (entry.start, entry.end))
+        self.db.add_event(
+            CalendarEvent(entry.location, start, end, ignored=entry.ignore, recurrence=entry.recurrence)
+        )
 
     # --- inputs ------------------------------------------------------------------------
 

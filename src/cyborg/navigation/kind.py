@@ -1,0 +1,54 @@
+"""The ``navigation`` module kind: its settings and how it is built from the robot's map.
+
+The factory opens the navigation database (``<data dir>/navigation.db`` unless ``db:``
+names another), makes the map's goals its places, and starts :class:`NavigationModule`.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from pydantic import Field
+
+from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
+from cyborg.navigation.database import NavigationDatabase
+from cyborg.navigation.module import NavigationModule
+from cyborg.transport.base import Node
+
+
+class NavigationSettings(ModuleSettings):
+    """Guides people to places (thesis 7): answers questions, follows the calendar, wanders."""
+
+    db: str | None = Field(None, description="navigation database (default: <data dir>/navigation.db)")
+    scheduler_interval: float = Field(10.0, gt=0, description="seconds between looks at the calendar")
+    scheduler_repeat: float = Field(
+        20.0, gt=0, description="seconds before the calendar may raise the same event again"
+    )
+    answer_timeout: float = Field(20.0, gt=0, description="seconds it waits for a yes or no")
+    feedback_interval: float = Field(15.0, gt=0, description="seconds between emotion feedbacks on a trip")
+    wander_limit: float = Field(600.0, gt=0, description="seconds a wander lasts at most")
+
+
+def _build(node: Node, settings: NavigationSettings, context: BuildContext) -> NavigationModule:
+    db = NavigationDatabase(Path(settings.db) if settings.db else context.data_dir / "navigation.db")
+    occupancy = context.occupancy_map()
+    map_name = Path(occupancy.source).stem if occupancy.source else "map"
+    db.use_map(map_name)  # also for a map without goals: the last map's places are not on this one
+    for goal in occupancy.poses:
+        if goal.kind in ("Goal", "GoalWithHeading"):
+            db.import_pose(goal, map_name)
+    module = NavigationModule(
+        node,
+        db,
+        rng=context.rng,
+        scheduler_interval=settings.scheduler_interval,
+        scheduler_repeat=settings.scheduler_repeat,
+        answer_timeout=settings.answer_timeout,
+        feedback_interval=settings.feedback_interval,
+        wander_limit=settings.wander_limit,
+    )
+    module.owns_db = True
+    return module
+
+
+KIND = ModuleKind(NavigationSettings, _build)

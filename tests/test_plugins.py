@@ -1,0 +1,204 @@
+"""A module kind from a package installed next to ours is known to every command, with no edit here.
+
+The package is written and pip-installed (into a folder of its own, put on PYTHONPATH) at test
+time: a "greeter" that asks for control when it hears "good morning", answers through the
+speech gatekeeper and finishes. `cyborg validate`, a scenario run of `cyborg sim` and the
+launch file `cyborg launch --write` all find it through its entry point.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from cyborg.app.registry import ENTRY_POINT_GROUP, KindRegistry
+from cyborg.errors import ConfigError
+
+CYBORG = Path(sys.executable).with_name("cyborg")
+
+GREETER = '''
+"""A greeter module: answers "good morning" (a student's package, not part of cyborg)."""
+
+from pydantic import Field
+
+from cyborg.modules.helper import BehaviourModule, GoalContext
+from cyborg.modules.kind import ModuleKind, ModuleSettings
+
+
+class GreeterSettings(ModuleSettings):
+    """Greets back whoever says good morning."""
+
+    action: str = Field("greeter/greet", description="action server of the greeting state")
+    reply: str = Field("Good morning to you too!", description="what it answers")
+
+
+class Greeter(BehaviourModule):
+    def __init__(self, node, settings):
+        super().__init__(node)
+        self.settings = settings
+        self.serve(settings.action, self.greet)
+        self.on_speech_text(self.heard)
+
+    def heard(self, text, info):
+        if "good morning" in text.lower():
+            self.publish_event("greeting_heard")
+
+    async def greet(self, ctx: GoalContext) -> None:
+        self.say(self.settings.reply)
+        self.send_emotion(0.05, 0.0, 0.0)
+        await ctx.sleep(3.0)
+
+
+KIND = ModuleKind(GreeterSettings, lambda node, settings, context: Greeter(node, settings))
+'''
+
+PYPROJECT = f"""
+[build-system]
+requires = ["setuptools"]
+build-backend = "setuptools.build_meta"
+
+[project]
+name = "cyborg-greeter"
+version = "0.1.0"
+
+[tool.setuptools]
+py-modules = ["greeter"]
+
+[project.entry-points."{ENTRY_POINT_GROUP}"]
+greeter = "greeter:KIND"
+"""
+
+CONFIG = """
+initial: idle
+timeouts: {connect: 2.0, preempt: 2.0}
+states:
+  idle: {action: cyborg_idle/idle, transitions: {greeting_heard: greeting, aborted: idle}}
+  greeting:
+    action: greeter/greet
+    transitions: {succeeded: idle, aborted: idle}
+    resources: {speech: greeter}
+gatekeepers:
+  - {name: cyborg_speech_gatekeeper, input: /text_to_speech, output: /cyborg_tts/say, resource: speech}
+modules:
+  cyborg_idle: {kind: idle}
+  greeter: {kind: greeter, reply: "Good morning, student!"}
+  cyborg_tts: {kind: tts}
+"""
+
+SCRIPT = """
+until: 30
+steps:
+  - {at: 5, say: "Good morning, robot"}
+"""
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A folder where the greeter package is pip-installed, as a student would install it."""
+    source = tmp_path_factory.mktemp("greeter-src")
+    (source / "greeter.py").write_text(GREETER)
+    (source / "pyproject.toml").write_text(PYPROJECT)
+    target = tmp_path_factory.mktemp("site")
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "install",
+            "-q",
+            "--no-deps",
+            "--no-build-isolation",
+            "--target",
+            str(target),
+            str(source),
+        ],
+        check=True,
+        capture_output=True,
+    )
+    return target
+
+
+def cyborg(site: Path, *args: str | Path, cwd: Path) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "PYTHONPATH": str(site)}
+    return subprocess.run(
+        [str(CYBORG), *map(str, args)], env=env, cwd=cwd, capture_output=True, text=True, timeout=120
+    )
+
+
+def test_validate_knows_the_installed_kind_and_its_settings(site: Path, tmp_path: Path) -> None:
+    config = tmp_path / "greeter.yaml"
+    config.write_text(CONFIG)
+    result = cyborg(site, "validate", config, cwd=tmp_path)
+    assert result.returncode == 0, result.stderr + result.stdout
+
+    config.write_text(CONFIG.replace('reply: "Good morning, student!"', "replies: 3"))
+    result = cyborg(site, "validate", config, cwd=tmp_path)
+    assert result.returncode == 1
+    assert (
+        "module 'greeter' > replies: unknown setting; fix: remove it or use one of action, reply"
+        in result.stderr
+    )
+
+
+def test_without_the_package_the_kind_is_unknown_and_the_error_says_how_to_get_it(tmp_path: Path) -> None:
+    config = tmp_path / "greeter.yaml"
+    config.write_text(CONFIG)
+    result = subprocess.run(
+        [str(CYBORG), "validate", str(config)], capture_output=True, text=True, cwd=tmp_path
+    )
+    assert result.returncode == 1
+    assert "module 'greeter': unknown kind 'greeter'" in result.stderr and "pip install" in result.stderr
+
+
+def test_a_scenario_runs_the_installed_module(site: Path, tmp_path: Path) -> None:
+    config = tmp_path / "greeter.yaml"
+    config.write_text(CONFIG)
+    script = tmp_path / "morning.yaml"
+    script.write_text(SCRIPT)
+    transcript = tmp_path / "out.jsonl"
+    result = cyborg(
+        site, "sim", "--config", config, "--script", script, "--transcript", transcript, cwd=tmp_path
+    )
+    assert result.returncode == 0, result.stderr
+    records = [json.loads(line) for line in transcript.read_text().splitlines()]
+    states = [(r["to"], r.get("event")) for r in records if r["type"] == "state"]
+    assert ("greeting", "greeting_heard") in states and states[-1][0] == "idle"
+    said = [r["text"] for r in records if r["type"] == "say"]
+    assert said == ["Good morning, student!"], "the reply passed the speech gatekeeper"
+
+
+def test_the_launch_file_starts_the_installed_module_as_its_own_node(site: Path, tmp_path: Path) -> None:
+    config = tmp_path / "greeter.yaml"
+    config.write_text(CONFIG)
+    launch = tmp_path / "robot.launch"
+    result = cyborg(site, "launch", "--config", config, "--write", launch, cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert 'name="greeter"' in launch.read_text()
+
+
+def test_two_packages_offering_one_kind_is_an_error_naming_both() -> None:
+    from importlib.metadata import EntryPoint
+
+    entries = [
+        EntryPoint("greeter", "greeter_a:KIND", ENTRY_POINT_GROUP),
+        EntryPoint("greeter", "greeter_b:KIND", ENTRY_POINT_GROUP),
+    ]
+    registry = KindRegistry(entries)
+    with pytest.raises(ConfigError, match=r"offered by several packages: .*greeter_a:KIND.*greeter_b:KIND"):
+        registry.get("greeter")
+
+
+def test_an_entry_point_that_is_no_kind_names_the_fix() -> None:
+    from importlib.metadata import EntryPoint
+
+    registry = KindRegistry([EntryPoint("broken", "json:dumps", ENTRY_POINT_GROUP)])
+    with pytest.raises(ConfigError, match=r"is a function, not a ModuleKind; fix: point the entry point"):
+        registry.get("broken")
+    registry = KindRegistry([EntryPoint("missing", "no_such_package_here:KIND", ENTRY_POINT_GROUP)])
+    with pytest.raises(ConfigError, match=r"could not be imported: .*fix: repair or reinstall"):
+        registry.get("missing")
