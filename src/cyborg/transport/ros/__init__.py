@@ -13,7 +13,8 @@ the generated ROS classes (the names are the same by design).
 Its modules, one idea each:
 
 * :mod:`.transport`: :class:`RosTransport` and its nodes and parameters (start here);
-* :mod:`.topics`, :mod:`.services`, :mod:`.actions`: what a node hands out;
+* :mod:`.topics`, :mod:`.services`, :mod:`.actions`: what a node hands out
+  (:mod:`.host`: what they need of the transport);
 * :mod:`.convert`: our messages to and from the generated ROS classes;
 * :mod:`.master`: calls to the master, and living through its outage or restart;
 * :mod:`.patches`: rospy's behaviour changed, installed when a RosTransport is made

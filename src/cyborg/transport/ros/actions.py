@@ -15,7 +15,7 @@ import logging
 import threading
 import time
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import actionlib  # type: ignore[import-not-found]
 
@@ -32,10 +32,8 @@ from cyborg.transport.base import (
 )
 from cyborg.transport.messages import ActionType, Message
 from cyborg.transport.ros.convert import from_ros, ros_class, sender, to_ros
+from cyborg.transport.ros.host import Host
 from cyborg.transport.ros.master import UNREACHABLE, WATCH
-
-if TYPE_CHECKING:
-    from cyborg.transport.ros.transport import RosTransport
 
 __all__ = [
     "ORDER_EXECUTE",
@@ -125,7 +123,7 @@ class _RosServerGoalHandle(ServerGoalHandle[G, R, F]):
 class RosActionServer(ActionServer[G, R, F]):
     def __init__(
         self,
-        transport: RosTransport,
+        transport: Host,
         name: str,
         action_type: ActionType[G, R, F],
         on_goal: Callable[[ServerGoalHandle[G, R, F]], None],
@@ -205,7 +203,7 @@ class _RosClientGoalHandle(ClientGoal[G, R, F]):
         super().__init__(
             goal,
             clock=transport.clock,
-            run=transport._run_callback,
+            run=transport.run_callback,
             on_feedback=on_feedback,
             on_status=on_status,
         )
@@ -221,7 +219,7 @@ class _RosClientGoalHandle(ClientGoal[G, R, F]):
 
 
 class RosActionClient(ActionClient[G, R, F]):
-    def __init__(self, transport: RosTransport, name: str, action_type: ActionType[G, R, F]) -> None:
+    def __init__(self, transport: Host, name: str, action_type: ActionType[G, R, F]) -> None:
         self.name = name
         self.transport = transport
         self.action_type = action_type

@@ -16,15 +16,12 @@ import threading
 import time
 import weakref
 import xmlrpc.client
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import rosgraph  # type: ignore[import-not-found]
 import rospy  # type: ignore[import-not-found]
 
 from cyborg.transport.base import normalize_node_name
-
-if TYPE_CHECKING:
-    from cyborg.transport.ros.transport import RosTransport
 
 __all__ = [
     "MASTER_CALL_TIMEOUT",
@@ -32,6 +29,7 @@ __all__ = [
     "UNREACHABLE",
     "WATCH",
     "MasterWatch",
+    "ParamHolder",
     "answer",
     "listed_subscribers",
     "master_proxy",
@@ -80,6 +78,13 @@ def listed_subscribers(topic: str) -> list[str]:
     return [normalize_node_name(n) for name, nodes in subscribers if name == topic for n in nodes]
 
 
+class ParamHolder(Protocol):
+    """Whoever remembers which parameter values the master holds (a RosTransport)."""
+
+    def forget_param_values(self) -> None:
+        """The master is a new one: it holds none of the values remembered."""
+
+
 class MasterWatch:
     """Keeps this process's registrations on the ROS master through an outage or a restart of it.
 
@@ -105,13 +110,13 @@ class MasterWatch:
         self._wanted: dict[str, Any] = {}  # parameter -> the value this process set last
         self._followed: set[str] = set()  # parameters whose changes this process is told of
         self._out_of_sync = threading.Event()
-        self._transports: weakref.WeakSet[RosTransport] = weakref.WeakSet()
+        self._transports: weakref.WeakSet[ParamHolder] = weakref.WeakSet()
         self._thread: threading.Thread | None = None
         self._pid: int | None = None
         self.away = False
         self.comebacks = 0
 
-    def start(self, transport: RosTransport) -> None:
+    def start(self, transport: ParamHolder) -> None:
         self._transports.add(transport)
         if self._thread is not None:
             return
@@ -238,7 +243,7 @@ class MasterWatch:
             for name, service_uri in offered:
                 answer(proxy.registerService(caller, name, service_uri, node_uri), f"register {name}")
         for transport in list(self._transports):
-            transport._forget_param_values()  # what the master held: a new one holds nothing
+            transport.forget_param_values()  # what the master held: a new one holds nothing
         with self._lock:
             wanted, followed = copy.deepcopy(self._wanted), set(self._followed)
         for key, value in wanted.items():

@@ -11,7 +11,7 @@ import asyncio
 import inspect
 import time
 from collections.abc import Awaitable, Callable
-from typing import TYPE_CHECKING, Any, Generic
+from typing import Any, Generic
 
 import rospy  # type: ignore[import-not-found]
 
@@ -19,9 +19,7 @@ from cyborg.errors import ServiceTimeoutError, ServiceUnavailableError, Transpor
 from cyborg.transport.base import MessageInfo, Req, Resp, ServiceProxy, ServiceServer
 from cyborg.transport.messages import ServiceType
 from cyborg.transport.ros.convert import from_ros, ros_class, sender, to_ros
-
-if TYPE_CHECKING:
-    from cyborg.transport.ros.transport import RosTransport
+from cyborg.transport.ros.host import Host
 
 __all__ = ["RosServiceProxy", "RosServiceServer"]
 
@@ -29,7 +27,7 @@ __all__ = ["RosServiceProxy", "RosServiceServer"]
 class RosServiceServer(ServiceServer, Generic[Req, Resp]):
     def __init__(
         self,
-        transport: RosTransport,
+        transport: Host,
         name: str,
         srv_type: ServiceType[Req, Resp],
         handler: Callable[[Req, MessageInfo], Resp | Awaitable[Resp]],
@@ -60,7 +58,7 @@ class RosServiceServer(ServiceServer, Generic[Req, Resp]):
 
 
 class RosServiceProxy(ServiceProxy[Req, Resp]):
-    def __init__(self, transport: RosTransport, name: str, srv_type: ServiceType[Req, Resp]) -> None:
+    def __init__(self, transport: Host, name: str, srv_type: ServiceType[Req, Resp]) -> None:
         self.name = name
         self._transport = transport
         self._srv_type = srv_type

@@ -13,7 +13,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import rosgraph  # type: ignore[import-not-found]
 import rospy  # type: ignore[import-not-found]
@@ -23,10 +23,8 @@ from cyborg.transport._queue import SubscriptionQueue
 from cyborg.transport.base import M, MessageInfo, Publisher, Subscription
 from cyborg.transport.messages import Message
 from cyborg.transport.ros.convert import from_ros, ros_class, sender, to_ros
+from cyborg.transport.ros.host import Host
 from cyborg.transport.ros.master import listed_subscribers
-
-if TYPE_CHECKING:
-    from cyborg.transport.ros.transport import RosTransport
 
 __all__ = ["FRESH_PUBLISHER_WAIT", "RosPublisher", "RosSubscription", "check_topic_type"]
 
@@ -124,7 +122,7 @@ class RosSubscription(Subscription[M]):
 
     def __init__(
         self,
-        transport: RosTransport,
+        transport: Host,
         topic: str,
         msg_type: type[M],
         callback: Callable[[M, MessageInfo], None],
@@ -133,7 +131,7 @@ class RosSubscription(Subscription[M]):
         self.topic = topic
         self._transport = transport
         self._type = msg_type
-        self._queue = SubscriptionQueue(transport.clock, callback, queue_size, transport._run_callback)
+        self._queue = SubscriptionQueue(transport.clock, callback, queue_size, transport.run_callback)
         self._sub = rospy.Subscriber(topic, ros_class(msg_type.ros_type), self._on_ros, queue_size=None)
 
     @property

@@ -63,7 +63,7 @@ class RosTransport(Transport):
         self.clock = clock
         self.process_name = process_name
         self.callback_errors = 0
-        self._run_callback = CallbackRunner(log, self._count_callback_error)
+        self.run_callback = CallbackRunner(log, self._count_callback_error)
         self._nodes: dict[str, RosNode] = {}
         self._watched_params: set[str] = set()
         self._param_values: dict[str, Any] = {}
@@ -145,7 +145,7 @@ class RosTransport(Transport):
         with self._params_lock:
             self._param_values[key] = copy.deepcopy(value)
 
-    def _forget_param_values(self) -> None:  # the master watch's thread: a new master holds nothing
+    def forget_param_values(self) -> None:  # the master watch's thread: a new master holds nothing
         with self._params_lock:
             self._param_values.clear()
 
@@ -164,7 +164,7 @@ class RosTransport(Transport):
         """Run ``callback(*args)`` on the loop (from a rospy thread), as every callback runs."""
         loop = self.clock.loop
         if not loop.is_closed():
-            loop.call_soon_threadsafe(self._run_callback, callback, *args)
+            loop.call_soon_threadsafe(self.run_callback, callback, *args)
 
 
 class RosNode(Node):
