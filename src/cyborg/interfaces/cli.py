@@ -81,6 +81,26 @@ def validate(file: Path) -> None:
 
 
 @cli.command()
+@click.option("--markdown", is_flag=True, help="print each kind's settings as Markdown tables")
+def kinds(markdown: bool) -> None:
+    """List the module kinds this installation knows (built in or from installed packages)."""
+    from cyborg.app.kinds_doc import kinds_markdown
+    from cyborg.app.registry import module_kinds
+
+    registry = module_kinds()
+    try:
+        if markdown:
+            click.echo(kinds_markdown(registry), nl=False)
+            return
+        width = max(map(len, registry.names()), default=0)
+        for name in registry.names():
+            summary = registry.get(name).summary
+            click.echo(f"{name:<{width}}  {summary}  [{registry.origin(name)}]")
+    except CyborgError as exc:
+        _fail(exc)
+
+
+@cli.command()
 @click.argument("file", type=click.Path(path_type=Path))
 @click.option(
     "-o",
