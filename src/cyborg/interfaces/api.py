@@ -24,6 +24,7 @@ from aiohttp import WSCloseCode, WSMsgType, web
 from cyborg.controller.machine import MachineSpec
 from cyborg.emotion.model import EmotionSettings
 from cyborg.errors import CyborgError
+from cyborg.interfaces.access import DEFAULT_PORT as DEFAULT_PORT
 from cyborg.interfaces.security import Access, Guard, needs_token, new_token
 from cyborg.limits import MAX_TEXT_LENGTH
 from cyborg.sim.records import Record, RecordStream
@@ -33,7 +34,6 @@ from cyborg.transport.messages import EmotionalFeedback, String
 
 log = logging.getLogger(__name__)
 
-DEFAULT_PORT = 8642
 RECORD_BUFFER = 5000
 GRAPH_MAX_STATES = 200  # more leaf states are shown as a list: Graphviz needs minutes and gigabytes
 GRAPH_TIMEOUT = 10.0  # real seconds Graphviz may take to lay out the machine (once per machine)

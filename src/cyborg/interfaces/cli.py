@@ -1,31 +1,44 @@
 """The ``cyborg`` command line: validate and draw machines, run the simulated robot, tools.
 
-Top of the import chain: it may use every layer below it.
+Top of the import chain: it may use every layer below it, but imports each part only in the
+command that needs it, so that ``cyborg --help`` and the command tool (``cyborg say``) load
+click and an HTTP client only, and ``cyborg node`` only its own part (issue 13).
 """
 
 from __future__ import annotations
 
-import asyncio
 import errno
+import importlib
 import logging
 import math
 import sys
-from importlib import resources
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
-from cyborg.app.config import LoadedConfig, load_config
-from cyborg.errors import ConfigError, CyborgError
-from cyborg.interfaces.security import Access, access_options
+from cyborg.errors import CyborgError
+from cyborg.interfaces.access import Access, access_options
 from cyborg.limits import MAX_SCRIPT_SECONDS, MAX_SPEED
+
+if TYPE_CHECKING:
+    from cyborg.app.config import LoadedConfig
 
 DEFAULT_CONFIG = "cyborg.yaml"
 
 
 def packaged_config(name: str) -> Path:
     """Path of a configuration file shipped with the package (``src/cyborg/data``)."""
+    from importlib import resources
+
     return Path(str(resources.files("cyborg") / "data" / name))
+
+
+def load_config(path: Path) -> LoadedConfig:
+    """:func:`cyborg.app.config.load_config`, imported by the commands that read a configuration."""
+    from cyborg.app.config import load_config as load
+
+    return load(path)
 
 
 def _load(path: Path | None) -> LoadedConfig:
@@ -48,7 +61,51 @@ def _fail(exc: CyborgError) -> None:
     sys.exit(1)
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class LazyGroup(click.Group):
+    """A group whose ``lazy`` subcommands are imported when run or asked for their help; its
+    own ``--help`` lists them with the short help given here, without importing them."""
+
+    def __init__(self, *args: object, lazy: dict[str, tuple[str, str]], **kwargs: object) -> None:
+        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+        self.lazy = lazy  # name -> ("module:attribute", short help)
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted({*super().list_commands(ctx), *self.lazy})
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        if cmd_name in self.lazy and cmd_name not in self.commands:
+            module, _, attribute = self.lazy[cmd_name][0].partition(":")
+            command = getattr(importlib.import_module(module), attribute)
+            assert isinstance(command, click.Command)
+            self.add_command(command, cmd_name)
+        return super().get_command(ctx, cmd_name)
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        names = self.list_commands(ctx)
+        limit = formatter.width - 6 - max((len(name) for name in names), default=0)
+        rows: list[tuple[str, str]] = []
+        for name in names:
+            if name in self.lazy and name not in self.commands:
+                rows.append((name, click.Command(name, help=self.lazy[name][1]).get_short_help_str(limit)))
+                continue
+            command = self.get_command(ctx, name)
+            if command is not None and not command.hidden:
+                rows.append((name, command.get_short_help_str(limit)))
+        if rows:
+            with formatter.section("Commands"):
+                formatter.write_dl(rows)
+
+
+@click.group(
+    cls=LazyGroup,
+    context_settings={"help_option_names": ["-h", "--help"]},
+    lazy={
+        "db": (
+            "cyborg.interfaces.db_cli:db_group",
+            "Locations, calendar events and responses of the navigation module.",
+        )
+    },
+)
 @click.option(
     "--log-level",
     default="INFO",
@@ -278,6 +335,8 @@ def sim(
             return
         if transcript_path is not None:
             raise click.UsageError("--transcript goes with --script")
+        import asyncio
+
         from cyborg.interfaces.serve import serve_api
         from cyborg.sim.runner import run_sim
 
@@ -619,12 +678,10 @@ def launch_command(
 
 
 def _add_tool_commands() -> None:
-    from cyborg.interfaces.command_tool import COMMANDS
-    from cyborg.interfaces.db_cli import db_group
+    from cyborg.interfaces.command_tool import COMMANDS  # light: click and urllib
 
     for command in COMMANDS:
-        cli.add_command(command)
-    cli.add_command(db_group)
+        cli.add_command(command)  # `db` is lazy: see the group's ``lazy``
 
 
 _add_tool_commands()

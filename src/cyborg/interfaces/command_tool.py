@@ -8,7 +8,6 @@ over the ROS graph instead (:mod:`cyborg.interfaces.ros_tool`).
 
 from __future__ import annotations
 
-import asyncio
 import contextlib
 import functools
 import json
@@ -22,8 +21,7 @@ from typing import Any, Protocol
 import click
 
 from cyborg.errors import CyborgError
-from cyborg.interfaces.api import DEFAULT_PORT
-from cyborg.interfaces.security import TOKEN_ENV, client_headers
+from cyborg.interfaces.access import DEFAULT_PORT, TOKEN_ENV, client_headers
 
 DEFAULT_URL = f"http://127.0.0.1:{DEFAULT_PORT}"
 
@@ -96,6 +94,8 @@ class HttpLink:
         return answer
 
     def follow(self, status: dict[str, Any], show: Callable[[dict[str, Any]], None]) -> None:
+        import asyncio
+
         import aiohttp
 
         try:

@@ -39,7 +39,7 @@ import click
 from cyborg.app.config import LoadedConfig
 from cyborg.app.parts import API, CONTROLLER, NodeContext, Part, build_part
 from cyborg.errors import CyborgError
-from cyborg.interfaces.security import Access, announcement
+from cyborg.interfaces.access import Access, announcement
 from cyborg.transport import topics
 from cyborg.transport.base import Node, Publisher
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, Clock, RealClock, VirtualClock

@@ -26,75 +26,29 @@ import json
 import resource
 import secrets
 import socket
-from collections.abc import Awaitable, Callable, Iterable
-from dataclasses import dataclass, field
-from typing import Any, NoReturn
+from collections.abc import Awaitable, Callable
+from typing import NoReturn
 
 from aiohttp import hdrs, web
 from aiohttp.web_protocol import RequestHandler
 from yarl import URL
 
-TOKEN_ENV = "CYBORG_TOKEN"
-LOOPBACK_NAMES = frozenset({"localhost", "127.0.0.1", "::1"})
-WILDCARDS = frozenset({"", "0.0.0.0", "::"})
+from cyborg.interfaces.access import LOOPBACK_NAMES as LOOPBACK_NAMES
+from cyborg.interfaces.access import TOKEN_ENV as TOKEN_ENV
+from cyborg.interfaces.access import WILDCARDS as WILDCARDS
+from cyborg.interfaces.access import Access as Access
+from cyborg.interfaces.access import Limits as Limits
+from cyborg.interfaces.access import access_options as access_options
+from cyborg.interfaces.access import allowed_origins as allowed_origins
+from cyborg.interfaces.access import announcement as announcement
+from cyborg.interfaces.access import client_headers as client_headers
+from cyborg.interfaces.access import is_loopback as is_loopback
+from cyborg.interfaces.access import needs_token as needs_token
+from cyborg.interfaces.access import new_token as new_token
+from cyborg.interfaces.access import parse_origin as parse_origin
+
 FD_RESERVE = 128  # files kept free for the robot itself (databases, Graphviz, logs)
 WANTED_FILES = 65536  # the open-file limit we raise to, if the hard limit allows
-
-
-@dataclass(frozen=True)
-class Limits:
-    """How much the API takes from one client, and from all of them together."""
-
-    max_body: int = 64 * 1024  # bytes of a command's body
-    header_timeout: float = 10.0  # real seconds to send a request, or the next one on a kept-alive connection
-    max_connections: int = 512
-    grace: float = 1.0  # real seconds a new connection has to start its request before it may make room
-    max_websockets: int = 64
-    max_ws_message: int = 4096  # bytes a client may send on the websocket (it is read and ignored)
-
-
-@dataclass
-class Access:
-    """The API's access policy: an optional bearer token and extra origins allowed in."""
-
-    token: str | None = None
-    allowed_origins: tuple[str, ...] = ()
-    limits: Limits = field(default_factory=Limits)
-
-
-def is_loopback(host: str) -> bool:
-    if host == "localhost":
-        return True
-    try:
-        return ipaddress.ip_address(host.strip("[]")).is_loopback
-    except ValueError:
-        return False
-
-
-def needs_token(host: str) -> bool:
-    """Binding to anything but a loopback address serves other machines: a token is required."""
-    return not is_loopback(host)
-
-
-def new_token() -> str:
-    return secrets.token_urlsafe(24)
-
-
-def parse_origin(value: str) -> str:
-    """``--allow-origin``: ``http(s)://name[:port]``, normalised; raises ValueError naming the fix."""
-    url = URL(value.strip())
-    if url.scheme not in ("http", "https") or not url.host or url.path not in ("", "/") or url.query_string:
-        raise ValueError(
-            f"{value!r} is not an origin; fix: give scheme, name and port only, e.g. http://cyborg.local:8642"
-        )
-    return _origin_of(url)
-
-
-def _origin_of(url: URL) -> str:
-    default = 443 if url.scheme == "https" else 80
-    port = "" if url.port in (None, default) else f":{url.port}"
-    host = f"[{url.host}]" if url.host and ":" in url.host else url.host
-    return f"{url.scheme}://{host}{port}"
 
 
 def _is_ip(name: str) -> bool:
@@ -338,87 +292,3 @@ class _Refused(asyncio.Protocol):
     def connection_lost(self, exc: BaseException | None) -> None:
         if self._timer is not None:
             self._timer.cancel()
-
-
-def allowed_origins(values: Iterable[str]) -> tuple[str, ...]:
-    """Parse ``--allow-origin`` values; raises ValueError naming the bad one and the fix."""
-    return tuple(parse_origin(v) for v in values)
-
-
-def client_headers(token: str | None) -> dict[str, Any]:
-    """Headers a client of the API sends: the bearer token when there is one."""
-    return {hdrs.AUTHORIZATION: f"Bearer {token}"} if token else {}
-
-
-def announcement(url: str, host: str, port: int, token: str | None, generated: bool) -> list[tuple[str, str]]:
-    """What a server prints at start, as (text, colour): the page's address (with the token for
-    the page to keep), how the command tool gets in, and a warning when serving beyond loopback."""
-    base = url.rstrip("/")
-    lines: list[tuple[str, str]] = []
-    if needs_token(host):
-        lines.append(
-            (
-                f"warning: serving on {host}:{port}, beyond this machine: whoever reaches that address "
-                "and holds the token below can command the robot and hear everything it hears and says; "
-                "the token travels unencrypted over HTTP. Use a trusted network, or keep --host 127.0.0.1 "
-                f"and tunnel (ssh -L {port}:127.0.0.1:{port} ROBOT). See docs/security.md",
-                "yellow",
-            )
-        )
-    page = f"{url}#token={token}" if token else url
-    tool = f"{TOKEN_ENV}={token} cyborg status --url {base}" if token else f"cyborg status --url {base}"
-    lines.append((f"dashboard and API: {page}  (command tool: {tool})", "green"))
-    if host in WILDCARDS:
-        lines.append(
-            (
-                f"from other machines: http://THIS-MACHINE'S-ADDRESS:{port}/"
-                + (f"#token={token}" if token else ""),
-                "green",
-            )
-        )
-    if token and generated:
-        lines.append((f"token generated for this run; give your own with --token or ${TOKEN_ENV}", "green"))
-    return lines
-
-
-def access_options(command: Callable[..., None]) -> Callable[..., None]:
-    """``--token`` and ``--allow-origin`` for a command that serves the API; the command receives
-    ``access``, an :class:`Access`, instead."""
-    import functools
-
-    import click
-
-    def origins(ctx: click.Context, param: click.Parameter, values: tuple[str, ...]) -> tuple[str, ...]:
-        try:
-            return allowed_origins(values)
-        except ValueError as exc:
-            raise click.BadParameter(str(exc)) from None
-
-    def token_value(ctx: click.Context, param: click.Parameter, value: str | None) -> str | None:
-        if value is not None and len(value.strip()) < 16:
-            raise click.BadParameter(
-                "a token shorter than 16 characters is easy to guess; fix: leave it out to get a "
-                'generated one, or make one with: python3 -c "import secrets; print(secrets.token_urlsafe(24))"'
-            )
-        return value.strip() if value else None
-
-    @click.option(
-        "--token",
-        envvar=TOKEN_ENV,
-        callback=token_value,
-        help=f"require this bearer token on the API (${TOKEN_ENV}); with a --host beyond loopback one is "
-        "generated and printed if not given",
-    )
-    @click.option(
-        "--allow-origin",
-        "allow_origin",
-        multiple=True,
-        callback=origins,
-        metavar="URL",
-        help="also accept pages and Host names of this origin, e.g. https://cyborg.example:443 (repeatable)",
-    )
-    @functools.wraps(command)
-    def wrapper(*args: Any, token: str | None, allow_origin: tuple[str, ...], **kwargs: Any) -> None:
-        command(*args, access=Access(token=token, allowed_origins=allow_origin), **kwargs)
-
-    return wrapper

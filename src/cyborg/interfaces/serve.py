@@ -7,9 +7,9 @@ from typing import Any
 
 from cyborg.app.robot import Robot
 from cyborg.errors import CyborgError
+from cyborg.interfaces.access import Access, announcement
 from cyborg.interfaces.api import RobotAPI
 from cyborg.interfaces.dashboard import register as register_dashboard
-from cyborg.interfaces.security import Access, announcement
 from cyborg.modules.gatekeeper import Gatekeeper
 from cyborg.transport.base import Transport
 
