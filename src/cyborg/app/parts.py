@@ -12,15 +12,17 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from cyborg.app.config import LoadedConfig
+from cyborg.app.place import BuildPlace, calendar_of
 from cyborg.app.registry import KindRegistry, module_kinds
-from cyborg.app.robot import BuildPlace, build_controller, build_gatekeeper, calendar_of
-from cyborg.controller.runtime import Controller
 from cyborg.errors import ConfigError
 from cyborg.modules.kind import CalendarEntry, Component
 from cyborg.transport.base import Transport
+
+if TYPE_CHECKING:
+    from cyborg.controller.runtime import Controller
 
 __all__ = ["API", "CONTROLLER", "NodeContext", "Part", "build_part", "part_names"]
 
@@ -73,6 +75,8 @@ def build_part(
     """Build the components of part ``name`` on ``transport`` (not started)."""
     model = config.model
     if name == CONTROLLER:
+        from cyborg.app.robot import build_controller
+
         _, controller, emotion, motivator = build_controller(
             config, transport, context.data_dir, resume=context.resume
         )
@@ -80,8 +84,11 @@ def build_part(
     if name in model.modules:
         kind, settings = (kinds or module_kinds()).parse(name, model.modules[name], source=config.source)
         return Part(name, [kind.build(transport.node(name), settings, context)])
-    keeper = build_gatekeeper(config, transport, name)
-    if keeper is not None:
+    if any(gate.name == name for gate in model.gatekeepers):
+        from cyborg.app.robot import build_gatekeeper
+
+        keeper = build_gatekeeper(config, transport, name)
+        assert keeper is not None
         return Part(name, [keeper])
     if name == API:
         return Part(name, [])  # built by the interface layer, which owns the HTTP server

@@ -17,12 +17,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from cyborg.app.config import LoadedConfig
+from cyborg.app.place import BuildPlace, calendar_of
 from cyborg.app.registry import KindRegistry, module_kinds
 from cyborg.app.view import BaseView
 from cyborg.controller.runtime import Controller, Phase
 from cyborg.emotion.system import EmotionSystem
 from cyborg.modules.gatekeeper import Gatekeeper
-from cyborg.modules.kind import CalendarEntry, Component, KeepsCalendar, ServesStates
+from cyborg.modules.kind import CalendarEntry, Component, ServesStates
 from cyborg.motivator.component import Motivator
 from cyborg.motivator.store import ControllerStore
 from cyborg.storage import SaveStatus
@@ -34,24 +35,6 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 __all__ = ["BuildPlace", "Robot", "build_controller", "build_gatekeeper", "build_robot", "controller_busy"]
-
-
-@dataclass
-class BuildPlace:
-    """What module factories may use besides their node (a :class:`~cyborg.modules.kind.BuildContext`)."""
-
-    data_dir: Path
-    rng: random.Random = field(default_factory=lambda: random.Random(0))
-    map_path: Path | None = None
-    _map: OccupancyMap | None = field(default=None, repr=False)
-
-    def occupancy_map(self) -> OccupancyMap:
-        """The map of the world (``--map`` or the packaged campus), loaded once."""
-        if self._map is None:
-            from cyborg.maps import default_map_path, load_map
-
-            self._map = load_map(self.map_path or default_map_path())
-        return self._map
 
 
 @dataclass
@@ -120,14 +103,6 @@ class Robot:
                 log.exception("closing %s failed; closing the rest", component.node.name)
             component.node.shutdown()
         self.store.close()
-
-
-def calendar_of(components: Iterable[object]) -> Callable[[CalendarEntry], None] | None:
-    """The calendar of the first component that keeps one."""
-    for component in components:
-        if isinstance(component, KeepsCalendar):
-            return component.add_calendar_entry
-    return None
 
 
 def served_actions(components: Iterable[object]) -> set[str]:

@@ -566,8 +566,7 @@ def node(
     sim_time = SimTime(speed=speed, epoch=parse_epoch(epoch), start=parse_start(start_at))
     scenario = ScenarioFiles(script_path, transcript_path) if script_path is not None else None
     try:
-        config = _load(config_path)
-        check_modules(config)
+        config = _load(config_path)  # the part checks its own module's settings, loading only its kind
         run_node(
             name,
             config,
