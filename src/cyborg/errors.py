@@ -62,3 +62,12 @@ class CalendarError(NavigationError):
 class RuleTooCostly(CalendarError):
     """A recurrence rule that is valid RFC 5545 but would cost unbounded time, or repeats nothing."""
 
+
+class InvalidValueError(CyborgError, ValueError):
+    """A value (a setting, an argument, a time in a script) is out of range or malformed.
+
+    The message names the value and the fix, as ``"what is wrong; fix: how"``. Also a
+    ValueError: pydantic turns one raised in a validator into a validation error (which
+    :func:`cyborg.configfile.describe_errors` words), and callers that caught ValueError
+    before this class existed still catch it.
+    """

@@ -21,7 +21,9 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
+from cyborg.configfile import describe_errors, load_yaml, read_text_file
 from cyborg.errors import ConfigError, MapError
 from cyborg.limits import MAX_MAP_CELLS
 
@@ -273,9 +275,24 @@ def load_map_server(yaml_path: str | Path) -> OccupancyMap:
     )
 
 
-def _read_map_server_yaml(yaml_path: Path) -> dict[str, Any]:
-    from cyborg.app.config import load_yaml, read_text_file
+class MapServerFile(BaseModel):
+    """The keys of a ROS ``map_server`` YAML file that the simulation reads (others are ignored)."""
 
+    model_config = ConfigDict(extra="ignore", allow_inf_nan=False)
+
+    image: str = Field(min_length=1, description="the PGM image, relative to this file", examples=["map.pgm"])
+    resolution: float = Field(gt=0, description="metres per cell", examples=[0.05])
+    origin: tuple[float, float] | tuple[float, float, float] = Field(
+        description="x, y and yaw of the lower-left cell, in metres and radians",
+        examples=[[-10.0, -10.0, 0.0]],
+    )
+    mode: str = Field("trinary", description="trinary or scale")
+    negate: bool = Field(False, description="true if white is occupied")
+    occupied_thresh: float = Field(0.65, ge=0, le=1, description="occupancy above which a cell is occupied")
+    free_thresh: float = Field(0.196, ge=0, le=1, description="occupancy below which a cell is free")
+
+
+def _read_map_server_yaml(yaml_path: Path) -> dict[str, Any]:
     try:
         raw = load_yaml(read_text_file(yaml_path), str(yaml_path))
     except OSError as error:
@@ -293,26 +310,22 @@ def _read_map_server_yaml(yaml_path: Path) -> dict[str, Any]:
     if mode not in ("trinary", "scale"):
         raise MapError(f"{yaml_path}: mode {mode!r} is not supported; fix: use mode 'trinary' or 'scale'")
     try:
-        origin = [float(v) for v in raw["origin"]]
-        info: dict[str, Any] = {
-            "image": raw["image"],
-            "resolution": float(raw["resolution"]),
-            "origin": (origin[0], origin[1]),
-            "negate": bool(int(raw.get("negate", 0))),
-            "occupied_thresh": float(raw.get("occupied_thresh", 0.65)),
-            "free_thresh": float(raw.get("free_thresh", 0.196)),
-        }
-    except (TypeError, ValueError, IndexError) as error:
+        info = MapServerFile.model_validate(raw)
+    except ValidationError as error:
+        problems = describe_errors(error, MapServerFile, doc="the ROS map_server documentation")
+        raise MapError(str(ConfigError(problems, source=str(yaml_path)))) from None
+    if len(info.origin) == 3 and info.origin[2] != 0.0:
         raise MapError(
-            f"{yaml_path}: bad number ({error}); fix: resolution and origin must be numbers"
-        ) from None
-    if not all(math.isfinite(v) for v in (*origin, info["resolution"])):
-        raise MapError(f"{yaml_path}: origin and resolution must be finite numbers; fix: correct them")
-    if len(origin) == 3 and origin[2] != 0.0:
-        raise MapError(f"{yaml_path}: a rotated origin (yaw {origin[2]}) is not supported; fix: set yaw to 0")
-    if info["resolution"] <= 0:
-        raise MapError(f"{yaml_path}: resolution must be > 0 m/cell, got {info['resolution']}")
-    return info
+            f"{yaml_path}: a rotated origin (yaw {info.origin[2]}) is not supported; fix: set yaw to 0"
+        )
+    return {
+        "image": info.image,
+        "resolution": info.resolution,
+        "origin": (info.origin[0], info.origin[1]),
+        "negate": info.negate,
+        "occupied_thresh": info.occupied_thresh,
+        "free_thresh": info.free_thresh,
+    }
 
 
 _PGM_TOKEN = re.compile(rb"\s*(?:#[^\n]*\n\s*)*(\S+)")

@@ -145,14 +145,15 @@ MESSAGES: dict[str, tuple[str, list[str]]] = {
     "unknown key in a state": (
         _in_music("    actoin: x\n"),
         [
-            "state 'music': unknown key 'actoin' (did you mean 'action'?)",
+            "state 'music' > actoin: unknown key 'actoin' (did you mean 'action'?)",
             "fix: remove it or correct its spelling; the keys here are: action, description",
         ],
     ),
     "unknown section": (
         "bogus: 1\n" + VALID,
         [
-            "top level: unknown key 'bogus'; fix: remove it or correct its spelling; the keys here are: emotion"
+            "bogus: unknown key 'bogus'; fix: remove it or correct its spelling; the keys here are: initial,",
+            "emotion",
         ],
     ),
     "states written as a list": (
@@ -164,7 +165,10 @@ MESSAGES: dict[str, tuple[str, list[str]]] = {
     ),
     "no states": (
         "initial: idle\n",
-        ["top level: missing required key 'states'; fix: add the states, e.g. states: {idle:"],
+        [
+            "states: missing 'states' (the states: name: state); fix: write states as a mapping",
+            "e.g. states: {idle:",
+        ],
     ),
     "empty states": ("states: {}\n", ["states: is empty; fix: define at least one state"]),
     "file is a list": (
@@ -266,8 +270,8 @@ MESSAGES: dict[str, tuple[str, list[str]]] = {
     "motivational event without event": (
         VALID + "motivator: {events: [{state: idle}]}\n",
         [
-            "motivator > events > entry 1: missing required key 'event'",
-            "fix: add 'event: <a transition of that state>'",
+            "motivator > events > entry 1 > event: missing 'event'",
+            "fix: name a transition of that state, e.g. event: music_play",
         ],
     ),
     "motivational event not a transition": (
@@ -295,8 +299,8 @@ MESSAGES: dict[str, tuple[str, list[str]]] = {
     "gatekeeper without input": (
         VALID + "gatekeepers: [{name: g, output: /out, resource: speech}]\n",
         [
-            "gatekeepers > entry 1: missing required key 'input'",
-            "fix: add 'input: ...' (topic the behaviour modules publish on)",
+            "gatekeepers > entry 1 > input: missing 'input' (topic the behaviour modules publish on)",
+            "fix: add it (e.g. input: /text_to_speech)",
         ],
     ),
 }

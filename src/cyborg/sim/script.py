@@ -11,14 +11,15 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Sequence
 from datetime import datetime
 from pathlib import Path
 from typing import Any
 
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from cyborg.errors import ConfigError
+from cyborg.configfile import describe_errors, item_lines, load_yaml, read_text_file
+from cyborg.errors import ConfigError, InvalidValueError
 from cyborg.limits import MAX_SCRIPT_SECONDS, MAX_TEXT_LENGTH
 
 RECORD_TYPES = ("state", "emotion", "say", "heard", "pose", "motivator")
@@ -26,15 +27,18 @@ _HMS = re.compile(r"^(\d+):([0-5]\d):([0-5]\d(?:\.\d+)?)$")
 
 
 def parse_seconds(value: Any) -> float:
-    """Seconds from a number or "H:MM:SS", at most :data:`~cyborg.limits.MAX_SCRIPT_SECONDS`."""
+    """Seconds from a number or "H:MM:SS", at most :data:`~cyborg.limits.MAX_SCRIPT_SECONDS`.
+
+    Raises :class:`~cyborg.errors.InvalidValueError` (a ValueError) naming the value and the fix.
+    """
     if isinstance(value, bool):
-        raise ValueError(f"{value!r} is not a time; fix: use seconds (90) or H:MM:SS (0:01:30)")
+        raise InvalidValueError(f"{value!r} is not a time; fix: use seconds (90) or H:MM:SS (0:01:30)")
     seconds: float | None = None
     if isinstance(value, float) and math.isnan(value):
-        raise ValueError(f"{value!r} is not a time; fix: use seconds (90) or H:MM:SS (0:01:30)")
+        raise InvalidValueError(f"{value!r} is not a time; fix: use seconds (90) or H:MM:SS (0:01:30)")
     if isinstance(value, int | float):
         if value < 0:
-            raise ValueError(f"{value} is negative (times count from the start); fix: use 0 or more")
+            raise InvalidValueError(f"{value} is negative (times count from the start); fix: use 0 or more")
         seconds = float(value) if value <= MAX_SCRIPT_SECONDS else math.inf
     elif isinstance(value, str):
         match = _HMS.match(value.strip())
@@ -42,9 +46,9 @@ def parse_seconds(value: Any) -> float:
             hours, minutes, secs = match.groups()
             seconds = int(hours) * 3600 + int(minutes) * 60 + float(secs) if len(hours) < 10 else math.inf
     if seconds is None or math.isnan(seconds):
-        raise ValueError(f"{value!r} is not a time; fix: use seconds (90) or H:MM:SS (0:01:30)")
+        raise InvalidValueError(f"{value!r} is not a time; fix: use seconds (90) or H:MM:SS (0:01:30)")
     if seconds > MAX_SCRIPT_SECONDS:
-        raise ValueError(
+        raise InvalidValueError(
             f"{value!r} is over the limit of {MAX_SCRIPT_SECONDS:.0f} s (366 days); "
             "fix: use a finite time within a year, e.g. 604800 for a week"
         )
@@ -63,14 +67,16 @@ class Match(BaseModel):
     @classmethod
     def _known_type(cls, value: str) -> str:
         if value not in RECORD_TYPES:
-            raise ValueError(f"unknown record type {value!r}; use one of {', '.join(RECORD_TYPES)}")
+            raise InvalidValueError(
+                f"unknown record type {value!r}; fix: use one of {', '.join(RECORD_TYPES)}"
+            )
         return value
 
     @model_validator(mode="after")
     def _plain_fields(self) -> Match:
         for key, value in (self.model_extra or {}).items():
             if not isinstance(value, str | int | float | bool) or len(str(value)) > MAX_TEXT_LENGTH:
-                raise ValueError(
+                raise InvalidValueError(
                     f"field {key!r} must be one short value (text, a number, true or false), "
                     f"not {type(value).__name__} {str(value)[:40]!r}; fix: e.g. {{type: state, to: idle}}"
                 )
@@ -93,7 +99,9 @@ class Step(BaseModel):
     at: float | None = None
     when: Match | None = None
     delay: float = 0.0
-    say: str | None = Field(None, max_length=MAX_TEXT_LENGTH)
+    say: str | None = Field(
+        None, max_length=MAX_TEXT_LENGTH, description="what the robot hears, one sentence at a time"
+    )
     event: str | None = Field(None, max_length=200)
     emotion: str | None = Field(None, max_length=200)
     line: int = Field(0, exclude=True)
@@ -106,19 +114,25 @@ class Step(BaseModel):
     @model_validator(mode="after")
     def _one_trigger_one_action(self) -> Step:
         if (self.at is None) == (self.when is None):
-            raise ValueError("give exactly one of 'at' (a time) or 'when' (a record to wait for)")
+            raise InvalidValueError(
+                "give exactly one of 'at' (a time) or 'when' (a record to wait for); "
+                "fix: e.g. at: 10, or when: {type: state, to: idle}"
+            )
         actions = [a for a in ("say", "event", "emotion") if getattr(self, a) is not None]
         if len(actions) != 1:
-            raise ValueError("give exactly one action: 'say', 'event' or 'emotion'")
+            raise InvalidValueError(
+                f"give exactly one action of 'say', 'event' or 'emotion', not {len(actions)}; "
+                "fix: one action per step, e.g. say: hello (add a step for the next one)"
+            )
         return self
 
 
 class CalendarEntry(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
-    location: str
-    start: datetime
-    end: datetime
+    location: str = Field(examples=["cafeteria"])
+    start: datetime = Field(examples=["2026-11-23T15:00:00"])
+    end: datetime = Field(examples=["2026-11-23T16:00:00"])
     recurrence: str | None = None
     ignore: bool = False
     line: int = Field(0, exclude=True)
@@ -127,12 +141,12 @@ class CalendarEntry(BaseModel):
     def _ends_after_start(self) -> CalendarEntry:
         if (self.start.tzinfo is None) != (self.end.tzinfo is None):
             naive, aware = ("start", "end") if self.start.tzinfo is None else ("end", "start")
-            raise ValueError(
+            raise InvalidValueError(
                 f"{naive} has no time zone but {aware} has one; fix: give both an offset "
                 "(e.g. 2026-11-23T15:00:00+01:00) or neither (then they are read in UTC)"
             )
         if self.end <= self.start:
-            raise ValueError(
+            raise InvalidValueError(
                 f"end {self.end.isoformat()} is not after start {self.start.isoformat()}; fix: swap them"
             )
         return self
@@ -145,7 +159,7 @@ class Script(BaseModel):
     seed: int = 0
     emotion: str | None = None
     calendar: list[CalendarEntry] = Field(default_factory=list)
-    until: float
+    until: float = Field(examples=[600])
     steps: list[Step] = Field(default_factory=list)
     source: str = Field("<script>", exclude=True)  # the file, for error messages
 
@@ -153,22 +167,6 @@ class Script(BaseModel):
     @classmethod
     def _until(cls, value: Any) -> float:
         return parse_seconds(value)
-
-
-def _item_lines(text: str, key: str) -> list[int]:
-    """Line numbers (1-based) of each entry of the top-level list ``key`` (``steps``, ``calendar``)."""
-    from cyborg.app.config import yaml_loader
-
-    try:
-        root = yaml.compose(text, Loader=yaml_loader(text))
-    except (yaml.YAMLError, RecursionError):
-        return []
-    if not isinstance(root, yaml.MappingNode):
-        return []
-    for name, value in root.value:
-        if name.value == key and isinstance(value, yaml.SequenceNode):
-            return [item.start_mark.line + 1 for item in value.value]
-    return []
 
 
 def check_against(script: Script, events: set[str], emotions: set[str]) -> None:
@@ -201,8 +199,6 @@ def check_against(script: Script, events: set[str], emotions: set[str]) -> None:
 
 def load_script(path: str | Path) -> Script:
     path = Path(path)
-    from cyborg.app.config import read_text_file
-
     try:
         text = read_text_file(path)
     except OSError as exc:
@@ -213,19 +209,20 @@ def load_script(path: str | Path) -> Script:
 
 
 def parse_script(text: str, source: str = "<script>") -> Script:
-    from cyborg.app.config import load_yaml
-
     data = load_yaml(text, source)
     if not isinstance(data, dict):
         raise ConfigError(
             "a script is a mapping with 'until' and 'steps'; fix: see the README's scenario section",
             source=source,
         )
-    lines = {key: _item_lines(text, key) for key in ("steps", "calendar")}
+    lines = {key: item_lines(text, key) for key in ("steps", "calendar")}
     try:
         script = Script.model_validate(data)
     except ValidationError as exc:
-        raise ConfigError([_describe(error, lines) for error in exc.errors()], source=source) from exc
+        problems = describe_errors(
+            exc, Script, name=lambda loc: _name(loc, lines), doc="the README's scenario section"
+        )
+        raise ConfigError(problems, source=source) from exc
     for step, line in zip(script.steps, lines["steps"], strict=False):
         step.line = line
     for entry, line in zip(script.calendar, lines["calendar"], strict=False):
@@ -234,41 +231,12 @@ def parse_script(text: str, source: str = "<script>") -> Script:
     return script
 
 
-_KEY_FIXES = {
-    "steps": "use at/when/delay and one of say/event/emotion",
-    "calendar": "use location, start, end and optionally recurrence, ignore",
-}
-_MISSING_EXAMPLES = {
-    "until": "until: 600",
-    "location": "location: cafeteria",
-    "start": "start: 2026-11-23T15:00:00",
-    "end": "end: 2026-11-23T16:00:00",
-}
-
-
-def _describe(error: Any, lines: dict[str, list[int]]) -> str:
-    loc = list(error["loc"])
-    where = "top level"
+def _name(loc: Sequence[Any], lines: dict[str, list[int]]) -> str:
+    """('steps', 1, 'say') -> 'line 5: step 2 say' (the step's line in the file)."""
     if len(loc) >= 2 and loc[0] in lines and isinstance(loc[1], int):
         known = lines[loc[0]]
         line = known[loc[1]] if loc[1] < len(known) else "?"
         what = "step" if loc[0] == "steps" else "calendar entry"
         rest = ".".join(str(p) for p in loc[2:])
-        where = f"line {line}: {what} {loc[1] + 1}" + (f" {rest}" if rest else "")
-    elif loc:
-        where = ".".join(str(p) for p in loc)
-    message = error["msg"].removeprefix("Value error, ")
-    if error["type"] == "extra_forbidden":
-        message = f"unknown key {loc[-1]!r}; fix: {_KEY_FIXES.get(str(loc[0]), 'remove it')}"
-    elif error["type"] == "missing":
-        example = _MISSING_EXAMPLES.get(str(loc[-1]), f"{loc[-1]}: ...")
-        message = f"missing {loc[-1]!r}; fix: add it (e.g. {example})"
-    elif error["type"] == "string_too_long":
-        limit = error.get("ctx", {}).get("max_length")
-        message = (
-            f"is {len(str(error.get('input')))} characters, over the limit of {limit}; "
-            "fix: shorten it (one sentence is what the robot hears at a time)"
-        )
-    elif error["type"].startswith("datetime"):
-        message = f"{error.get('input')!r} is not a date-time; fix: write it as 2026-11-23T15:00:00"
-    return f"{where}: {message}"
+        return f"line {line}: {what} {loc[1] + 1}" + (f" {rest}" if rest else "")
+    return ".".join(str(p) for p in loc) or "top level"

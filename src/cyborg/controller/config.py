@@ -1,0 +1,266 @@
+"""The state machine's part of the robot's YAML: its schema, its messages and its checks.
+
+The schema (pydantic) checks types; :func:`build_machine` checks the machine: unknown
+targets, missing ``aborted`` transitions, duplicate states, superstates without an initial
+substate. Every problem names where in the file, what is wrong and the fix; unreachable
+states are warnings, not errors. The whole robot's file (emotion, motivator, modules...)
+extends :class:`MachineModel` in :mod:`cyborg.app.config`. docs/configuration.md describes
+every key; keep it in step with the models here.
+
+File layout::
+
+    initial: idle
+    timeouts: {connect: 2.0, preempt: 2.0}
+    states:
+      idle:
+        action: cyborg_idle/idle
+        transitions: {music_play: music, aborted: idle}
+      navigation:                 # a superstate: its transitions apply to all substates
+        initial: navigation_planning
+        transitions: {aborted: idle}
+        resources: {base: cyborg_navigation}
+        states:
+          navigation_planning: {action: cyborg_navigation/planning, transitions: {...}}
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from functools import partial
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
+from cyborg.configfile import Fixes, KeyRules, Location, name_location, suggest
+from cyborg.controller.machine import ABORTED, MachineSpec, StateSpec, Timeouts
+from cyborg.errors import ConfigError, InvalidValueError
+
+# --- schema ------------------------------------------------------------------------
+
+
+class StateModel(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    action: str | None = Field(None, description="action server of the module that serves this state")
+    description: str = Field("", description="free text for the reader; the controller ignores it")
+    transitions: dict[str, str] = Field(default_factory=dict, description="event: target state")
+    resources: dict[str, str] = Field(default_factory=dict, description="resource: node that may use it")
+    initial: str | None = Field(None, description="substate entered first (default: the first listed)")
+    states: dict[str, StateModel] | None = Field(None, description="substates of this superstate")
+
+    @field_validator("action")
+    @classmethod
+    def _action_not_blank(cls, value: str | None) -> str | None:
+        if value is not None and not value.strip("/ "):
+            raise InvalidValueError("action is empty: name the module's action server, e.g. cyborg_idle/idle")
+        return value
+
+
+class TimeoutsModel(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+    connect: float = Field(2.0, gt=0, description="seconds to wait for a module's action server")
+    preempt: float = Field(2.0, gt=0, description="seconds to wait for a module to acknowledge a cancel")
+
+
+class MachineModel(BaseModel):
+    """The state machine's keys of the file; the robot's file adds its components' sections."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    initial: str = Field("idle", description="state the controller enters at start")
+    timeouts: TimeoutsModel = Field(default_factory=TimeoutsModel)  # type: ignore[arg-type]
+    states: dict[str, StateModel] = Field(description="the states: name: state")
+
+
+# --- messages -----------------------------------------------------------------------
+
+name_machine_location: Callable[[Location], str] = partial(name_location, labels={"states": "state"})
+"""('states', 'idle', 'transitions') -> "state 'idle' > transitions"."""
+
+MACHINE_FIXES: Fixes = {
+    (StateModel,): "write each state as a mapping, e.g. idle: {action: cyborg_idle/idle, transitions: "
+    "{aborted: idle}}",
+    (StateModel, "transitions"): "write transitions as a mapping event: target, e.g. {succeeded: idle, "
+    "aborted: idle}",
+    (StateModel, "transitions", "*"): "the target of an event is the name of a state, e.g. succeeded: idle",
+    (StateModel, "resources"): "write resources as a mapping resource: node, e.g. {speech: cyborg_joke}",
+    (StateModel, "resources", "*"): "a resource is given to a node by its name, e.g. speech: cyborg_joke",
+    (StateModel, "action"): "name the module's action server, e.g. action: cyborg_idle/idle",
+    (StateModel, "description"): "write the description as text; put it in quotes if it contains ': '",
+    (StateModel, "initial"): "name one of the substates, e.g. initial: navigation_planning",
+    (StateModel, "states"): "write substates as a mapping name: state, e.g. states: {planning: "
+    "{action: cyborg_navigation/planning}}",
+    ("states",): "write states as a mapping name: state, e.g. states: {idle: {action: cyborg_idle/idle, "
+    "transitions: {aborted: idle}}}",
+    ("initial",): "name the state the controller starts in, e.g. initial: idle",
+    ("timeouts",): "write timeouts as a mapping, e.g. timeouts: {connect: 2.0, preempt: 2.0}",
+}
+"""How to write each part of the machine, for values of the wrong type (see describe_errors)."""
+
+
+def _mapping_role(path: Location) -> str:
+    """What the keys of the mapping at ``path`` name: sections, states, a state's keys, events..."""
+    role = "sections"
+    for part in path:
+        if role == "sections":
+            role = "states" if part == "states" else "other"
+        elif role == "states":
+            role = "state"
+        elif role == "state":
+            role = {"states": "states", "transitions": "transitions", "resources": "resources"}.get(
+                str(part), "other"
+            )
+        else:
+            role = "other"
+    return role
+
+
+def _duplicate_advice(path: Location, key: str) -> tuple[str, str]:
+    role = _mapping_role(path)
+    if role == "transitions":
+        return (
+            f"duplicate key {key!r}: the event {key!r} is listed twice in this state's transitions",
+            "an event leads to exactly one target: keep the entry with the target you want and "
+            "delete the other",
+        )
+    if role == "states":
+        return (
+            f"duplicate key {key!r}: the state {key!r} is defined twice",
+            "give each state a unique name, or merge the two entries into one",
+        )
+    if role == "resources":
+        return (
+            f"duplicate key {key!r}: the resource {key!r} is granted twice in this state",
+            "a resource belongs to one node at a time: keep the entry naming the node you want",
+        )
+    if role == "state":
+        return (
+            f"duplicate key {key!r}: this state sets {key!r} twice",
+            f"write '{key}:' once (merge the two entries if both are mappings)",
+        )
+    if role == "sections":
+        return (
+            f"duplicate key {key!r}: the section {key!r} appears twice",
+            "merge the two sections into one",
+        )
+    return f"duplicate key {key!r}", "keep one of the two entries (merge them if both are mappings)"
+
+
+MACHINE_KEYS = KeyRules(
+    name=name_machine_location,
+    duplicate=_duplicate_advice,
+    names=lambda path: _mapping_role(path) != "other",
+)
+"""Duplicate-key advice for the robot's YAML (a state twice, an event twice in a state...)."""
+
+
+# --- the machine ----------------------------------------------------------------------
+
+
+def build_machine(
+    model: MachineModel, source: str, check: Callable[[MachineSpec], list[str]] | None = None
+) -> tuple[MachineSpec, list[str]]:
+    """Turn the schema model into a MachineSpec, checking the machine's semantics.
+
+    ``check`` adds the problems other sections find with the machine (the motivator's events);
+    they are reported with the machine's own. Returns the machine and the warnings.
+    """
+    problems: list[str] = []
+    if not model.states:
+        raise ConfigError(
+            "states: is empty; fix: define at least one state, e.g. "
+            "states: {idle: {action: cyborg_idle/idle, transitions: {aborted: idle}}}",
+            source=source,
+        )
+    states: dict[str, StateSpec] = {}
+    _flatten(model.states, None, states, problems)
+    names = sorted(states)
+    for state in states.values():
+        for event, target in state.transitions.items():
+            if target not in states:
+                problems.append(
+                    f"state {state.name!r}: transition {event!r} leads to unknown state {target!r}"
+                    f"{suggest(target, names)}; fix: use one of {', '.join(names)}"
+                )
+        if state.children and state.initial not in state.children:
+            problems.append(
+                f"state {state.name!r}: initial substate {state.initial!r} is not one of its substates "
+                f"({', '.join(state.children)}); fix: name one of them"
+            )
+    if model.initial not in states:
+        problems.append(
+            f"initial state {model.initial!r} is not defined{suggest(model.initial, names)}; "
+            f"fix: define it or set 'initial:' to one of {', '.join(names)}"
+        )
+    if problems:
+        raise ConfigError(problems, source=source)
+    machine = MachineSpec(
+        states=states,
+        initial=model.initial,
+        timeouts=Timeouts(connect=model.timeouts.connect, preempt=model.timeouts.preempt),
+    )
+    for leaf in machine.leaves():
+        if machine.lookup(leaf.name, ABORTED) is None:
+            problems.append(
+                f"state {leaf.name!r}: no 'aborted' transition (needed when its module fails or "
+                "cannot be reached); fix: add 'aborted: idle' to its transitions or to a superstate's"
+            )
+    if check is not None:
+        problems.extend(check(machine))
+    if problems:
+        raise ConfigError(problems, source=source)
+    reachable = machine.reachable()
+    warnings = [
+        f"{source}: state {name!r} is unreachable from {model.initial!r}: no transition leads to it"
+        for name in names
+        if name not in reachable
+    ]
+    return machine, warnings
+
+
+def _flatten(
+    states: dict[str, StateModel],
+    parent: str | None,
+    out: dict[str, StateSpec],
+    problems: list[str],
+) -> None:
+    for name, model in states.items():
+        if name in out:
+            first = out[name].parent
+            places = [f"inside {p!r}" if p else "at the top level" for p in (first, parent)]
+            problems.append(
+                f"state {name!r}: defined twice, {places[0]} and {places[1]}; "
+                "fix: state names must be unique across all levels, rename one"
+            )
+            continue
+        children = tuple(model.states or ())
+        if model.action is not None and children:
+            problems.append(
+                f"state {name!r}: has both an action and substates; fix: a state is either served "
+                "by a module (action) or groups substates (states), move the action into a substate"
+            )
+        if model.action is None and not children:
+            problems.append(
+                f"state {name!r}: has no action; fix: add 'action: <module>/<server>' naming the "
+                "module's action server"
+            )
+        initial = model.initial
+        if initial is not None and not children:
+            problems.append(
+                f"state {name!r}: sets initial {initial!r} but has no substates; fix: remove 'initial:' "
+                "(only a superstate, one with 'states:', has an initial substate)"
+            )
+        if children and initial is None:
+            initial = children[0]
+        out[name] = StateSpec(
+            name=name,
+            action=model.action.strip() if model.action else None,
+            transitions=dict(model.transitions),
+            resources=dict(model.resources),
+            parent=parent,
+            initial=initial if children else None,
+            children=children,
+            description=model.description,
+        )
+        if model.states:
+            _flatten(model.states, name, out, problems)
