@@ -75,8 +75,11 @@ def lock_data_dir(folder: Path, what: str = "cyborg sim") -> Iterator[Path]:
             fcntl.flock(handle, fcntl.LOCK_UN)
 
 
-class Unusable(Exception):
-    """The file exists but cannot be used as this database (reason in args[0])."""
+class Unusable(DatabaseError):
+    """The file exists but cannot be used as this database (reason in args[0]).
+
+    Raised while opening; :class:`SQLiteFile` moves such a file aside and starts afresh.
+    """
 
 
 class NotSaved(DatabaseError):

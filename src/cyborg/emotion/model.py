@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-from cyborg.errors import CyborgError
+from cyborg.errors import CyborgError, InvalidValueError
 
 NEUTRAL = "neutral"
 """The name used when no prototype lies within the threshold."""
@@ -132,17 +132,21 @@ class EmotionSettings(BaseModel):
         cls, value: dict[str, tuple[float, float, float]]
     ) -> dict[str, tuple[float, float, float]]:
         if not value:
-            raise ValueError("prototypes is empty: list at least one emotion, e.g. elated: [0.5, 0.42, 0.23]")
+            raise InvalidValueError(
+                "prototypes is empty: list at least one emotion, e.g. elated: [0.5, 0.42, 0.23]"
+            )
         for name, point in value.items():
             if not name.strip() or name != name.strip():
-                raise ValueError(f"prototype name {name!r} is blank or padded: use e.g. 'elated'")
+                raise InvalidValueError(f"prototype name {name!r} is blank or padded: use e.g. 'elated'")
             if name == NEUTRAL:
-                raise ValueError(
+                raise InvalidValueError(
                     f"prototype {NEUTRAL!r} is reserved for 'no emotion within threshold': remove it"
                 )
             for dim, x in zip(DIMENSIONS, point, strict=True):
                 if not (math.isfinite(x) and -1.0 <= x <= 1.0):
-                    raise ValueError(f"prototype {name!r} has {dim} = {x}: PAD values must lie in [-1, 1]")
+                    raise InvalidValueError(
+                        f"prototype {name!r} has {dim} = {x}: PAD values must lie in [-1, 1]"
+                    )
         return value
 
     @model_validator(mode="after")
@@ -152,9 +156,11 @@ class EmotionSettings(BaseModel):
         for alias, name in self.aliases.items():
             if name != NEUTRAL and name not in self.prototypes:
                 known = ", ".join([NEUTRAL, *self.prototypes])
-                raise ValueError(f"alias {alias!r} names {name!r}, which is no emotion: use one of {known}")
+                raise InvalidValueError(
+                    f"alias {alias!r} names {name!r}, which is no emotion: use one of {known}"
+                )
             if alias in self.prototypes:
-                raise ValueError(f"alias {alias!r} is also a prototype's name: remove the alias")
+                raise InvalidValueError(f"alias {alias!r} is also a prototype's name: remove the alias")
         return self
 
     def resolve(self, name: str) -> str:
@@ -224,7 +230,7 @@ def time_decay(pad: PAD, elapsed_seconds: float, half_lives: HalfLives | None) -
     equals decaying by a + b, however often the caller ticks.
     """
     if not (math.isfinite(elapsed_seconds) and elapsed_seconds >= 0.0):
-        raise ValueError(
+        raise InvalidValueError(
             f"elapsed_seconds = {elapsed_seconds}: pass the non-negative time since the last decay"
         )
     if half_lives is None:

@@ -40,7 +40,9 @@ GRAPH_TIMEOUT = 10.0  # real seconds Graphviz may take to lay out the machine (o
 GRAPH_MEMORY = 2**30  # bytes of address space Graphviz may use
 
 
-class CommandError(web.HTTPBadRequest):
+class CommandError(CyborgError, web.HTTPBadRequest):
+    """A request the API refuses: answered 400 Bad Request with ``{"error": problem}``."""
+
     def __init__(self, problem: str) -> None:
         super().__init__(text=json.dumps({"error": problem}), content_type="application/json")
 

@@ -26,8 +26,8 @@ from cyborg.interfaces.access import DEFAULT_PORT, TOKEN_ENV, client_headers
 DEFAULT_URL = f"http://127.0.0.1:{DEFAULT_PORT}"
 
 
-class ToolError(click.ClickException):
-    pass
+class ToolError(CyborgError, click.ClickException):
+    """A request to the robot's API failed: printed as 'Error: ...', exit code 1."""
 
 
 def _request(base: str, path: str, body: dict[str, Any] | None = None, token: str | None = None) -> Any:

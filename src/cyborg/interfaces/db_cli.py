@@ -35,7 +35,7 @@ def default_db_path() -> Path:
     return folder / DB_FILE
 
 
-class InputError(click.ClickException):
+class InputError(CyborgError, click.ClickException):
     """Bad input from the user: printed as 'Error: ...', exit code 2."""
 
     exit_code = 2

@@ -53,7 +53,12 @@ class Outcome(enum.Enum):
 
 
 class Abort(Exception):
-    """Raise inside ``execute`` to end the goal ABORTED with a reason."""
+    """Raise inside ``execute`` to end the goal ABORTED with a reason.
+
+    Deliberately not a CyborgError: it is a control-flow signal, not an error of the package.
+    :class:`StateServer` catches it and reports the goal aborted; an ``except CyborgError`` in a
+    module's own code must not swallow it.
+    """
 
 
 class GoalContext:

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from cyborg.emotion.model import PAD
+from cyborg.errors import InvalidValueError
 
 
 class SelectionRule(enum.StrEnum):
@@ -74,7 +75,7 @@ class MotivationalEvent(BaseModel):
     @classmethod
     def _no_blanks(cls, value: str) -> str:
         if value != value.strip() or any(c.isspace() for c in value):
-            raise ValueError(f"{value!r} contains whitespace: use a name like navigation_emotional")
+            raise InvalidValueError(f"{value!r} contains whitespace: use a name like navigation_emotional")
         return value
 
     @property
@@ -116,7 +117,9 @@ class MotivatorSettings(BaseModel):
         seen: set[tuple[str, str]] = set()
         for e in self.events:
             if (e.state, e.event) in seen:
-                raise ValueError(f"event {e.event!r} is listed twice for state {e.state!r}: keep one entry")
+                raise InvalidValueError(
+                    f"event {e.event!r} is listed twice for state {e.state!r}: keep one entry"
+                )
             seen.add((e.state, e.event))
         return self
 
@@ -277,7 +280,7 @@ def apply_choice(
 def decline(saturations: Mapping[str, float], elapsed_seconds: float, rate: float) -> dict[str, float]:
     """Every saturation falls linearly by ``rate`` per second, floored at 0."""
     if not (math.isfinite(elapsed_seconds) and elapsed_seconds >= 0.0):
-        raise ValueError(
+        raise InvalidValueError(
             f"elapsed_seconds = {elapsed_seconds}: pass the non-negative time since the last decline"
         )
     return {name: max(0.0, value - rate * elapsed_seconds) for name, value in saturations.items()}

@@ -98,7 +98,7 @@ class SimulatedBase:
         planner: RoutePlanner | None = None,
     ) -> None:
         if speed <= 0:
-            raise ValueError(f"speed must be positive (m/s), got {speed}")
+            raise InvalidValueError(f"speed must be positive (m/s), got {speed}")
         self.node = node
         self.map = occupancy_map
         self.planner = planner or RoutePlanner(occupancy_map, robot_radius)

@@ -20,7 +20,7 @@ import pyastar2d
 from numpy.typing import NDArray
 from scipy import ndimage
 
-from cyborg.errors import PlanningError
+from cyborg.errors import InvalidValueError, PlanningError
 from cyborg.maps import Cell, KeepOutZone, NamedPose, OccupancyMap, Point, segment_cells
 
 Location = Point | NamedPose
@@ -61,7 +61,7 @@ class RoutePlanner:
         keep_out: Sequence[KeepOutZone] | None = None,
     ) -> None:
         if robot_radius < 0:
-            raise ValueError(f"robot_radius must be >= 0 m, got {robot_radius}")
+            raise InvalidValueError(f"robot_radius must be >= 0 m, got {robot_radius}")
         self.map = occupancy_map
         self.robot_radius = robot_radius
         self.keep_out = tuple(occupancy_map.keep_out if keep_out is None else keep_out)

@@ -23,7 +23,7 @@ from collections.abc import Awaitable, Callable, Coroutine, Mapping
 from datetime import UTC, datetime
 from typing import Any, TypeVar
 
-from cyborg.errors import CyborgError
+from cyborg.errors import CyborgError, InvalidValueError
 
 T = TypeVar("T")
 
@@ -124,7 +124,9 @@ class Periodic:
         logger: logging.Logger | None = None,
     ) -> None:
         if not (math.isfinite(period) and period > 0):
-            raise ValueError(f"the period of {name} must be a positive number of seconds, got {period!r}")
+            raise InvalidValueError(
+                f"the period of {name} must be a positive number of seconds, got {period!r}"
+            )
         self.clock = clock
         self.period = period
         self.callback = callback
@@ -266,9 +268,9 @@ class VirtualClock(Clock):
     ) -> None:
         super().__init__()
         if speed is not None and speed <= 0:
-            raise ValueError(f"speed must be positive or None (as fast as possible), got {speed!r}")
+            raise InvalidValueError(f"speed must be positive or None (as fast as possible), got {speed!r}")
         if speed is None and real_origin is not None:
-            raise ValueError(
+            raise InvalidValueError(
                 "a real-time origin needs a speed: with speed=None the clock does not follow real time"
             )
         self.speed = speed
@@ -285,7 +287,9 @@ class VirtualClock(Clock):
         the machine), converted from the wall clock once, so clock steps later do not move it.
         """
         if self.speed is None:
-            raise ValueError("only a clock with a speed follows real time; this one runs as fast as possible")
+            raise InvalidValueError(
+                "only a clock with a speed follows real time; this one runs as fast as possible"
+            )
         if math.isinf(real_origin):
             self._real_origin = math.inf
         else:
