@@ -139,10 +139,8 @@ def test_validate_knows_the_installed_kind_and_its_settings(site: Path, tmp_path
     config.write_text(CONFIG.replace('reply: "Good morning, student!"', "replies: 3"))
     result = cyborg(site, "validate", config, cwd=tmp_path)
     assert result.returncode == 1
-    assert (
-        "module 'greeter' > replies: unknown setting; fix: remove it or use one of action, reply"
-        in result.stderr
-    )
+    assert "module 'greeter' > replies: unknown key 'replies' (did you mean 'reply'?)" in result.stderr
+    assert "the keys here are: action, reply" in result.stderr
 
 
 def test_without_the_package_the_kind_is_unknown_and_the_error_says_how_to_get_it(tmp_path: Path) -> None:

@@ -99,8 +99,8 @@ def test_validate_reports_every_bad_module_with_its_fix(tmp_path: Path) -> None:
     lines = result.output.splitlines()
     assert (
         f"{path}: module 'cyborg_idle' > interval: " in lines[0]
-        and "fix: give a number, e.g. 2.5" in lines[0]
+        and "must be a number, not the text 'soon'; fix: write it as a number, e.g. interval: 8.0" in lines[0]
     )
     assert "module 'cyborg_music': unknown kind 'musik'; fix: did you mean 'music'? use one of" in lines[1]
-    assert "module 'cyborg_other' > intervall: unknown setting; fix: remove it or use one of" in lines[2]
-    assert "interval" in lines[2]
+    assert "module 'cyborg_other' > intervall: unknown key 'intervall' (did you mean 'interval'?)" in lines[2]
+    assert "the keys here are: action, interval, boredom" in lines[2]

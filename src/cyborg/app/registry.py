@@ -14,8 +14,9 @@ from collections.abc import Iterable, Mapping
 from importlib.metadata import EntryPoint, entry_points
 from typing import Any
 
-from pydantic import BaseModel, ValidationError
+from pydantic import ValidationError
 
+from cyborg.configfile import describe_errors
 from cyborg.errors import ConfigError
 from cyborg.modules.kind import ModuleKind, ModuleSettings
 
@@ -123,10 +124,10 @@ class KindRegistry:
         try:
             return kind, kind.settings.model_validate(settings)
         except ValidationError as exc:
-            where = f"module {node_name!r} > "
-            raise ConfigError(
-                [_problem(where, kind.settings, e) for e in exc.errors()], source=source
-            ) from exc
+            problems = describe_errors(
+                exc, kind.settings, where=f"module {node_name!r}", doc="docs/configuration.md"
+            )
+            raise ConfigError(problems, source=source) from exc
 
     def check(self, modules: Mapping[str, Any], *, source: str | None = None) -> None:
         """Validate every block of a ``modules:`` section; one ConfigError lists every problem."""
@@ -138,35 +139,6 @@ class KindRegistry:
                 problems.extend(exc.problems)
         if problems:
             raise ConfigError(problems, source=source)
-
-
-def _problem(prefix: str, settings: type[BaseModel], error: Any) -> str:
-    """One settings error: where, what is wrong and the fix."""
-    loc = [str(p) for p in error["loc"]]
-    where = f"{prefix}{'.'.join(loc)}"
-    if error["type"] == "extra_forbidden":
-        known = ", ".join(name for name in settings.model_fields)
-        return f"{where}: unknown setting; fix: remove it or use one of {known}"
-    field = settings.model_fields.get(loc[0]) if loc else None
-    meaning = f" ({field.description})" if field is not None and field.description else ""
-    message = str(error["msg"]).removeprefix("Value error, ")
-    if field is None:
-        return f"{where}: {message}"
-    expected = _READABLE_TYPES.get(str(error["type"]).split("_")[0], "value of the right type")
-    value = error.get("input")
-    return f"{where}: {message} (got {value!r}); fix: give {expected}{meaning}"
-
-
-_READABLE_TYPES = {
-    "float": "a number, e.g. 2.5",
-    "int": "a whole number, e.g. 3",
-    "bool": "true or false",
-    "string": "text in quotes",
-    "greater": "a larger number",
-    "less": "a smaller number",
-    "list": "a list, e.g. [a, b]",
-    "dict": "a mapping, e.g. {key: value}",
-}
 
 
 def module_kinds(extra: Mapping[str, ModuleKind[Any]] | None = None) -> KindRegistry:
