@@ -71,7 +71,7 @@ def check_clock() -> None:
 
 
 def force_tcp_nodelay() -> None:
-    """Every rospy subscriber asks for TCP_NODELAY (importing cyborg.transport.ros does the same)."""
+    """Every rospy subscriber asks for TCP_NODELAY (creating a cyborg RosTransport does the same)."""
     import rospy  # type: ignore[import-not-found]
 
     original = rospy.topics.Subscriber.__init__

@@ -23,17 +23,11 @@ SRC = Path(cyborg.__file__).resolve().parent
 OUTSIDE_MARK = "not a CyborgError"
 """What the docstring of an exception class outside the tree says, followed by why."""
 
-PENDING_CLASSES: dict[str, str] = {
-    # Owned by the navigation engineer, who is moving it into cyborg.errors (CalendarError) now.
-    "cyborg.navigation.calendar.RuleTooCostly": "navigation's conversion to cyborg.errors is under way",
-}
+PENDING_CLASSES: dict[str, str] = {}
+"""Classes outside the tree for a while (qualified name: why); empty now."""
 
-ALLOWED_RAISES: dict[str, str] = {
-    # path relative to src/cyborg (a folder ends in /): why its plain built-in raises may stay for now
-    "navigation/": "owned by the navigation engineer, converting them to NavigationError now",
-    "transport/ros": "owned by the ROS transport engineer now; convert when that work lands",
-    "interfaces/access.py": "new file of the interfaces engineer (split from security.py); convert when it lands",
-}
+ALLOWED_RAISES: dict[str, str] = {}
+"""Paths relative to src/cyborg (a folder ends in /) whose plain built-in raises may stay, and why; empty now."""
 
 _PLAIN_RAISE = re.compile(r"\braise (ValueError|RuntimeError|TypeError)\(")
 

@@ -14,6 +14,8 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from cyborg.errors import InvalidValueError
+
 if TYPE_CHECKING:
     from yarl import URL
 
@@ -63,12 +65,12 @@ def new_token() -> str:
 
 
 def parse_origin(value: str) -> str:
-    """``--allow-origin``: ``http(s)://name[:port]``, normalised; raises ValueError naming the fix."""
+    """``--allow-origin``: ``http(s)://name[:port]``, normalised; raises InvalidValueError (a ValueError) naming the fix."""
     from yarl import URL
 
     url = URL(value.strip())
     if url.scheme not in ("http", "https") or not url.host or url.path not in ("", "/") or url.query_string:
-        raise ValueError(
+        raise InvalidValueError(
             f"{value!r} is not an origin; fix: give scheme, name and port only, e.g. http://cyborg.local:8642"
         )
     return _origin_of(url)

@@ -14,9 +14,9 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
+from cyborg.configfile import describe_errors, load_yaml, read_text_file
 from cyborg.errors import ConfigError, DatabaseError
 from cyborg.navigation.keywords import normalise
 from cyborg.navigation.records import Location, Response, ResponseType, checked_sentence, valid_location
@@ -81,7 +81,7 @@ def load_places(path: Path = PLACES_FILE) -> tuple[Location, ...]:
                 )
             )
         except ValidationError as exc:
-            problems += _explain(where, exc)
+            problems += _explain(where, _Place, exc)
             continue
         except DatabaseError as exc:
             problems.append(f"{where}: {exc}")
@@ -132,7 +132,7 @@ def load_sentences(path: Path = SENTENCES_FILE) -> tuple[Response, ...]:
                 response = checked_sentence(Response(entry.sentence, kind, entry.emotion))
             except ValidationError as exc:
                 broken.add(kind)
-                problems += _explain(where, exc)
+                problems += _explain(where, _Sentence, exc)
                 continue
             except DatabaseError as exc:
                 broken.add(kind)
@@ -156,46 +156,26 @@ def load_sentences(path: Path = SENTENCES_FILE) -> tuple[Response, ...]:
 
 def _read(path: Path, expected: str) -> Any:
     try:
-        text = path.read_text(encoding="utf-8")
+        text = read_text_file(path)
     except (OSError, UnicodeDecodeError) as exc:
         raise ConfigError(
             f"cannot read it ({exc}); fix: reinstall cyborg, or restore the file from git", source=str(path)
         ) from exc
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        at = f"line {mark.line + 1}: " if mark is not None else ""
-        problem = getattr(exc, "problem", None) or exc
-        raise ConfigError(
-            f"{at}not valid YAML ({problem}); fix: check the indentation and quote text with ': ' or '#'",
-            source=str(path),
-        ) from exc
+    data = load_yaml(text, str(path))
     if data is None:
         raise ConfigError(f"it is empty; fix: it should hold {expected}", source=str(path))
     return data
 
 
-def _explain(where: str, exc: ValidationError) -> list[str]:
-    """One line per pydantic error: the entry, the field, what is wrong with the value and the fix."""
-    lines = []
-    for error in exc.errors():
-        loc = [str(part) for part in error["loc"]]
-        field = loc[0] if loc else ""
-        if error["type"] == "extra_forbidden":
-            known = ", ".join(_Place.model_fields if "place" in where else _Sentence.model_fields)
-            lines.append(f"{where}: unknown key {field!r}; fix: remove it, or use one of {known}")
-        elif error["type"] == "model_type":
-            lines.append(
-                f"{where}: {error['input']!r} is no mapping; fix: write it as 'key: value' lines, "
-                "e.g. '- name: cafeteria'"
-                if "place" in where
-                else f"{where}: {error['input']!r} is no mapping; fix: write '- sentence: ...'"
-            )
-        else:
-            fix = _FIXES.get(field, "see the comment at the top of the shipped file")
-            lines.append(f"{where}: {'.'.join(loc)}: {error['msg']} (got {error['input']!r}); fix: {fix}")
-    return lines
+def _explain(where: str, model: type[BaseModel], exc: ValidationError) -> list[str]:
+    """One line per problem: the entry, the key, what is wrong with the value and the fix."""
+    fixes: dict[tuple[str, ...], str] = {(key,): fix for key, fix in _FIXES.items()}
+    fixes["aliases", "*"] = (
+        "write each alias as text, in quotes if YAML would read it otherwise, e.g. ['no', lift]"
+    )
+    return describe_errors(
+        exc, model, where=where, fixes=fixes, doc="the comment at the top of the shipped file"
+    )
 
 
 DEFAULT_LOCATIONS: tuple[Location, ...] = load_places()
