@@ -104,3 +104,17 @@ def test_validate_reports_every_bad_module_with_its_fix(tmp_path: Path) -> None:
     assert "module 'cyborg_music': unknown kind 'musik'; fix: did you mean 'music'? use one of" in lines[1]
     assert "module 'cyborg_other' > intervall: unknown key 'intervall' (did you mean 'interval'?)" in lines[2]
     assert "the keys here are: action, interval, boredom" in lines[2]
+
+
+def test_the_lazy_commands_help_line_is_their_own() -> None:
+    """`cyborg --help` lists the lazy commands without importing them, with their own first line."""
+    import click
+
+    from cyborg.interfaces.cli import LazyGroup
+
+    assert isinstance(cli, LazyGroup)
+    for name, (_, short) in cli.lazy.items():
+        command = cli.get_command(click.Context(cli), name)
+        assert command is not None
+        listed = click.Command(name, help=short).get_short_help_str(200)
+        assert command.get_short_help_str(200) == listed, f"cyborg {name}: update the lazy help line"

@@ -1,0 +1,132 @@
+"""What the commands of the ``cyborg`` command line share: loading a configuration, failing with
+a readable message, and checking option values before anything starts.
+
+Light on purpose (click only): ``cyborg --help`` and the command tool import it.
+"""
+
+from __future__ import annotations
+
+import errno
+import math
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import click
+
+from cyborg.errors import CyborgError
+from cyborg.limits import MAX_SCRIPT_SECONDS, MAX_SPEED
+
+if TYPE_CHECKING:
+    from cyborg.app.config import LoadedConfig
+
+DEFAULT_CONFIG = "cyborg.yaml"
+
+
+def packaged_config(name: str) -> Path:
+    """Path of a configuration file shipped with the package (``src/cyborg/data``)."""
+    from importlib import resources
+
+    return Path(str(resources.files("cyborg") / "data" / name))
+
+
+def load_config(path: Path) -> LoadedConfig:
+    """:func:`cyborg.app.config.load_config`, imported by the commands that read a configuration."""
+    from cyborg.app.config import load_config as load
+
+    return load(path)
+
+
+def load_or_default(path: Path | None) -> LoadedConfig:
+    if path is None:
+        path = packaged_config(DEFAULT_CONFIG)
+        if not path.exists():
+            path = packaged_config("demo.yaml")
+    return load_config(path)
+
+
+def check_modules(loaded: LoadedConfig) -> None:
+    """Validate the ``modules:`` section against the installed module kinds."""
+    from cyborg.app.registry import module_kinds
+
+    module_kinds().check(loaded.model.modules, source=loaded.source)
+
+
+def fail(exc: CyborgError) -> None:
+    click.secho(str(exc), fg="red", err=True)
+    sys.exit(1)
+
+
+def parse_speed(value: str | None) -> float | str | None:
+    if value is None:
+        return "real"
+    if value == "max":
+        return None
+    try:
+        speed = float(value)
+    except ValueError:
+        raise click.BadParameter(f"{value!r} is not a number; use e.g. --speed 10 or --speed max") from None
+    if not math.isfinite(speed) or speed > MAX_SPEED:
+        raise click.BadParameter(
+            f"{value!r} is not a usable factor (at most {MAX_SPEED:g}); fix: use e.g. --speed 10, "
+            "or --speed max for as fast as possible",
+            param_hint="--speed",
+        )
+    if speed <= 0:
+        raise click.BadParameter(f"{value!r} must be positive")
+    return speed
+
+
+def check_port(ctx: click.Context, param: click.Parameter, value: int) -> int:
+    if not 0 <= value <= 65535:
+        raise click.BadParameter(f"{value} is not a TCP port; fix: use 1-65535, or 0 for any free port")
+    return value
+
+
+def check_duration(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
+    if value is None:
+        return None
+    if not (math.isfinite(value) and 0 <= value <= MAX_SCRIPT_SECONDS):
+        raise click.BadParameter(
+            f"{value!r} is not a duration; fix: give seconds from 0 to {MAX_SCRIPT_SECONDS:.0f} (a year), "
+            "or leave --duration out to run until stopped"
+        )
+    return value
+
+
+def check_data_folder(ctx: click.Context, param: click.Parameter, value: Path | None) -> Path | None:
+    if value is not None and value.exists() and not value.is_dir():
+        raise click.BadParameter(
+            f"{value} is a file, not a folder; fix: give a folder for the databases (it is made if missing)"
+        )
+    return value
+
+
+duration_option = click.option(
+    "--duration",
+    type=float,
+    default=None,
+    callback=check_duration,
+    help="stop after this many (virtual) seconds",
+)
+
+
+def check_factor(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
+    if value is not None and not (math.isfinite(value) and value <= MAX_SPEED):
+        raise click.BadParameter(
+            f"{value!r} is not a usable factor; fix: use e.g. --speed 20 (at most {MAX_SPEED:g})"
+        )
+    return value
+
+
+def os_problem(exc: OSError) -> CyborgError:
+    """A file system error met while running, as 'what; fix' instead of a traceback."""
+    where = f"{exc.filename}: " if exc.filename else ""
+    fixes = {
+        errno.ENOSPC: "free some space on that disk, or give another folder with --data-dir",
+        errno.EDQUOT: "free some space on that disk, or give another folder with --data-dir",
+        errno.EACCES: "check the permissions of that path, or use another one",
+        errno.EROFS: "that disk is read-only; give a writable folder",
+    }
+    fix = fixes.get(exc.errno or 0, "check the path")
+    return CyborgError(f"{where}{exc.strerror or exc}; fix: {fix}")

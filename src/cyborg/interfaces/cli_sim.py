@@ -1,0 +1,249 @@
+"""``cyborg sim``: the whole simulated robot in this process (or as ROS nodes), or a scenario run."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import click
+
+from cyborg.errors import CyborgError
+from cyborg.interfaces.access import Access, access_options
+from cyborg.interfaces.cli_common import (
+    check_modules,
+    check_port,
+    duration_option,
+    fail,
+    load_or_default,
+    os_problem,
+    parse_speed,
+)
+
+if TYPE_CHECKING:
+    from cyborg.app.config import LoadedConfig
+
+
+@click.command()
+@click.option(
+    "--config",
+    "config_path",
+    type=click.Path(path_type=Path),
+    help="state machine YAML (default: the packaged Cyborg)",
+)
+@click.option(
+    "--map",
+    "map_path",
+    type=click.Path(path_type=Path),
+    help="map for the simulated base: ARNL .map or map_server .yaml",
+)
+@click.option("--speed", default=None, help="virtual time: a factor (10) or 'max'; default real time")
+@duration_option
+@click.option("--host", default="127.0.0.1", show_default=True, help="address the API and dashboard bind to")
+@click.option(
+    "--port",
+    default=8642,
+    show_default=True,
+    type=int,
+    callback=check_port,
+    help="port of the API and dashboard (0: any free port)",
+)
+@click.option(
+    "--db",
+    "--data-dir",
+    "data_dir",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="folder of the databases (default: $CYBORG_DATA_DIR or ~/.local/share/cyborg; scripts: a temporary one)",
+)
+@click.option(
+    "--script", "script_path", type=click.Path(path_type=Path), help="scenario script to run (YAML)"
+)
+@click.option(
+    "--transcript",
+    "transcript_path",
+    type=click.Path(path_type=Path),
+    help="write the run's records here (JSON lines)",
+)
+@click.option(
+    "--ros",
+    "over_ros",
+    is_flag=True,
+    help="run every part as its own ROS 1 node (as `cyborg launch`); with --script, the script too",
+)
+@access_options
+def sim(
+    config_path: Path | None,
+    map_path: Path | None,
+    speed: str | None,
+    duration: float | None,
+    host: str,
+    port: int,
+    data_dir: Path | None,
+    script_path: Path | None,
+    transcript_path: Path | None,
+    over_ros: bool,
+    access: Access,
+) -> None:
+    """Run the whole simulated robot in this process, with its API and dashboard.
+
+    With --script, run a scenario on a fresh robot in virtual time and write its transcript.
+    With --ros, the robot runs as ROS nodes, one process per part, in virtual time with --speed.
+    """
+    try:
+        config = load_or_default(config_path)
+        check_modules(config)
+        for warning in config.warnings:
+            click.secho(f"warning: {warning}", fg="yellow", err=True)
+        if map_path is not None and not map_path.exists():
+            raise CyborgError(
+                f"map file {map_path} does not exist; fix: check the path (e.g. ../shared/maps/glassgarden.map)"
+            )
+        if over_ros:
+            _sim_over_ros(config, speed, duration, port, data_dir, script_path, transcript_path, map_path)
+            return
+        if script_path is not None:
+            _run_script(config, script_path, transcript_path, speed, data_dir, map_path)
+            return
+        if transcript_path is not None:
+            raise click.UsageError("--transcript goes with --script")
+        import asyncio
+
+        from cyborg.interfaces.serve import serve_api
+        from cyborg.sim.runner import run_sim
+
+        asyncio.set_event_loop(None)
+        run_sim(
+            config,
+            speed=parse_speed(speed),
+            duration=duration,
+            echo=click.echo,
+            serve=serve_api(host, port, click.secho, access),
+            data_dir=data_dir,
+            map_path=map_path,
+        )
+    except CyborgError as exc:
+        fail(exc)
+    except OSError as exc:
+        fail(os_problem(exc))
+    except KeyboardInterrupt:
+        click.echo("stopped")
+
+
+def _ros_speed(speed: str | None) -> float | None:
+    """--speed over ROS: real time (None) or a factor; 'max' has no meaning across processes."""
+    parsed = parse_speed(speed)
+    if parsed is None:
+        raise click.BadParameter(
+            "'max' needs one process; over ROS the nodes share a clock running at a fixed speed: "
+            "use e.g. --speed 20",
+            param_hint="--speed",
+        )
+    return None if parsed == "real" else float(parsed)
+
+
+def _sim_over_ros(
+    config: LoadedConfig,
+    speed: str | None,
+    duration: float | None,
+    port: int,
+    data_dir: Path | None,
+    script_path: Path | None,
+    transcript_path: Path | None,
+    map_path: Path | None,
+) -> None:
+    from cyborg.interfaces.ros_launch import all_parts, launch, run_scenario_ros
+    from cyborg.sim.runner import default_data_dir
+
+    factor = _ros_speed(speed)
+    config_path = Path(config.source).resolve()
+    if script_path is None:
+        if transcript_path is not None:
+            raise click.UsageError("--transcript goes with --script")
+        folder = (data_dir or default_data_dir()).resolve()
+        launch(
+            config_path,
+            config,
+            all_parts(config),
+            folder,
+            map_path,
+            port,
+            echo=True,
+            speed=factor,
+            duration=duration,
+        )
+        return
+    records = run_scenario_ros(
+        config_path,
+        config,
+        script_path,
+        transcript_path=transcript_path.resolve() if transcript_path else None,
+        speed=factor or 1.0,
+        data_dir=data_dir.resolve() if data_dir else None,
+        map_path=map_path.resolve() if map_path else None,
+        echo=True,
+    )
+    _echo_records(records)
+    if transcript_path:
+        click.secho(f"wrote {len(records)} records to {transcript_path}", fg="green")
+
+
+def _echo_records(records: list[dict[str, object]]) -> None:
+    for record in records:
+        _echo_record(record)
+
+
+def _echo_record(record: dict[str, object]) -> None:
+    t = float(record["t"])  # type: ignore[arg-type]
+    if record["type"] == "state":
+        click.echo(f"[{t:8.1f}s] {record['from'] or '-'} --{record['event']}--> {record['to']}")
+    elif record["type"] in ("say", "heard"):
+        who = "Cyborg" if record["type"] == "say" else "User"
+        click.echo(f"[{t:8.1f}s] {who}: {record['text']}")
+
+
+def _run_script(
+    config: LoadedConfig,
+    script_path: Path,
+    transcript_path: Path | None,
+    speed: str | None,
+    data_dir: Path | None,
+    map_path: Path | None,
+) -> None:
+    import contextlib
+
+    from cyborg.sim.scenario import run_scenario
+    from cyborg.sim.script import load_script
+
+    script = load_script(script_path)
+    parsed = parse_speed(speed)
+    virtual_speed = 1.0 if parsed == "real" else (None if parsed is None else float(parsed))
+    count = 0
+
+    def echo(record: dict[str, object]) -> None:
+        nonlocal count
+        count += 1
+        _echo_record(record)
+
+    with contextlib.ExitStack() as stack:
+        out = None
+        if transcript_path is not None:
+            try:
+                out = stack.enter_context(transcript_path.open("w", encoding="utf-8"))
+            except OSError as exc:
+                raise CyborgError(
+                    f"cannot write the transcript {transcript_path}: {exc.strerror}; fix: create the folder "
+                    f"{transcript_path.parent} first, or give a writable path"
+                ) from exc
+        # Each record is echoed and written as it happens; none is kept, so memory stays flat.
+        run_scenario(
+            config,
+            script,
+            transcript=out,
+            data_dir=data_dir,
+            speed=virtual_speed,
+            map_path=map_path,
+            keep_records=False,
+            on_record=echo,
+        )
+    if transcript_path:
+        click.secho(f"wrote {count} records to {transcript_path}", fg="green")
