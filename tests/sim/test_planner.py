@@ -10,10 +10,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 from numpy.typing import NDArray
+from scipy import ndimage
 
 from cyborg.errors import PlanningError
 from cyborg.maps import Cell, KeepOutZone, OccupancyMap, Point, default_map_path, load_map
-from cyborg.sim.planner import Route, RoutePlanner
+from cyborg.sim.planner import Route, RoutePlanner, _close_diagonal_gaps, inflate
 
 MAPS = Path(__file__).resolve().parents[2].parent / "shared" / "maps"
 RESOLUTION = 0.05
@@ -276,3 +277,56 @@ def test_willow_plans_between_random_points() -> None:
         goal = planner.random_reachable_point(rng, near=start)
         route = planner.plan(start, goal)
         assert_valid_route(planner, route, start, goal)
+
+
+# --- inflation and free areas: the same cells as the distance transform, in less memory --------------------
+
+
+def inflated_by_distance_transform(
+    blocked: NDArray[np.bool_], robot_radius: float, resolution: float
+) -> NDArray[np.bool_]:
+    """The planner's inflation up to commit 0d97fce: scipy's exact Euclidean distance transform."""
+    if not blocked.any():
+        return np.zeros_like(blocked)
+    clearance = ndimage.distance_transform_edt(~blocked) * resolution
+    return np.asarray(clearance < robot_radius + resolution / 2)
+
+
+@pytest.mark.parametrize("map_path", [default_map_path(), MAPS / "glassgarden.map", MAPS / "willow.yaml"])
+def test_inflation_is_the_distance_transforms_on_the_real_maps(map_path: Path) -> None:
+    occupancy_map = load_map(map_path)
+    blocked = occupancy_map.blocked | occupancy_map.keep_out_mask()
+    for robot_radius in (0.0, 0.1, 0.275, 0.35, 0.5):
+        expected = inflated_by_distance_transform(blocked, robot_radius, occupancy_map.resolution)
+        got = inflate(blocked, robot_radius, occupancy_map.resolution)
+        assert np.array_equal(got, expected), f"{map_path.name}, robot_radius {robot_radius}"
+    expected = inflated_by_distance_transform(blocked, 0.35, occupancy_map.resolution)
+    assert np.array_equal(RoutePlanner(occupancy_map).inflated, _close_diagonal_gaps(expected))
+
+
+@pytest.mark.parametrize("resolution", [0.025, 0.05, 0.07, 0.1, 0.3])
+def test_inflation_is_the_distance_transforms_on_random_specks(resolution: float) -> None:
+    rng = np.random.default_rng(round(resolution * 1000))
+    blocked = rng.random((120, 90)) < 0.01
+    blocked[0, 5] = blocked[-1, -3] = blocked[40, 0] = True  # on the edges: beyond them counts as free
+    for robot_radius in (0.0, 0.05, 0.12, 0.35, 0.6):
+        assert np.array_equal(
+            inflate(blocked, robot_radius, resolution),
+            inflated_by_distance_transform(blocked, robot_radius, resolution),
+        ), f"resolution {resolution}, robot_radius {robot_radius}"
+    assert not inflate(np.zeros((4, 5), dtype=bool), 0.35, resolution).any()
+
+
+def test_more_than_255_free_areas_get_wider_labels() -> None:
+    grid = np.full((41, 41), Cell.OCCUPIED, dtype=np.uint8)
+    grid[1::2, 1::2] = Cell.FREE  # 400 single free cells, no two touching even at a corner
+    planner = RoutePlanner(OccupancyMap(grid, 1.0, (0.0, 0.0), source="pockets"), robot_radius=0.0)
+    labels, count = ndimage.label(~planner.inflated, structure=np.ones((3, 3), dtype=bool))
+    assert count == 400
+    assert planner._components.dtype == np.uint16
+    assert np.array_equal(planner._components, labels)
+    assert planner._component_sizes.tolist() == [0] + [1] * 400
+    assert planner.plan((1.5, 1.5), (1.5, 1.5)).length == 0
+    with pytest.raises(PlanningError, match="is enclosed"):
+        planner.plan((1.5, 1.5), (3.5, 1.5))
+    assert planner.random_reachable_point(random.Random(1), near=(5.5, 7.5)) == (5.5, 7.5)

@@ -5,6 +5,11 @@ simulated base that drives along the result. At construction the planner grows
 every wall and keep-out zone by the robot's radius and labels the connected
 free areas; a query then asks ``pyastar2d`` (A* in C++) for a grid path and
 pulls it taut into a few straight, collision-free legs. Pure: no I/O, no clock.
+
+Memory (issue 13): the planner keeps two grids of one byte a cell, ``inflated``
+and the free-area labels (two bytes a cell beyond 255 areas). Inflating is a
+boolean dilation by a disc (a few shifted ORs, no distance transform), and the
+A* weights exist only while a route is searched, cut to the free area's bounding box.
 """
 
 from __future__ import annotations
@@ -14,6 +19,7 @@ import math
 import random
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pyastar2d
@@ -65,20 +71,22 @@ class RoutePlanner:
         self.map = occupancy_map
         self.robot_radius = robot_radius
         self.keep_out = tuple(occupancy_map.keep_out if keep_out is None else keep_out)
-        self._keep_out_cells = occupancy_map.keep_out_mask(self.keep_out)
-        self.inflated: NDArray[np.bool_] = self._inflate(occupancy_map.blocked | self._keep_out_cells)
+        blocked = occupancy_map.blocked
+        blocked |= occupancy_map.keep_out_mask(self.keep_out)
+        self.inflated: NDArray[np.bool_] = _close_diagonal_gaps(
+            inflate(blocked, robot_radius, occupancy_map.resolution)
+        )
         """True where the robot's centre may not be."""
-        self._components, _ = ndimage.label(~self.inflated, structure=_EIGHT_NEIGHBOURS)
-        self._component_sizes = np.bincount(self._components.ravel())
+        del blocked
+        self._components, count = _label_free_areas(self.inflated)
+        self._component_sizes = _label_sizes(self._components, count)
         self._component_sizes[0] = 0  # label 0 is the blocked cells
-        self._weights = np.where(self.inflated, np.inf, 1.0).astype(np.float32)
-        self._cells_by_component: dict[int, NDArray[np.intp]] = {}
-
-    def _inflate(self, blocked: NDArray[np.bool_]) -> NDArray[np.bool_]:
-        if not blocked.any():
-            return blocked.copy()
-        clearance = ndimage.distance_transform_edt(~blocked) * self.map.resolution
-        return _close_diagonal_gaps(np.asarray(clearance < self.robot_radius + self.map.resolution / 2))
+        self._component_boxes: list[tuple[slice, slice] | None] = [
+            None,
+            *ndimage.find_objects(self._components),
+        ]
+        self._row_counts: dict[int, NDArray[np.int64]] = {}
+        """Per free area: how many of its cells lie in rows before each row (for random points)."""
 
     @property
     def safety_distance(self) -> float:
@@ -107,7 +115,7 @@ class RoutePlanner:
         self._check_connected(start, start_cell, goal, goal_cell)
         if start_cell == goal_cell:
             return Route.through([start_point, goal_point])
-        path = pyastar2d.astar_path(self._weights, start_cell, goal_cell, allow_diagonal=True)
+        path = self._search(start_cell, goal_cell)
         if path is None:  # cannot happen after _check_connected, unless the library disagrees with it
             raise PlanningError(
                 f"no route from {_describe(start)} to {_describe(goal)}: the search found none"
@@ -123,11 +131,32 @@ class RoutePlanner:
             component = self._largest_component()
         else:
             component = int(self._components[self._check_endpoint("start", near)])
-        if component not in self._cells_by_component:
-            self._cells_by_component[component] = np.flatnonzero(self._components.ravel() == component)
-        cells = self._cells_by_component[component]
-        row, col = np.unravel_index(cells[rng.randrange(len(cells))], self._components.shape)
-        return self.map.cell_to_world(int(row), int(col))
+        if component not in self._row_counts:
+            in_rows = np.count_nonzero(self._components == component, axis=1)
+            self._row_counts[component] = np.concatenate([[0], np.cumsum(in_rows)])
+        before = self._row_counts[component]
+        index = rng.randrange(int(before[-1]))  # the index-th cell of the area in row-major order
+        row = int(np.searchsorted(before, index, side="right")) - 1
+        col = int(np.flatnonzero(self._components[row] == component)[index - before[row]])
+        return self.map.cell_to_world(row, col)
+
+    def _search(self, start: tuple[int, int], goal: tuple[int, int]) -> NDArray[np.int32] | None:
+        """pyastar2d's grid path between two cells of one free area, in the area's bounding box.
+
+        The float32 weights are made for this search only (1 on free cells, inf elsewhere): every
+        cell next to the area is blocked or in it, so the box holds every cell the search can reach
+        and the path is the same as on the whole grid.
+        """
+        box = self._component_boxes[int(self._components[start])]
+        assert box is not None  # start is a free cell, so its area has a box
+        weights = np.where(self.inflated[box], np.float32(np.inf), np.float32(1.0)).view(_FlattenInPlace)
+        top, left = box[0].start, box[1].start
+        path: NDArray[np.int32] | None = pyastar2d.astar_path(
+            weights, (start[0] - top, start[1] - left), (goal[0] - top, goal[1] - left), allow_diagonal=True
+        )
+        if path is None:
+            return None
+        return path + np.array([top, left], dtype=path.dtype)
 
     def _largest_component(self) -> int:
         if not self._component_sizes.any():
@@ -159,7 +188,8 @@ class RoutePlanner:
         rows = slice(max(0, row - reach), row + reach + 1)
         cols = slice(max(0, col - reach), col + reach + 1)
         margin = f"{self.robot_radius:.2f} m"
-        if self._keep_out_cells[cell]:
+        keep_out = self.map.keep_out_mask(self.keep_out)  # only when saying why: not worth keeping
+        if keep_out[cell]:
             return f"inside {self._zone_at(cell)}"
         if self.map.grid[cell] == Cell.OCCUPIED:
             return f"inside a wall or within {margin} of one"
@@ -167,7 +197,7 @@ class RoutePlanner:
             return "in unmapped (unknown) space"
         if (self.map.grid[rows, cols] == Cell.OCCUPIED).any():
             return f"inside a wall or within {margin} of one"
-        if self._keep_out_cells[rows, cols].any():
+        if keep_out[rows, cols].any():
             return f"within {margin} of a keep-out zone"
         return f"within {margin} of unmapped (unknown) space"
 
@@ -250,13 +280,81 @@ class RoutePlanner:
         return kept
 
 
+class _FlattenInPlace(np.ndarray):  # type: ignore[type-arg]
+    """A C-contiguous array whose ``flatten()`` is a view: ``pyastar2d.astar_path`` flattens the
+    weights before the search, and a copy would add 4 bytes a cell to the planning peak."""
+
+    def flatten(self, order: Any = "C") -> Any:
+        return self.ravel(order)
+
+
+def inflate(blocked: NDArray[np.bool_], robot_radius: float, resolution: float) -> NDArray[np.bool_]:
+    """True on every cell whose centre lies closer than ``robot_radius + resolution / 2`` to a blocked cell's.
+
+    The same cells as ``distance_transform_edt(~blocked) * resolution < robot_radius + resolution / 2``
+    (the float comparison included), without its float64 distances and index arrays: a dilation by
+    the disc of offsets (dr, dc) with ``sqrt(dr**2 + dc**2) * resolution`` below that limit, made as
+    one OR of row shifts per disc row, of the blocked cells widened sideways by that row's half-width.
+    Cells beyond the grid's edge count as free. Memory: three boolean grids.
+    """
+    half_widths = _disc_half_widths(robot_radius + resolution / 2, resolution)
+    inflated = np.zeros_like(blocked, dtype=bool)
+    if not blocked.any():
+        return inflated
+    widened = blocked.copy()  # blocked, widened sideways by `width` cells
+    width = 0
+    for row_offset in range(len(half_widths) - 1, -1, -1):  # outer rows are narrowest
+        while width < half_widths[row_offset]:
+            width += 1
+            widened[:, width:] |= blocked[:, :-width]
+            widened[:, :-width] |= blocked[:, width:]
+        if row_offset == 0:
+            inflated |= widened
+        else:
+            inflated[row_offset:] |= widened[:-row_offset]
+            inflated[:-row_offset] |= widened[row_offset:]
+    return inflated
+
+
+def _disc_half_widths(limit: float, resolution: float) -> list[int]:
+    """For each row offset dr = 0, 1, ...: the largest dc with ``sqrt(dr**2 + dc**2) * resolution < limit``.
+
+    Computed as ``distance_transform_edt`` computes a distance (float64 sqrt of the integer sum of
+    squares, times the resolution), so the comparison falls the same way on every offset.
+    """
+    reach = math.ceil(limit / resolution) + 1
+    offsets = np.arange(reach + 1, dtype=np.float64)
+    inside = np.sqrt(offsets[:, None] ** 2 + offsets[None, :] ** 2) * resolution < limit
+    return [int(np.flatnonzero(row)[-1]) for row in inside if row[0]]
+
+
+def _label_free_areas(inflated: NDArray[np.bool_]) -> tuple[NDArray[np.integer], int]:
+    """The 8-connected free areas, labelled 1..count as uint8, uint16 beyond 255 areas, int32 beyond 65535."""
+    free = ~inflated
+    try:
+        labels, count = ndimage.label(free, structure=_EIGHT_NEIGHBOURS, output=np.uint8)
+    except RuntimeError:  # more than 255 areas
+        labels, count = ndimage.label(free, structure=_EIGHT_NEIGHBOURS)
+        if count <= np.iinfo(np.uint16).max:
+            labels = labels.astype(np.uint16)
+    return labels, int(count)
+
+
+def _label_sizes(labels: NDArray[np.integer], count: int) -> NDArray[np.int64]:
+    """Cells per label 0..count, counted a band of rows at a time (bincount widens to 8 bytes a cell)."""
+    sizes = np.zeros(count + 1, dtype=np.int64)
+    band = max(1, (1 << 18) // max(1, labels.shape[1]))
+    for top in range(0, labels.shape[0], band):
+        sizes += np.bincount(labels[top : top + band].ravel(), minlength=count + 1)
+    return sizes
+
+
 def _close_diagonal_gaps(blocked: NDArray[np.bool_]) -> NDArray[np.bool_]:
-    """Block both free cells of every 2x2 square whose blocked cells touch only at a corner.
+    """Block both free cells of every 2x2 square whose blocked cells touch only at a corner; in place.
 
     Free space then never narrows to a single corner point, so every diagonal
     step has at least one free side cell to go through instead.
     """
-    blocked = blocked.copy()
     while True:
         low_left, low_right = blocked[:-1, :-1], blocked[:-1, 1:]
         high_left, high_right = blocked[1:, :-1], blocked[1:, 1:]
