@@ -117,6 +117,10 @@ class ConversationSettings(ModuleSettings):
     action: str = Field(CONVERSATION_ACTION, description="action server of the conversation state")
     quiet_seconds: float = Field(90.0, gt=0, description="seconds without speech that end the conversation")
 
+    def listens_for(self) -> tuple[str, ...]:
+        """Greetings: a sentence starting with one of them asks for the conversation state."""
+        return (*sorted(GREETINGS), *GREETING_PHRASES)
+
 
 class QuestionSettings(ModuleSettings):
     """Asks one question, waits for an answer, and tells the emotion system how it went."""

@@ -48,6 +48,15 @@ class ModuleSettings(BaseModel):
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
+    def listens_for(self) -> tuple[str, ...]:
+        """The phrases this module reacts to when speech-to-text hears them (lower case).
+
+        Override it in a module that listens: ``cyborg validate`` warns when two modules
+        listen for the same phrase (they would race for one sentence), and speech recognition
+        adds the phrases to what it can hear. The default: none.
+        """
+        return ()
+
 
 @runtime_checkable
 class Component(Protocol):

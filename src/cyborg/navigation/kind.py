@@ -12,6 +12,7 @@ from pydantic import Field
 
 from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
 from cyborg.navigation.database import NavigationDatabase
+from cyborg.navigation.keywords import NO_PHRASES, TRIGGERS, YES_PHRASES
 from cyborg.navigation.module import NavigationModule
 from cyborg.transport.base import Node
 
@@ -27,6 +28,10 @@ class NavigationSettings(ModuleSettings):
     answer_timeout: float = Field(20.0, gt=0, description="seconds it waits for a yes or no")
     feedback_interval: float = Field(15.0, gt=0, description="seconds between emotion feedbacks on a trip")
     wander_limit: float = Field(600.0, gt=0, description="seconds a wander lasts at most")
+
+    def listens_for(self) -> tuple[str, ...]:
+        """The phrases that start a request for a place (the place follows them), and the answers."""
+        return (*(phrase for phrases in TRIGGERS.values() for phrase in phrases), *YES_PHRASES, *NO_PHRASES)
 
 
 def _build(node: Node, settings: NavigationSettings, context: BuildContext) -> NavigationModule:
