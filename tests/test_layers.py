@@ -27,7 +27,7 @@ LAYERS: list[set[str]] = [
     {"modules"},
     {"navigation"},
     {"app"},
-    {"sim"},
+    {"sim", "testing"},
     {"interfaces"},
 ]
 """Lowest first. A package may import its own layer's packages and those below; never above."""

@@ -2,38 +2,29 @@
 
 from __future__ import annotations
 
-from cyborg.modules.idle import IdleModule, IdleSettings
-from cyborg.transport import topics
-from cyborg.transport.base import GoalStatus, MessageInfo
-from cyborg.transport.clock import VirtualClock
-from cyborg.transport.embedded import EmbeddedTransport
-from cyborg.transport.messages import EmotionalFeedback, StateMachineAction, StateMachineGoal
+from cyborg.modules.idle import KIND
+from cyborg.testing import GoalStatus, ModuleHarness
 
 
-def test_idle_sends_boredom_and_stops_at_once_when_preempted(clock: VirtualClock) -> None:
-    transport = EmbeddedTransport(clock)
-    IdleModule(transport.node("cyborg_idle"), IdleSettings(interval=2.0, boredom=(-0.1, -0.2, -0.05)))
-    probe = transport.node("probe")
-    feedback: list[tuple[float, EmotionalFeedback]] = []
+def test_idle_sends_boredom_and_stops_at_once_when_preempted() -> None:
+    with ModuleHarness(
+        KIND, {"interval": 2.0, "boredom": [-0.1, -0.2, -0.05]}, node_name="cyborg_idle"
+    ) as idle:
+        goal = idle.start("cyborg_idle/idle", event="start")
+        idle.run(7.0)
+        goal.cancel()
+        idle.run(0.001)
+        assert goal.status is GoalStatus.PREEMPTED, "the preemption is acknowledged at once"
+        idle.run(10.0)
+    assert [round(f.t - idle.feedback[0].t) for f in idle.feedback] == [0, 2, 4]  # nothing after it
+    assert idle.feedback[0].pad == (-0.1, -0.2, -0.05)
+    assert idle.said == [] and idle.events == []
 
-    def on_feedback(m: EmotionalFeedback, info: MessageInfo) -> None:
-        feedback.append((clock.monotonic(), m))
 
-    probe.subscribe(topics.EMOTIONAL_FEEDBACK, EmotionalFeedback, on_feedback)
-    client = probe.action_client("cyborg_idle/idle", StateMachineAction)
+def test_idle_refuses_a_non_positive_interval_naming_the_setting() -> None:
+    import pytest
 
-    async def main() -> tuple[GoalStatus, float]:
-        handle = client.send_goal(StateMachineGoal("", "start", "idle"))
-        await clock.sleep(7.0)
-        cancelled_at = clock.monotonic()
-        handle.cancel()
-        status = await handle.wait()
-        waited = clock.monotonic() - cancelled_at
-        await clock.sleep(10.0)
-        return status, waited
+    from cyborg.errors import ConfigError
 
-    status, waited = clock.run(main())
-    assert status is GoalStatus.PREEMPTED
-    assert waited < 0.01
-    assert [round(t) for t, _ in feedback] == [2, 4, 6]  # nothing after the preemption
-    assert (feedback[0][1].delta_pleasure, feedback[0][1].delta_arousal) == (-0.1, -0.2)
+    with pytest.raises(ConfigError, match=r"interval: .*greater than 0"):
+        ModuleHarness(KIND, {"interval": 0})

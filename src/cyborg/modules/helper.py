@@ -48,6 +48,8 @@ _GoalHandle = ServerGoalHandle[StateMachineGoal, StateMachineResult, StateMachin
 
 
 class Outcome(enum.Enum):
+    """How a goal ends when ``execute`` returns it: the controller takes the event of that name."""
+
     SUCCEEDED = "succeeded"
     ABORTED = "aborted"
 
@@ -76,13 +78,21 @@ class GoalContext:
 
     @property
     def previous_state(self) -> str:
+        """The state the controller left for this one."""
         return self.goal.previous_state
 
     @property
+    def state(self) -> str:
+        """The state this goal serves (one action server may serve several)."""
+        return self.goal.current_state
+
+    @property
     def preempt_requested(self) -> bool:
+        """True once the controller asked to stop (modules that ignore cancel can poll it)."""
         return self.handle.cancel_requested
 
     async def sleep(self, seconds: float) -> None:
+        """Wait ``seconds`` on the robot's clock (virtual in simulations); preemption ends it at once."""
         await self.module.node.clock.sleep(seconds)
 
     async def wait_forever(self) -> None:
@@ -90,6 +100,7 @@ class GoalContext:
         await asyncio.get_running_loop().create_future()
 
     def feedback(self, status: str, message: str = "") -> None:
+        """Action feedback to the controller (the dashboard shows when a module last sent some)."""
         self.handle.publish_feedback(StateMachineFeedback(status=status, message=message))
 
 
@@ -185,12 +196,16 @@ class StateServer:
 
 
 class BehaviourModule:
-    """Base class for behaviour modules: serve states, send events, feedback and speech."""
+    """Base class for behaviour modules: serve states, send events, feedback and speech.
+
+    ``emotion`` is the robot's current emotion (from ``/cyborg_controller/emotional_state``).
+    """
 
     def __init__(self, node: Node) -> None:
         self.node = node
         self.emotion = "neutral"
         self.servers: dict[str, StateServer] = {}
+        self._emotion_listeners: list[Callable[[str, str], None]] = []
         self._events = node.publisher(topics.REGISTER_EVENT, String)
         self._feedback = node.publisher(topics.EMOTIONAL_FEEDBACK, EmotionalFeedback)
         self._speech = node.publisher(
@@ -199,6 +214,9 @@ class BehaviourModule:
         node.subscribe(topics.EMOTIONAL_STATE, EmotionalState, self._on_emotion)
 
     def serve(self, name: str, execute: Execute, *, honour_cancel: bool = True) -> StateServer:
+        """Offer the action server ``name`` (a state's ``action:`` in the YAML): each goal the
+        controller sends runs ``await execute(ctx)``; a new goal or a cancel ends the running one.
+        ``honour_cancel=False`` ignores cancels (the controller then aborts after its timeout)."""
         server = StateServer(self, name, execute, honour_cancel=honour_cancel)
         self.servers[name] = server
         return server
@@ -209,19 +227,38 @@ class BehaviourModule:
             server.close()
 
     def publish_event(self, event: str) -> None:
+        """Ask the controller for a state change: published on ``/cyborg_controller/register_event``.
+        The controller takes it only if it is a transition of the active state, else drops it."""
         self._events.publish(String(data=event))
 
     def send_emotion(self, pleasure: float = 0.0, arousal: float = 0.0, dominance: float = 0.0) -> None:
+        """Change the robot's emotion by this PAD amount: published on
+        ``/cyborg_controller/emotional_feedback``; the emotion system adds it (each value clamped
+        to [-1, 1]) unless it is switched off."""
         self._feedback.publish(
             EmotionalFeedback(delta_pleasure=pleasure, delta_arousal=arousal, delta_dominance=dominance)
         )
 
     def say(self, text: str) -> None:
+        """Say ``text``: published on ``/text_to_speech``. The speech gatekeeper passes it to the
+        text-to-speech only while the active state grants ``speech`` to this node (its
+        ``resources:``), and drops it otherwise."""
         self._speech.publish(String(data=text))
 
     def on_speech_text(self, callback: Callable[[str, MessageInfo], None]) -> None:
-        """Call ``callback`` with every text heard by speech-to-text."""
+        """Call ``callback(text, info)`` with every sentence heard (``/text_from_speech``), in any state.
+        Declare what you listen for in your settings' ``listens_for()``."""
         self.node.subscribe(topics.TEXT_FROM_SPEECH, String, lambda m, i: callback(m.data, i))
 
+    def on_emotion_change(self, callback: Callable[[str, str], None]) -> None:
+        """Call ``callback(emotion, previous)`` whenever the robot's emotion changes its name."""
+        self._emotion_listeners.append(callback)
+
     def _on_emotion(self, message: EmotionalState, info: MessageInfo) -> None:
-        self.emotion = message.to_emotional_state or self.emotion
+        previous, self.emotion = self.emotion, message.to_emotional_state or self.emotion
+        if self.emotion != previous:
+            for listener in self._emotion_listeners:
+                try:
+                    listener(self.emotion, previous)
+                except Exception:
+                    log.exception("%s: an emotion listener failed; the module carries on", self.node.name)

@@ -40,7 +40,6 @@ from cyborg.navigation.records import CalendarEvent, Location, ResponseType
 from cyborg.transport import topics
 from cyborg.transport.base import GoalStatus, MessageInfo, Node
 from cyborg.transport.messages import (
-    EmotionalState,
     EmptyService,
     Header,
     MoveBaseAction,
@@ -121,6 +120,7 @@ class NavigationModule(BehaviourModule):
         node.subscribe(topics.AMCL_POSE, PoseWithCovarianceStamped, self._on_pose, queue_size=10)
         node.subscribe(topics.STATE_CHANGE, SystemState, self._on_state_change)
         self.on_speech_text(self._on_text)
+        self.on_emotion_change(self._on_emotion_change)
         self.serve(PLANNING_ACTION, self.planning)
         self.serve(MOVING_ACTION, self.moving)
         self.serve(TALKING_ACTION, self.talking)
@@ -150,11 +150,8 @@ class NavigationModule(BehaviourModule):
     def _on_pose(self, message: PoseWithCovarianceStamped, info: MessageInfo) -> None:
         self.pose = (message.pose.pose.position.x, message.pose.pose.position.y)
 
-    def _on_emotion(self, message: EmotionalState, info: MessageInfo) -> None:
-        before = self.emotion
-        super()._on_emotion(message, info)
-        if self.emotion != before:
-            self.emotion_since = self.node.clock.monotonic()
+    def _on_emotion_change(self, emotion: str, previous: str) -> None:
+        self.emotion_since = self.node.clock.monotonic()
 
     def _on_text(self, text: str, info: MessageInfo) -> None:
         # Places on the loaded map first: on Glassgården "waiting area" is the map's "waitingarea".
