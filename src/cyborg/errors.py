@@ -71,3 +71,17 @@ class InvalidValueError(CyborgError, ValueError):
     :func:`cyborg.configfile.describe_errors` words), and callers that caught ValueError
     before this class existed still catch it.
     """
+
+
+class ScenarioFailed(CyborgError):
+    """A scenario script ran, but an ``expect`` step was not met or a ``when`` never fired.
+
+    ``problems`` holds one line per failed step: its line in the script, what it waited for
+    and what happened instead.
+    """
+
+    def __init__(self, problems: list[str], *, source: str | None = None) -> None:
+        self.problems = list(problems)
+        self.source = source
+        prefix = f"{source}: " if source else ""
+        super().__init__("\n".join(prefix + p for p in self.problems))

@@ -397,3 +397,7 @@ class _ScenarioNode:
         finally:
             if self._out is not None:
                 self._out.close()
+        if self.driver.failures:
+            from cyborg.errors import ScenarioFailed
+
+            raise ScenarioFailed(self.driver.failures, source=self.script.source)

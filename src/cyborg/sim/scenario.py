@@ -14,6 +14,7 @@ import json
 import logging
 import random
 import tempfile
+from collections import deque
 from collections.abc import Callable
 from datetime import UTC, datetime
 from pathlib import Path
@@ -21,7 +22,7 @@ from typing import IO
 
 from cyborg.app.config import LoadedConfig
 from cyborg.app.robot import Robot, build_robot
-from cyborg.errors import ConfigError, CyborgError
+from cyborg.errors import ConfigError, CyborgError, ScenarioFailed
 from cyborg.sim.records import Record, RecordStream
 from cyborg.sim.script import CalendarEntry, Match, Script, Step, check_against
 from cyborg.storage import lock_data_dir
@@ -32,6 +33,22 @@ from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import String
 
 log = logging.getLogger(__name__)
+
+RECENT_KEPT = 200
+"""Records kept while a step waits, to say what came instead of what it waited for."""
+
+
+def _brief(record: Record) -> str:
+    t = f"t={float(record['t']):g}"  # type: ignore[arg-type]
+    kind = record.get("type")
+    if kind == "state":
+        return f"{t} {record.get('from')} --{record.get('event')}--> {record.get('to')}"
+    if kind in ("say", "heard"):
+        return f"{t} {kind} {record.get('text')!r}"
+    if kind == "emotion":
+        return f"{t} emotion {record.get('emotion')}"
+    rest = ", ".join(f"{k}: {v}" for k, v in record.items() if k not in ("t", "type"))
+    return f"{t} {kind} {{{rest}}}"
 
 
 class ScenarioDriver:
@@ -52,8 +69,12 @@ class ScenarioDriver:
         self.keep_records = keep_records
         self.count = 0
         self.listeners: list[Callable[[Record], None]] = []
-        self._waiting_for: Match | None = None  # the 'when' of the step being waited for
+        self._waiting_for: Match | None = None  # the 'when' or 'expect' of the step being waited for
         self._matched = asyncio.Event()
+        self._since: deque[Record] = deque(maxlen=RECENT_KEPT)  # records since that step was armed
+        self._step: tuple[int, Step, float] | None = None  # the step under way, and since when
+        self.failures: list[str] = []
+        """Expectations that failed and ``when`` steps that never fired, one line each."""
         self.stream = RecordStream(node, origin=origin)
         self.stream.listeners.append(self._on_record)
         self.say = node.publisher(topics.TEXT_FROM_SPEECH, String)
@@ -64,21 +85,26 @@ class ScenarioDriver:
         self.count += 1
         if self.keep_records:
             self.records.append(record)
-        if self._waiting_for is not None and self._waiting_for.matches(record):
-            self._matched.set()
+        if self._waiting_for is not None:
+            self._since.append(record)
+            if self._waiting_for.matches(record):
+                self._matched.set()
         for listener in self.listeners:
             listener(record)
 
     def _watch(self, step: Step | None) -> None:
         """From now on, look for records matching ``step.when`` (if it waits for one)."""
-        self._waiting_for = step.when if step is not None else None
+        self._waiting_for = (step.when or step.expect) if step is not None else None
         self._matched.clear()
+        self._since.clear()
 
-    async def _wait_for(self) -> bool:
-        """Wait until a record since the previous step's action matched; False at the end of the run."""
+    async def _wait_for(self, within: float | None = None) -> bool:
+        """Wait until a record since the previous step's action matched; False at the end of the run
+        (or after ``within`` seconds)."""
         if self._matched.is_set():
             return True
-        remaining = self.script.until - self.clock.monotonic()
+        end = self.script.until if within is None else min(self.script.until, self.clock.monotonic() + within)
+        remaining = end - self.clock.monotonic()
         if remaining <= 0:
             return False
         try:
@@ -92,11 +118,19 @@ class ScenarioDriver:
         steps = self.script.steps
         self._watch(steps[0] if steps else None)
         for index, step in enumerate(steps):
+            self._step = (index, step, self.clock.monotonic())
+            if step.expect is not None:
+                if not await self._wait_for(step.within):
+                    self._fail_step()
+                    return
+                self._watch(steps[index + 1] if index + 1 < len(steps) else None)
+                continue
             if step.at is not None:
                 await self.clock.sleep(step.at - self.clock.monotonic())
             elif not await self._wait_for():
-                log.warning("line %d: nothing matched %s before the end", step.line, step.when)
+                self._fail_step()
                 return
+            self._step = None
             self._watch(None)
             await self.clock.sleep(step.delay)
             if step.say is not None:
@@ -107,13 +141,48 @@ class ScenarioDriver:
                 self.set_emotion.publish(String(step.emotion))
             self._watch(steps[index + 1] if index + 1 < len(steps) else None)
 
+    def _fail_step(self) -> None:
+        """The step being waited for did not come: record what it waited for and what came instead."""
+        if self._step is None or self.failures:
+            return
+        index, step, armed = self._step
+        where = f"line {step.line or '?'}: step {index + 1}"
+        if step.expect is not None:
+            limit = f"within {step.within:g} s" if step.within is not None else "before the end"
+            problem = (
+                f"{where} expected {step.expect.describe()} {limit} (from t={armed:.1f} s); "
+                f"instead: {self._instead(step.expect)}"
+            )
+        elif step.when is not None:
+            problem = (
+                f"{where} waited for {step.when.describe()}, which never came before the end "
+                f"(until: {self.script.until:g} s); instead: {self._instead(step.when)}"
+            )
+        else:
+            return  # an 'at' step whose time is after the end: nothing was promised
+        log.info("%s", problem)
+        self.failures.append(problem)
+
+    def _instead(self, match: Match) -> str:
+        """What came instead of ``match``: the last records of its type since the step was armed."""
+        same = [record for record in self._since if record.get("type") == match.type]
+        if not same:
+            return f"no {match.type} record at all"
+        return "; ".join(_brief(record) for record in same[-3:])
+
     async def run(self) -> list[Record]:
-        """Play the script until its ``until`` time; return the records."""
+        """Play the script until its ``until`` time, or until a step fails; return the records."""
         driver = asyncio.ensure_future(self.drive())
+        end = asyncio.ensure_future(self.clock.sleep(self.script.until - self.clock.monotonic()))
         try:
-            await self.clock.sleep(self.script.until - self.clock.monotonic())
+            await asyncio.wait({driver, end}, return_when=asyncio.FIRST_COMPLETED)
+            if not driver.done():
+                self._fail_step()  # the end came while a step still waited
+            elif not self.failures and not end.done():
+                await end  # the steps are done; the run goes on to its end
         finally:
             driver.cancel()
+            end.cancel()
         return self.records
 
 
@@ -164,11 +233,16 @@ class ScenarioRun:
         await self.robot.controller.stop()
 
     def run(self) -> list[Record]:
+        """Run the script to its end; :class:`ScenarioFailed` if an expectation failed or a ``when``
+        never fired (the transcript holds every record up to the end either way)."""
         try:
             self.clock.run(self._main())
         finally:
+            self.robot.close()
             self.transport.shutdown()
             self.clock.close()
+        if self.driver.failures:
+            raise ScenarioFailed(self.driver.failures, source=self.script.source)
         return self.records
 
 

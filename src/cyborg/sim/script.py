@@ -4,7 +4,10 @@ A script (YAML) gives an optional start date-time, seed, initial emotion and
 calendar, an end time ``until`` and ``steps``. A step waits (``at`` a virtual
 time, or ``when`` a transcript record matches, plus an optional ``delay``) and
 then acts (``say`` text as speech-to-text, publish an ``event``, or set the
-``emotion``). Errors name the line and the fix.
+``emotion``). An ``expect`` step checks instead: a matching record must come after the
+previous step (``within`` seconds, or before the end), else the run fails naming the step's
+line and what happened instead; so does a ``when`` that never matches. Errors name the line
+and the fix.
 """
 
 from __future__ import annotations
@@ -92,6 +95,15 @@ class Match(BaseModel):
         extra = self.model_extra or {}
         return all(str(record.get(key)) == str(value) for key, value in extra.items())
 
+    def describe(self) -> str:
+        """As written in a script: ``{type: state, to: idle}``."""
+        fields = {
+            "type": self.type,
+            **({"contains": self.contains} if self.contains else {}),
+            **(self.model_extra or {}),
+        }
+        return "{" + ", ".join(f"{key}: {value}" for key, value in fields.items()) + "}"
+
 
 class Step(BaseModel):
     model_config = ConfigDict(extra="forbid")
@@ -104,21 +116,41 @@ class Step(BaseModel):
     )
     event: str | None = Field(None, max_length=200)
     emotion: str | None = Field(None, max_length=200)
+    expect: Match | None = Field(
+        None, description="a record that must come after the previous step, else the run fails"
+    )
+    within: float | None = Field(
+        None, description="with expect: seconds it may take (default: until the end)"
+    )
     line: int = Field(0, exclude=True)
 
-    @field_validator("at", "delay", mode="before")
+    @field_validator("at", "delay", "within", mode="before")
     @classmethod
     def _time(cls, value: Any) -> float | None:
         return None if value is None else parse_seconds(value)
 
     @model_validator(mode="after")
     def _one_trigger_one_action(self) -> Step:
+        actions = [a for a in ("say", "event", "emotion") if getattr(self, a) is not None]
+        if self.expect is not None:
+            extra = [k for k in ("at", "when", *actions) if getattr(self, k) is not None] + (
+                ["delay"] if self.delay else []
+            )
+            if extra:
+                raise InvalidValueError(
+                    f"an 'expect' step only checks, so it takes no {', '.join(repr(k) for k in extra)}; "
+                    "fix: put the action in a step of its own, e.g. - expect: {type: state, to: idle}"
+                )
+            return self
+        if self.within is not None:
+            raise InvalidValueError(
+                "'within' goes with 'expect'; fix: e.g. - {expect: {type: say, contains: cafeteria}, within: 30}"
+            )
         if (self.at is None) == (self.when is None):
             raise InvalidValueError(
                 "give exactly one of 'at' (a time) or 'when' (a record to wait for); "
                 "fix: e.g. at: 10, or when: {type: state, to: idle}"
             )
-        actions = [a for a in ("say", "event", "emotion") if getattr(self, a) is not None]
         if len(actions) != 1:
             raise InvalidValueError(
                 f"give exactly one action of 'say', 'event' or 'emotion', not {len(actions)}; "

@@ -1,0 +1,77 @@
+"""Scenario scripts that check: expect steps, and when steps that never fire, fail the run."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from cyborg.app.config import load_config
+from cyborg.errors import ConfigError, ScenarioFailed
+from cyborg.interfaces.cli import cli, packaged_config
+from cyborg.sim.scenario import run_scenario
+from cyborg.sim.script import parse_script
+
+GREETING = """
+until: 120
+steps:
+  - {at: 5, say: hello}
+  - expect: {type: state, to: conversation}
+    within: 5
+  - {expect: {type: say}, within: 30}
+"""
+
+
+def run(text: str) -> list[dict[str, object]]:
+    return run_scenario(load_config(packaged_config("cyborg.yaml")), parse_script(text, source="test.yaml"))
+
+
+def test_met_expectations_let_the_run_go_on_to_its_end() -> None:
+    records = run(GREETING)
+    assert records[-1]["t"] > 60, "the run went on after the last expectation"
+
+
+def test_an_unmet_expectation_fails_naming_its_line_and_what_came_instead() -> None:
+    text = GREETING.replace("{type: say}, within: 30", "{type: say, contains: goodbye}, within: 30")
+    with pytest.raises(ScenarioFailed) as caught:
+        run(text)
+    (problem,) = caught.value.problems
+    assert problem.startswith("line 7: step 3 expected {type: say, contains: goodbye} within 30 s")
+    assert "instead: " in problem and " say '" in problem, "it names the sentences said instead"
+    assert str(caught.value).startswith("test.yaml: line 7")
+
+
+def test_a_when_that_never_fires_fails_the_run() -> None:
+    text = """
+until: 60
+steps:
+  - when: {type: state, to: music}
+    say: hello
+"""
+    with pytest.raises(
+        ScenarioFailed, match=r"line 4: step 1 waited for \{type: state, to: music\}, which never came"
+    ):
+        run(text)
+
+
+def test_cyborg_sim_exits_1_on_a_failed_expectation(tmp_path: Path) -> None:
+    script = tmp_path / "s.yaml"
+    script.write_text(GREETING.replace("to: conversation}", "to: music}"))
+    result = CliRunner().invoke(cli, ["sim", "--script", str(script), "--speed", "max"])
+    assert result.exit_code == 1
+    assert "line 5: step 2 expected {type: state, to: music} within 5 s" in result.output
+    assert "--conversation_interest--> conversation" in result.output, "what came instead"
+
+
+@pytest.mark.parametrize(
+    ("step", "message"),
+    [
+        ("{expect: {type: state}, say: hi}", r"an 'expect' step only checks, so it takes no 'say'"),
+        ("{at: 3, say: hi, within: 4}", r"'within' goes with 'expect'"),
+        ("{expect: {type: nonsense}}", r"unknown record type 'nonsense'"),
+    ],
+)
+def test_bad_expect_steps_are_refused_with_the_fix(step: str, message: str) -> None:
+    with pytest.raises(ConfigError, match=message):
+        parse_script(f"until: 10\nsteps:\n  - {step}\n")
