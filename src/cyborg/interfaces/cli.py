@@ -96,14 +96,21 @@ def cli(log_level: str) -> None:
 @cli.command()
 @click.argument("file", type=click.Path(path_type=Path))
 def validate(file: Path) -> None:
-    """Check a state machine YAML FILE; exit 0 if valid, 1 with the problems otherwise."""
+    """Check a state machine YAML FILE; exit 0 if valid, 1 with the problems otherwise.
+
+    With a modules: section it also warns about the robot as a whole: states no module serves,
+    resources granted to no module's node, and modules listening for the same phrase."""
+    from cyborg.app.checks import robot_warnings
+    from cyborg.app.registry import module_kinds
+
     try:
         loaded = load_config(file)
         check_modules(loaded)
+        warnings = [*loaded.warnings, *robot_warnings(loaded, module_kinds())]
     except CyborgError as exc:
         fail(exc)
         return
-    for warning in loaded.warnings:
+    for warning in warnings:
         click.secho(f"warning: {warning}", fg="yellow", err=True)
     leaves = len(loaded.machine.leaves())
     click.echo(f"{file}: valid ({leaves} states, initial {loaded.machine.initial!r})")

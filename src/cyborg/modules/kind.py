@@ -57,6 +57,15 @@ class ModuleSettings(BaseModel):
         """
         return ()
 
+    def serves(self) -> tuple[str, ...]:
+        """The action servers this module offers (states' ``action:``), known without starting it.
+
+        The default reads an ``action`` setting; a module that serves several states, or fixed
+        ones, overrides it. ``cyborg validate`` warns about states that no module serves.
+        """
+        action = getattr(self, "action", None)
+        return (action,) if isinstance(action, str) and action else ()
+
 
 @runtime_checkable
 class Component(Protocol):

@@ -74,6 +74,9 @@ class PlaceholderSettings(ModuleSettings):
 
     servers: list[PlaceholderServer] = Field(min_length=1, description="the states it serves, one entry each")
 
+    def serves(self) -> tuple[str, ...]:
+        return tuple(server.action for server in self.servers)
+
 
 def _build(node: Node, settings: PlaceholderSettings, context: BuildContext) -> PlaceholderModule:
     return PlaceholderModule(node, [PlaceholderSpec(**server.model_dump()) for server in settings.servers])

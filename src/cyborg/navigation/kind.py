@@ -13,7 +13,7 @@ from pydantic import Field
 from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
 from cyborg.navigation.database import NavigationDatabase
 from cyborg.navigation.keywords import NO_PHRASES, TRIGGERS, YES_PHRASES
-from cyborg.navigation.module import NavigationModule
+from cyborg.navigation.module import MOVING_ACTION, PLANNING_ACTION, TALKING_ACTION, NavigationModule
 from cyborg.transport.base import Node
 
 
@@ -28,6 +28,9 @@ class NavigationSettings(ModuleSettings):
     answer_timeout: float = Field(20.0, gt=0, description="seconds it waits for a yes or no")
     feedback_interval: float = Field(15.0, gt=0, description="seconds between emotion feedbacks on a trip")
     wander_limit: float = Field(600.0, gt=0, description="seconds a wander lasts at most")
+
+    def serves(self) -> tuple[str, ...]:
+        return (PLANNING_ACTION, MOVING_ACTION, TALKING_ACTION)
 
     def listens_for(self) -> tuple[str, ...]:
         """The phrases that start a request for a place (the place follows them), and the answers."""
