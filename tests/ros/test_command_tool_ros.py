@@ -44,10 +44,17 @@ def test_command_tool_drives_a_robot_of_ros_nodes(
     processes.wait_ready(idle, worker, controller)
     changes.wait_state("idle", event="start")
 
+    result = tool("event", "no_such_event")
+    assert result.returncode == 0, result.stderr
+    assert (
+        "sent event no_such_event (not a transition of the current state: it will be dropped)"
+        in result.stdout
+    )
+
     mark = changes.mark()
     result = tool("event", "work")
     assert result.returncode == 0, result.stderr
-    assert "sent event work" in result.stdout
+    assert result.stdout.strip() == "sent event work", "a transition of idle: no warning"
     changes.wait_state("working", event="work", after=mark)
 
     result = tool("status")

@@ -172,6 +172,14 @@ class Controller:
         self._pending_topic_events += 1
         self._push(_Event(name, EventSource.TOPIC))
 
+    def _share_transitions(self) -> None:
+        """Each state's events in a parameter, for tools that send events from outside."""
+        transitions = {name: sorted(self.machine.transitions_of(name)) for name in self.machine.states}
+        try:
+            self.node.set_param(topics.TRANSITIONS_PARAM, transitions)
+        except Exception as exc:  # a master away at start: the tools then cannot tell, nothing else
+            log.warning("could not share the transitions in %s: %s", topics.TRANSITIONS_PARAM, exc)
+
     def _drop_invalid(self, name: str, sender: str) -> None:
         self.stats.events_invalid += 1
         log.debug("event %r from %s is no transition of %s; dropped", name, sender, self.active_state)
@@ -200,6 +208,7 @@ class Controller:
 
     async def _run(self) -> None:
         assert self._wakeup is not None
+        self._share_transitions()
         await self._enter(self.machine.enter(self.machine.initial), START_EVENT)
         while True:
             while not self._queue:

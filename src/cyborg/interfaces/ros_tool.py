@@ -15,7 +15,7 @@ import signal
 from collections.abc import Callable, Coroutine
 from typing import Any, TypeVar
 
-from cyborg.errors import CyborgError, ServiceTimeoutError, ServiceUnavailableError
+from cyborg.errors import CyborgError, ServiceTimeoutError, ServiceUnavailableError, TransportError
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Node
 from cyborg.transport.clock import RealClock
@@ -75,8 +75,31 @@ class RosLink:
     # --- the commands -------------------------------------------------------------------------
 
     def send_event(self, name: str) -> bool | None:
+        """Send it; whether it is a transition of the current state (None if that is not known)."""
+        valid = self._run(self._valid_events())
         self._run(self._publish(topics.REGISTER_EVENT, String(name)))
-        return None  # the valid events are known to the controller, not on the wire
+        return None if valid is None else name in valid
+
+    async def _valid_events(self) -> set[str] | None:
+        """The current state's events, from the latched state change and the controller's parameter."""
+        try:
+            transitions = self._node.get_param(topics.TRANSITIONS_PARAM, None)
+        except TransportError:
+            return None
+        if not isinstance(transitions, dict):
+            return None  # a controller that does not share them
+        current: list[str] = []
+        subscription = self._node.subscribe(
+            topics.STATE_CHANGE, SystemState, lambda m, i: current.append(m.to_system_state)
+        )
+        try:
+            deadline = asyncio.get_running_loop().time() + CONNECT_TIMEOUT
+            while not current and asyncio.get_running_loop().time() < deadline:
+                await asyncio.sleep(0.02)  # latched: it comes as soon as we are connected
+        finally:
+            subscription.unsubscribe()
+        events = transitions.get(current[-1]) if current else None
+        return set(events) if isinstance(events, list) else None
 
     def say(self, text: str) -> None:
         self._run(self._publish(topics.TEXT_FROM_SPEECH, String(text)))

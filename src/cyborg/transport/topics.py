@@ -9,6 +9,9 @@ STATE_CHANGE = "/cyborg_controller/state_change"
 STATE_RESOURCES_PARAM = "/state_resources"
 # Ours, not the thesis's: the controller's counters as JSON (std_msgs/String).
 CONTROLLER_STATS = "/cyborg_controller/stats"
+# Ours: each state's transitions ({state: [event, ...]}), set once when the controller starts,
+# so tools over ROS can tell whether an event would be taken.
+TRANSITIONS_PARAM = "/cyborg_controller/transitions"
 
 EMOTIONAL_FEEDBACK = "/cyborg_controller/emotional_feedback"
 EMOTIONAL_STATE = "/cyborg_controller/emotional_state"
