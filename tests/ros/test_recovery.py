@@ -388,3 +388,48 @@ def test_launch_starts_its_roscore_again_and_the_robot_works_through_the_new_one
         f"\nroscore of cyborg launch killed: every node listed {listed - killed:.2f} s later, "
         f"a state change end to end {changed - killed:.2f} s later"
     )
+
+
+def test_launch_shows_each_nodes_warnings_in_its_terminal_and_says_where_the_logs_are(
+    processes: Processes, observe: Observers, tmp_path: Path
+) -> None:
+    """A state whose module is not running: the controller's reason shows in the launch's own output."""
+    changes = observe.state_changes()
+    parts = ("cyborg_controller", "cyborg_test_idle")  # no worker: 'working' has no action server
+    only = [arg for part in parts for arg in ("--only", part)]
+    ros_home = tmp_path / "ros_home"
+    launch = processes.start(
+        "cyborg_launch",
+        [
+            sys.executable,
+            "-m",
+            "cyborg.interfaces.cli",
+            "launch",
+            "--config",
+            str(FAULTS),
+            "--db",
+            str(tmp_path),
+            *only,
+        ],
+        "launched 2 nodes",
+        env={**os.environ, "ROS_HOME": str(ros_home)},
+        new_session=True,
+    )
+    processes.wait_ready(launch)
+    changes.wait_state("idle", event="start", timeout=60)
+    assert f"every log line is in {ros_home / 'log'}/NODE.log" in launch.log()
+    events = observe.events()
+    events.wait_connected()
+    mark = changes.mark()
+    events.send("work")
+    changes.wait_state("recovering", event="aborted", after=mark, timeout=30)
+    wait_until(
+        lambda: (
+            "[cyborg_controller] WARNING cyborg.controller.runtime: no action server cyborg_test_worker/work"
+            in launch.log()
+        ),
+        timeout=10,
+        what="the controller's warning in the launch's terminal",
+    )
+    assert "[cyborg_test_idle] INFO" not in launch.log(), "only warnings and errors"
+    assert "no action server" in (ros_home / "log" / "cyborg_controller.log").read_text()

@@ -22,10 +22,12 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
+import logging
 import math
 import os
 import random
 import signal
+import sys
 import time
 import xmlrpc.client
 from collections.abc import Sequence
@@ -256,6 +258,7 @@ def run_node(
         part = Part(name, [driver])
     else:
         part = build_part(name, config, transport, context)
+    show_problems_on_stderr(name)
     if publish_clock_too is None:
         publish_clock_too = is_simulated_base(config, name)
     clock_publisher = None
@@ -355,6 +358,39 @@ def run_node(
         clock.close()
     if code:
         raise SystemExit(code)
+
+
+def node_log_file(name: str) -> Path:
+    """Where rospy writes every log line of node ``name`` in this environment."""
+    import rospkg  # type: ignore[import-not-found]
+
+    return Path(rospkg.get_log_dir()) / f"{name}.log"
+
+
+class _OneWrite(logging.Formatter):
+    """A record (traceback included) as one string ending in a newline, written in one go."""
+
+    def format(self, record: logging.LogRecord) -> str:
+        return super().format(record).rstrip("\n") + "\n"
+
+
+def show_problems_on_stderr(name: str) -> None:
+    """Warnings and errors of this node also go to stderr, prefixed ``[name]``.
+
+    rospy sends the log to the node's file only (:func:`node_log_file`); under ``cyborg launch``
+    every node's stderr is the launch's terminal, so problems show where the person looks.
+    """
+    root = logging.getLogger()
+    if any(
+        isinstance(h, logging.StreamHandler) and getattr(h, "stream", None) is sys.stderr
+        for h in root.handlers
+    ):
+        return  # rospy left the command line's own handler in place: it shows them already
+    handler = logging.StreamHandler(sys.stderr)
+    handler.terminator = ""  # one write per line: the nodes share the terminal
+    handler.setLevel(logging.WARNING)
+    handler.setFormatter(_OneWrite(f"[{name}] %(levelname)s %(name)s: %(message)s"))
+    logging.getLogger("cyborg").addHandler(handler)
 
 
 class _ScenarioNode:

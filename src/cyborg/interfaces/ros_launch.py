@@ -48,6 +48,7 @@ from cyborg.interfaces.ros_commands import (
     clock_owner_of,
     master_running,
     master_uri,
+    node_log_file,
     require_ros,
 )
 from cyborg.sim.script import Script
@@ -169,6 +170,10 @@ class Launch:
         for name in self.parts:
             self._spawn(name, fresh=True)
         self.say(f"launched {len(self.processes)} nodes: {', '.join(self.parts)}")
+        self.say(
+            f"their warnings and errors show here, prefixed [node]; every log line is in "
+            f"{node_log_file('NODE').parent}/NODE.log"
+        )
         if self.speed is not None:
             self._start_virtual_time(master)
 
