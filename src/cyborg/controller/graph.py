@@ -1,23 +1,23 @@
-"""Draw the state machine with Graphviz (the layout is Graphviz's, not ours).
+"""Draw the state machine with Graphviz.
 
-Superstates become clusters; their transitions are drawn from the cluster's
-border. The active state can be highlighted (the dashboard uses that).
+:func:`to_graph` describes the machine for Graphviz to lay out in one go (the .dot that
+`cyborg graph` writes); :func:`render` draws it laid out one superstate at a time, which stays
+fast as the machine grows (:mod:`cyborg.controller.layout`). Superstates become clusters; the
+active state can be highlighted. :func:`list_svg` lists the states where no graph can be drawn.
 """
 
 from __future__ import annotations
 
-import contextlib
-import resource
-import shutil
-import subprocess
-from collections.abc import Callable
 from pathlib import Path
 from xml.sax.saxutils import escape, quoteattr
 
 import graphviz
 
+from cyborg.controller.layout import draw, lay_out
 from cyborg.controller.machine import MachineSpec, StateSpec
-from cyborg.errors import CyborgError
+from cyborg.errors import InvalidValueError
+
+__all__ = ["ACTIVE_FILL", "list_svg", "render", "to_graph"]
 
 ACTIVE_FILL = "#7bd389"
 
@@ -83,64 +83,18 @@ def _leaves_under(machine: MachineSpec, state: StateSpec) -> set[str]:
 
 
 def render(machine: MachineSpec, output: Path, *, active: str | None = None) -> Path:
-    """Write ``output`` as .dot (no Graphviz needed) or any format ``dot`` renders (.svg, .png, .pdf)."""
-    graph = to_graph(machine, active=active)
+    """Write ``output`` as .dot (the machine for Graphviz to lay out; no Graphviz needed) or, laid
+    out one superstate at a time (:mod:`cyborg.controller.layout`), as .svg, .png or .pdf."""
     suffix = output.suffix.lstrip(".").lower()
     if suffix in ("dot", "gv"):
-        output.write_text(graph.source, encoding="utf-8")
+        output.write_text(to_graph(machine, active=active).source, encoding="utf-8")
         return output
-    output.write_bytes(render_bytes(graph, suffix or "svg"))
+    if suffix not in ("svg", "png", "pdf"):
+        raise InvalidValueError(
+            f"cannot draw the machine as {output.name!r}; fix: name a .svg, .png, .pdf or .dot file"
+        )
+    output.write_bytes(draw(lay_out(machine), suffix))
     return output
-
-
-def render_bytes(
-    graph: graphviz.Digraph,
-    fmt: str = "svg",
-    *,
-    timeout: float | None = None,
-    memory: int | None = None,
-    started: Callable[[subprocess.Popen[bytes]], None] | None = None,
-) -> bytes:
-    """Run Graphviz's ``dot`` on ``graph``.
-
-    ``timeout`` (real seconds) and ``memory`` (bytes of address space) cap the ``dot`` process:
-    past either it is stopped and a :class:`CyborgError` names the cap. ``started`` receives the
-    process (so a server can kill it when it stops).
-    """
-    if shutil.which("dot") is None:
-        raise CyborgError(
-            "Graphviz's 'dot' program is not installed, so the graph cannot be rendered; "
-            "fix: install it (apt-get install graphviz) or write a .dot file instead"
-        )
-    process = subprocess.Popen(
-        ["dot", f"-T{fmt}"], stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE
-    )
-    if memory is not None:  # dot waits for its input, so the cap is in place before it lays anything out
-        with contextlib.suppress(ProcessLookupError):
-            resource.prlimit(process.pid, resource.RLIMIT_AS, (memory, memory))
-    if started is not None:
-        started(process)
-    try:
-        out, err = process.communicate(graph.source.encode(), timeout=timeout)
-    except subprocess.TimeoutExpired:
-        process.kill()
-        process.communicate()
-        raise CyborgError(
-            f"Graphviz took longer than {timeout:g} s (the limit) to lay out this machine; "
-            "fix: draw it offline with `cyborg graph FILE -o machine.svg`, or group states in superstates"
-        ) from None
-    if process.returncode != 0:
-        problem = err.decode(errors="replace").strip().splitlines()
-        if memory is not None and (process.returncode < 0 or any("memory" in line for line in problem)):
-            raise CyborgError(
-                f"Graphviz needed more than {memory // 2**20} MiB (the limit) to lay out this machine, "
-                f"or was stopped (exit {process.returncode}); fix: draw it offline with "
-                "`cyborg graph FILE -o machine.svg`"
-            )
-        raise CyborgError(
-            f"Graphviz could not render format {fmt!r}: {' '.join(problem[-3:])}; fix: use svg, png or pdf"
-        )
-    return bytes(out)
 
 
 def list_svg(machine: MachineSpec, note: str) -> bytes:

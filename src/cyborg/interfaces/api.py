@@ -10,11 +10,11 @@ buffer and streamed over a websocket. Bound to 127.0.0.1 unless told otherwise.
 from __future__ import annotations
 
 import asyncio
-import functools
 import json
 import logging
 import math
 import subprocess
+import time
 from collections import deque
 from collections.abc import Callable
 from typing import Any
@@ -35,9 +35,10 @@ from cyborg.transport.messages import EmotionalFeedback, String
 log = logging.getLogger(__name__)
 
 RECORD_BUFFER = 5000
-GRAPH_MAX_STATES = 200  # more leaf states are shown as a list: Graphviz needs minutes and gigabytes
+GRAPH_MAX_STATES = 10_000  # more leaf states are shown as a list (5,000 are laid out in about 2 s)
 GRAPH_TIMEOUT = 10.0  # real seconds Graphviz may take to lay out the machine (once per machine)
-GRAPH_MEMORY = 2**30  # bytes of address space Graphviz may use
+GRAPH_MEMORY = 2**30  # bytes of address space each Graphviz run may use
+_DRAWINGS: dict[str, tuple[bytes, str, dict[str, Any]]] = {}  # machine hash -> svg, how, arrows: one per process
 
 
 class CommandError(CyborgError, web.HTTPBadRequest):
@@ -69,7 +70,7 @@ class RobotAPI:
             if self.emotions
             else None
         )  # to refuse a name the emotion system does not know, as it would only log a warning
-        self._graph: asyncio.Future[tuple[bytes, str]] | None = None  # laid out once, shared by all requests
+        self._graph: asyncio.Future[tuple[bytes, str, dict[str, Any]]] | None = None  # shared by all requests
         self._dot: subprocess.Popen[bytes] | None = None
         self.guard = Guard(access or Access())
         self.extra_status = extra_status
@@ -108,6 +109,7 @@ class RobotAPI:
                 web.get("/api/ws", self.websocket),
                 web.get("/api/machine", self.get_machine),
                 web.get("/api/graph.svg", self.get_graph),
+                web.get("/api/graph.json", self.get_graph_arrows),
                 web.get("/api/emotions", self.get_emotions),
             ]
         )
@@ -264,42 +266,67 @@ class RobotAPI:
         ]
         return web.json_response({"initial": self.machine.initial, "states": states})
 
-    async def get_graph(self, request: web.Request) -> web.Response:
-        """The machine drawn by Graphviz; nodes have ids ``state:<name>`` for live highlighting.
-
-        Laid out once (every request waits for the same layout), within a time and memory cap;
-        a machine too big for that is shown as a list (header ``X-Graph-Layout: list``).
-        """
+    async def _drawing(self) -> tuple[bytes, str, dict[str, Any]]:
         if self.machine is None:
             raise web.HTTPNotFound(text="this robot's state machine is not known here")
         if self._graph is None:
             self._graph = asyncio.ensure_future(self._lay_out(self.machine))
-        svg, layout = await asyncio.shield(self._graph)
+        return await asyncio.shield(self._graph)
+
+    async def get_graph(self, request: web.Request) -> web.Response:
+        """The machine drawn by Graphviz; ids ``state:<leaf>``, ``super:<superstate>`` and
+        ``edge:<state>:<event>`` for live highlighting (see /api/graph.json for what each arrow shows).
+
+        Laid out once per machine (every request waits for the same layout), each Graphviz run
+        within a time and memory cap; a machine too big for that is shown as a list (header
+        ``X-Graph-Layout: list``).
+        """
+        svg, layout, _ = await self._drawing()
         return web.Response(body=svg, content_type="image/svg+xml", headers={"X-Graph-Layout": layout})
 
-    async def _lay_out(self, machine: MachineSpec) -> tuple[bytes, str]:
-        from cyborg.controller.graph import list_svg, render_bytes, to_graph
+    async def get_graph_arrows(self, request: web.Request) -> web.Response:
+        """How the drawing was made and, per arrow id, the [state, event] transitions it shows."""
+        _, layout, info = await self._drawing()
+        return web.json_response({"layout": layout, **info})
 
+    async def _lay_out(self, machine: MachineSpec) -> tuple[bytes, str, dict[str, Any]]:
+        from cyborg.controller.graph import list_svg
+        from cyborg.controller.layout import draw, lay_out, machine_key, run_graphviz
+
+        key = machine_key(machine)
+        if key in _DRAWINGS:
+            return _DRAWINGS[key]
         leaves = len(machine.leaves())
         if leaves > GRAPH_MAX_STATES:
             note = (
                 f"{leaves} states: more than the {GRAPH_MAX_STATES} laid out as a graph here, so a list. "
                 "Fix: draw it offline with `cyborg graph FILE -o machine.svg`"
             )
-            return list_svg(machine, note), "list"
+            return list_svg(machine, note), "list", {"edges": {}}
 
         def started(process: subprocess.Popen[bytes]) -> None:
             self._dot = process
 
-        render = functools.partial(render_bytes, timeout=GRAPH_TIMEOUT, memory=GRAPH_MEMORY, started=started)
+        def run(args: list[str], data: bytes, left: float | None) -> bytes:
+            return run_graphviz(args, data, left, memory=GRAPH_MEMORY, started=started)
+
+        def work() -> tuple[bytes, dict[str, Any]]:
+            began = time.perf_counter()
+            layout = lay_out(machine, run, timeout=GRAPH_TIMEOUT)
+            svg = draw(layout, "svg", run, GRAPH_TIMEOUT)
+            return svg, {"edges": layout.edges, "seconds": round(time.perf_counter() - began, 3)}
+
         try:
-            svg = await asyncio.get_running_loop().run_in_executor(None, render, to_graph(machine), "svg")
+            svg, info = await asyncio.get_running_loop().run_in_executor(None, work)
         except (CyborgError, OSError) as exc:
             log.warning("the dashboard shows the state machine as a list: %s", exc)
-            return list_svg(machine, f"Shown as a list: {exc}"), "list"
+            return list_svg(machine, f"Shown as a list: {exc}"), "list", {"edges": {}}
         finally:
             self._dot = None
-        return svg, "graphviz"
+        if len(_DRAWINGS) >= 4:
+            _DRAWINGS.clear()
+        _DRAWINGS[key] = (svg, "graphviz", info)
+        return _DRAWINGS[key]
 
     async def get_emotions(self, request: web.Request) -> web.Response:
         return web.json_response(
