@@ -379,6 +379,7 @@ def test_motivator_decisions_show_reward_cost_and_the_choice(browser: Browser, s
     page = open_page(browser, sim + "/", errors, before=lambda tab: socket.append(FakeSocket(tab)))
     try:
         fake = socket[0]
+        page.locator('.log-filters input[data-type="nothing"]').check()  # hidden unless asked for
         seq = 10**6
         # Ranked by reward among those whose reward exceeds their cost: "music_play" wins on reward
         # although "joke_tell" has the larger net; "weather_tell" costs more than it brings.

@@ -14,6 +14,7 @@
   const TRAIL = 60; // poses kept for the robot's trail
   const READABLE = 15; // px: the height of a graph label's box that "follow" zooms to (about 12 px type)
   const ZOOM_STEP = 1.5; // one click on + or −
+  const COLLAPSE_FROM = 60; // a machine with more states opens with its superstates collapsed around the active one
   const EMOTION_COLOURS = {
     neutral: "#a0a7b4",
     elated: "#f5c518",
@@ -39,6 +40,11 @@
     retry: 500,
     status: {},
     parents: {},
+    transitions: {}, // state -> {event: target}, as declared (a superstate's are its own)
+    arrowOf: {}, // "state\tevent" -> id of the arrow that shows the transition
+    collapsed: new Set(), // superstates drawn as one box
+    supers: new Set(), // the superstates' names
+    leafCount: 0,
     prototypes: {},
     emotion: null,
     history: [],
@@ -224,6 +230,7 @@
     $("events-state").textContent = s.state || "–";
     renderEventButtons(s.valid_events || []);
     highlightGraph();
+    openAroundActive();
     if (s.state !== before && $("graph-follow").checked) requestAnimationFrame(followActive);
   }
 
@@ -240,9 +247,18 @@
   async function loadGraph() {
     const box = $("graph");
     try {
-      const [machine, response] = await Promise.all([getJSON("/api/machine"), api("/api/graph.svg")]);
+      const [machine, response, arrows] = await Promise.all([
+        getJSON("/api/machine"), api("/api/graph.svg"), getJSON("/api/graph.json"),
+      ]);
       if (!response.ok) throw new Error(`/api/graph.svg: HTTP ${response.status} ${await response.text()}`);
-      for (const state of machine.states) dash.parents[state.name] = state.parent;
+      for (const state of machine.states) {
+        dash.parents[state.name] = state.parent;
+        dash.transitions[state.name] = state.transitions;
+        if (!state.leaf) dash.supers.add(state.name);
+      }
+      for (const [id, pairs] of Object.entries(arrows.edges || {})) {
+        for (const [state, event] of pairs) dash.arrowOf[`${state}\t${event}`] = id;
+      }
       const text = await response.text();
       box.innerHTML = text.slice(text.indexOf("<svg"));
       const svg = box.querySelector("svg");
@@ -251,22 +267,26 @@
       svg.setAttribute("preserveAspectRatio", "xMidYMid meet");
       dash.graphZoom = makeZoomable(svg, $("graph-tools"), { maxZoom: 15 });
       const leaves = machine.states.filter((s) => s.leaf).length;
+      dash.leafCount = leaves;
       $("graph-caption").textContent = `${leaves} states · initial ${machine.initial}`;
+      prepareClusters(svg);
+      fillSearchList(machine);
       if (response.headers.get("X-Graph-Layout") === "list") { // too big or too slow for Graphviz here
         $("graph-caption").textContent += " · listed, not drawn";
         $("graph-caption").title = box.querySelector("#list > text")?.textContent || "";
       }
+      dash.graphLoaded = true;
       highlightGraph();
+      openAroundActive();
     } catch (error) {
       box.innerHTML = "";
       box.append(el("p", "muted", `The state machine cannot be drawn: ${error.message}`));
     }
   }
 
-  // Bring the active state into view, zoomed in until its label is readable (never zooms out).
-  function followActive() {
+  // Bring an element of the graph into view, zoomed in until its label is readable (never zooms out).
+  function focusOn(node) {
     const zoom = dash.graphZoom;
-    const node = dash.status.state && document.getElementById(`state:${dash.status.state}`);
     if (!zoom || !node) return;
     const area = $("graph").querySelector("svg").getBoundingClientRect();
     const box = node.getBoundingClientRect();
@@ -281,11 +301,189 @@
     zoom.markMoved();
   }
 
+  // The active state, or the collapsed superstate that holds it.
+  function followActive() {
+    const s = dash.status.state;
+    if (!s) return;
+    const hidden = outermostCollapsed(s);
+    focusOn(document.getElementById(hidden ? `super:${hidden}` : `state:${s}`));
+  }
+
+  // Zoom so that a superstate's box fills the panel (what a large machine opens on).
+  function fitTo(element) {
+    const zoom = dash.graphZoom;
+    if (!zoom || !element) return;
+    zoom.fit();
+    zoom.center();
+    const area = $("graph").querySelector("svg").getBoundingClientRect();
+    const box = element.getBoundingClientRect();
+    if (!box.width || !box.height) return;
+    const factor = Math.min(area.width / box.width, area.height / box.height) * 0.9;
+    const point = { x: box.x + box.width / 2 - area.x, y: box.y + box.height / 2 - area.y };
+    zoom.panBy({ x: area.width / 2 - point.x, y: area.height / 2 - point.y });
+    if (factor > 1) zoom.zoomAtPointBy(factor, { x: area.width / 2, y: area.height / 2 });
+    zoom.markMoved();
+  }
+
+  // --- collapse and expand superstates ------------------------------------------------------------
+
+  const ancestorsOf = (name) => {
+    const chain = [];
+    for (let p = dash.parents[name]; p; p = dash.parents[p]) chain.push(p);
+    return chain;
+  };
+
+  // The outermost collapsed superstate around ``name`` (not ``name`` itself), if any.
+  function outermostCollapsed(name) {
+    let found = null;
+    for (const p of ancestorsOf(name)) if (dash.collapsed.has(p)) found = p;
+    return found;
+  }
+
+  // Each cluster gets a card (drawn when it is collapsed) and toggles on a click on its title or card.
+  function prepareClusters(svg) {
+    dash.collapsed.clear();
+    const counts = {}; // superstate -> how many states it holds
+    for (const name of Object.keys(dash.parents)) {
+      if (!isSuper(name)) for (const p of ancestorsOf(name)) counts[p] = (counts[p] || 0) + 1;
+    }
+    for (const cluster of svg.querySelectorAll("g.cluster[id^='super:']")) {
+      const name = cluster.id.slice("super:".length);
+      const frame = cluster.querySelector("path, polygon").getBBox();
+      const card = svgEl("g", { class: "card" });
+      card.append(svgEl("rect", { x: frame.x, y: frame.y, width: frame.width, height: frame.height, rx: 8 }));
+      const count = counts[name] || 0;
+      const size = Math.max(12, Math.min(frame.height * 0.22, (frame.width * 0.9) / (0.6 * (name.length + 2))));
+      const title = svgEl("text", { x: frame.x + frame.width / 2, y: frame.y + frame.height / 2, "font-size": size.toFixed(1), "text-anchor": "middle" }, `▸ ${name}`);
+      const detail = svgEl("text", { class: "detail", x: frame.x + frame.width / 2, y: frame.y + frame.height / 2 + size * 0.9,
+        "font-size": (size * 0.5).toFixed(1), "text-anchor": "middle" }, `${count} states`);
+      card.append(title, detail);
+      card.dataset.states = String(count);
+      cluster.append(card);
+      const toggle = (event) => {
+        event.stopPropagation();
+        setCollapsed(name, !dash.collapsed.has(name));
+      };
+      card.addEventListener("click", toggle);
+      const heading = cluster.querySelector(":scope > text");
+      if (heading) {
+        heading.addEventListener("click", toggle);
+        heading.classList.add("toggle");
+      }
+    }
+  }
+
+  function setCollapsed(name, collapsed) {
+    if (collapsed) dash.collapsed.add(name);
+    else dash.collapsed.delete(name);
+    applyCollapse();
+  }
+
+  // Hide what collapsed superstates hold: their states, inner superstates and inner arrows.
+  function applyCollapse() {
+    const svg = $("graph").querySelector("svg");
+    if (!svg) return;
+    const hiddenInside = (name) => ancestorsOf(name).some((p) => dash.collapsed.has(p));
+    for (const node of svg.querySelectorAll("g.node[id^='state:']")) {
+      node.classList.toggle("folded", hiddenInside(node.id.slice(6)));
+    }
+    for (const cluster of svg.querySelectorAll("g.cluster[id^='super:']")) {
+      const name = cluster.id.slice(6);
+      cluster.classList.toggle("folded", hiddenInside(name));
+      cluster.classList.toggle("collapsed", dash.collapsed.has(name));
+    }
+    for (const edge of svg.querySelectorAll("g.edge")) {
+      const tail = (edge.querySelector("title")?.textContent || "").split("->")[0];
+      edge.classList.toggle("folded", tail in dash.parents && hiddenInside(tail));
+    }
+    $("graph-caption").dataset.collapsed = String(dash.collapsed.size);
+    highlightGraph();
+  }
+
+  // Collapse every superstate except those around ``state``, and show the innermost of those.
+  function collapseAround(state) {
+    const keep = new Set(ancestorsOf(state));
+    dash.collapsed = new Set(Object.keys(dash.transitions).filter((name) => isSuper(name) && !keep.has(name)));
+    applyCollapse();
+    const inner = ancestorsOf(state)[0];
+    requestAnimationFrame(() => {
+      if (inner) fitTo(document.getElementById(`super:${inner}`));
+      else dash.graphZoom?.fit(); // a state at the top level: the whole machine, its superstates as cards
+    });
+  }
+
+  const isSuper = (name) => dash.supers.has(name);
+
+  // A large machine opens collapsed around the active state, once the graph and the state are known.
+  function openAroundActive() {
+    if (dash.opened || !dash.graphLoaded || !dash.status.state) return;
+    dash.opened = true;
+    if (dash.leafCount > COLLAPSE_FROM) collapseAround(dash.status.state);
+  }
+
+  function expandAll() {
+    dash.collapsed.clear();
+    applyCollapse();
+  }
+
+  function collapseAll() {
+    dash.collapsed = new Set(Object.keys(dash.transitions).filter(isSuper));
+    applyCollapse();
+  }
+
+  // --- search ---------------------------------------------------------------------------------------
+
+  function fillSearchList(machine) {
+    const list = $("graph-search-list");
+    const names = new Set();
+    for (const state of machine.states) {
+      names.add(state.name);
+      for (const event of Object.keys(state.transitions)) names.add(event);
+    }
+    list.replaceChildren(...[...names].sort().slice(0, 5000).map((name) => el("option", "", name)));
+  }
+
+  // Find a state (its name, else the first name containing the words) or an event, open the
+  // superstates around it and bring it into view.
+  function search(text) {
+    const svg = $("graph").querySelector("svg");
+    const words = text.trim();
+    svg?.querySelectorAll(".found").forEach((node) => node.classList.remove("found"));
+    if (!svg || !words) return null;
+    const lower = words.toLowerCase();
+    const states = Object.keys(dash.parents);
+    const state = states.find((s) => s === words) || states.find((s) => s.toLowerCase() === lower) ||
+      states.find((s) => s.toLowerCase().includes(lower));
+    const pairs = Object.keys(dash.arrowOf).filter((key) => key.split("\t")[1].toLowerCase() === lower);
+    let target = null;
+    if (state && !(pairs.length && state.toLowerCase() !== lower)) {
+      for (const p of ancestorsOf(state)) dash.collapsed.delete(p);
+      applyCollapse();
+      target = document.getElementById(isSuper(state) ? `super:${state}` : `state:${state}`);
+    } else if (pairs.length) {
+      for (const key of pairs) {
+        for (const p of ancestorsOf(key.split("\t")[0])) dash.collapsed.delete(p);
+      }
+      applyCollapse();
+      const edges = [...new Set(pairs.map((key) => dash.arrowOf[key]))].map((id) => document.getElementById(id)).filter(Boolean);
+      edges.forEach((edge) => edge.classList.add("found"));
+      target = edges[0] || null;
+    }
+    if (target) {
+      target.classList.add("found");
+      focusOn(target);
+      say(`found ${words}`);
+    } else {
+      say(`no state or event called ${words}`, true);
+    }
+    return target ? target.id : null;
+  }
+
   function highlightGraph() {
     const box = $("graph");
     const s = dash.status;
-    box.querySelectorAll(".active, .active-parent, .last, .valid").forEach((node) => {
-      node.classList.remove("active", "active-parent", "last", "valid");
+    box.querySelectorAll(".active, .active-parent, .active-inside, .last, .last-inside, .valid").forEach((node) => {
+      node.classList.remove("active", "active-parent", "active-inside", "last", "last-inside", "valid");
     });
     if (!s.state) return;
     const node = document.getElementById(`state:${s.state}`);
@@ -294,15 +492,29 @@
       const cluster = document.getElementById(`super:${parent}`);
       if (cluster) cluster.classList.add("active-parent");
     }
+    const hidden = outermostCollapsed(s.state); // the box the active state is folded into
+    box.querySelectorAll(".card text.detail").forEach((text) => {
+      text.textContent = `${text.parentNode.dataset.states} states`;
+    });
+    if (hidden) {
+      const cluster = document.getElementById(`super:${hidden}`);
+      cluster?.classList.add("active-inside");
+      const detail = cluster?.querySelector(".card text.detail");
+      if (detail) detail.textContent = `${detail.parentNode.dataset.states} states · active: ${s.state}`;
+    }
     // The transitions the active state (or a superstate around it) can take now.
     for (let from = s.state; from; from = dash.parents[from]) {
-      box.querySelectorAll(`g.edge[id^="edge:${CSS.escape(from)}:"]`).forEach((edge) => edge.classList.add("valid"));
+      for (const event of Object.keys(dash.transitions[from] || {})) {
+        document.getElementById(dash.arrowOf[`${from}\t${event}`])?.classList.add("valid");
+      }
     }
     // The transition may belong to the state left or to a superstate around it.
     for (let from = s.previous_state; from && s.event; from = dash.parents[from]) {
-      const edge = document.getElementById(`edge:${from}:${s.event}`);
+      const edge = document.getElementById(dash.arrowOf[`${from}\t${s.event}`]);
       if (edge) {
         edge.classList.add("last");
+        const folded = edge.classList.contains("folded") && outermostCollapsed(from);
+        if (folded) document.getElementById(`super:${folded}`)?.classList.add("last-inside");
         break;
       }
     }
@@ -382,8 +594,10 @@
       const name = el("td", "", m.name);
       name.title = m.name;
       row.append(name);
-      const states = el("td", "muted states", m.states.join(", ") || "–");
-      states.title = m.states.join(", ");
+      // A module that serves many states (a generated machine) names a few and counts the rest.
+      const named = m.states.length > 6 ? `${m.states.slice(0, 4).join(", ")} +${m.states.length - 4} more` : m.states.join(", ");
+      const states = el("td", "muted states", named || "–");
+      states.title = m.states.length > 200 ? `${m.states.slice(0, 200).join(", ")} …` : m.states.join(", ");
       row.append(states);
       const goal = el("td");
       if (m.goal_status) goal.append(el("span", `goal goal-${m.goal_status}`, m.goal_status.toLowerCase()));
@@ -951,7 +1165,18 @@
       [...document.querySelectorAll(".log-filters input[type=checkbox]")].filter((c) => c.checked).map((c) => c.dataset.type)
     );
     const words = $("log-text").value.trim().toLowerCase();
-    return (r) => types.has(r.type) && (!words || `${r.type} ${logText(r)} ${JSON.stringify(r.candidates || "")}`.toLowerCase().includes(words));
+    // The motivator's "nothing chosen" decisions have their own box (off at first): they come every few seconds.
+    return (r) => (isIdleDecision(r) ? types.has("nothing") : types.has(r.type)) && (!words || `${r.type} ${logText(r)} ${JSON.stringify(r.candidates || "")}`.toLowerCase().includes(words));
+  }
+
+  // "12 shown of 40 · 85 nothing chosen": the folded decisions count each one they stand for.
+  function showLogCount(shown) {
+    let idle = 0;
+    for (const r of dash.records) if (isIdleDecision(r)) idle += r.repeats || 1;
+    const hidden = !document.querySelector('.log-filters input[data-type="nothing"]').checked;
+    $("log-count").textContent = `${shown} shown of ${dash.records.length}` +
+      (idle && hidden ? ` · ${idle} nothing chosen (hidden)` : "");
+    $("log-count").dataset.idle = String(idle);
   }
 
   function renderLog() {
@@ -961,7 +1186,7 @@
       if (keep(dash.records[i])) rows.push(logRow(dash.records[i]));
     }
     $("log").replaceChildren(...rows);
-    $("log-count").textContent = `${rows.length} shown of ${dash.records.length}`;
+    showLogCount(rows.length);
   }
 
   // The motivator decides every few seconds; a run of "nothing chosen" for the same reason (numbers
@@ -987,6 +1212,7 @@
       const old = $("log").querySelector(`li[data-seq="${oldSeq}"]`);
       if (old) old.remove();
       if (logFilter()(last)) $("log").prepend(logRow(last));
+      showLogCount($("log").children.length);
     }
     return true;
   }
@@ -1000,7 +1226,7 @@
     const log = $("log");
     log.prepend(logRow(r));
     while (log.children.length > LOG_SHOWN) log.lastElementChild.remove();
-    $("log-count").textContent = `${log.children.length} shown of ${dash.records.length}`;
+    showLogCount(log.children.length);
   }
 
   // --- records and the websocket -------------------------------------------------------------
@@ -1118,6 +1344,15 @@
     });
     $("graph-follow").addEventListener("change", (event) => {
       if (event.target.checked) followActive();
+    });
+    $("graph-search-form").addEventListener("submit", (event) => {
+      event.preventDefault();
+      search($("graph-search").value);
+    });
+    $("graph-expand").addEventListener("click", expandAll);
+    $("graph-collapse").addEventListener("click", () => {
+      if (dash.status.state) collapseAround(dash.status.state);
+      else collapseAll();
     });
     document.querySelectorAll(".log-filters input").forEach((input) => input.addEventListener("input", renderLog));
     window.addEventListener("resize", scheduleDraw);
