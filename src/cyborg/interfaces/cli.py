@@ -63,6 +63,10 @@ class LazyGroup(click.Group):
             "cyborg.interfaces.db_cli:db_group",
             "Locations, calendar events and responses of the navigation module.",
         ),
+        "new": (
+            "cyborg.interfaces.cli_new:new_group",
+            "Start something new from a template: a behaviour module.",
+        ),
         "sim": (
             "cyborg.interfaces.cli_sim:sim",
             "Run the whole simulated robot in this process, with its API and dashboard.",
