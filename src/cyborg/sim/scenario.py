@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import IO
 
 from cyborg.app.config import LoadedConfig
+from cyborg.app.registry import KindRegistry
 from cyborg.app.robot import Robot, build_robot
 from cyborg.errors import ConfigError, CyborgError, ScenarioFailed
 from cyborg.sim.records import Record, RecordStream
@@ -198,6 +199,7 @@ class ScenarioRun:
         speed: float | None = None,
         map_path: Path | None = None,
         keep_records: bool = True,
+        kinds: KindRegistry | None = None,
     ) -> None:
         check_script(script, config)
         self.script = script
@@ -205,7 +207,12 @@ class ScenarioRun:
         self.transport = EmbeddedTransport(self.clock)
         try:
             self.robot: Robot = build_robot(
-                config, self.transport, data_dir=data_dir, rng=random.Random(script.seed), map_path=map_path
+                config,
+                self.transport,
+                data_dir=data_dir,
+                rng=random.Random(script.seed),
+                map_path=map_path,
+                kinds=kinds,
             )
             self.driver = ScenarioDriver(
                 self.transport.node("cyborg_scenario"), script, keep_records=keep_records
@@ -285,10 +292,11 @@ def run_scenario(
     map_path: Path | None = None,
     keep_records: bool = True,
     on_record: Callable[[Record], None] | None = None,
+    kinds: KindRegistry | None = None,
 ) -> list[Record]:
     """Run ``script``; write each record to ``transcript`` as a JSON line; return the records.
 
-    With ``keep_records=False`` the records go only to ``transcript`` and ``on_record`` as they
+    ``kinds`` defaults to every installed module kind. With ``keep_records=False`` the records go only to ``transcript`` and ``on_record`` as they
     happen and the returned list is empty, so a week-long script runs in flat memory.
     """
     with contextlib.ExitStack() as stack:
@@ -302,6 +310,7 @@ def run_scenario(
             speed=speed,
             map_path=map_path,
             keep_records=keep_records,
+            kinds=kinds,
         )
         if transcript is not None:
 
