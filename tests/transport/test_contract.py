@@ -14,6 +14,7 @@ transport is held to the same code.
 from __future__ import annotations
 
 import asyncio
+import dataclasses
 import importlib.util
 import itertools
 import sys
@@ -184,7 +185,7 @@ def test_bounded_queue_drops_oldest_and_counts(graph: Graph) -> None:
     assert sub.dropped == 15
 
 
-def test_messages_are_copies(graph: Graph) -> None:
+def test_a_published_message_cannot_change(graph: Graph) -> None:
     a, b = graph.node("a"), graph.node("b")
     got: list[SystemState] = []
     b.subscribe(graph.name("/s"), SystemState, lambda m, i: got.append(m))
@@ -194,11 +195,13 @@ def test_messages_are_copies(graph: Graph) -> None:
     async def main() -> None:
         await graph.connected(pub)
         pub.publish(msg)
-        msg.event = "changed after publish"
-        await graph.until(lambda: bool(got), "the message")
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            msg.event = "changed after publish"  # type: ignore[misc]
+        pub.publish(dataclasses.replace(msg, event="a new message"))
+        await graph.until(lambda: len(got) == 2, "the messages")
 
     graph.run(main())
-    assert got[0] == SystemState("e", "x", "y")
+    assert got == [SystemState("e", "x", "y"), SystemState("a new message", "x", "y")]
 
 
 def test_latched_topic_reaches_late_subscriber(graph: Graph) -> None:

@@ -1,12 +1,30 @@
-"""Embedded-transport behaviour beyond the shared contract: waiting for an offer is event-driven."""
+"""Embedded-transport behaviour beyond the shared contract: waiting for an offer is event-driven;
+messages are shared when frozen and copied for each subscriber when not."""
 
 from __future__ import annotations
 
+import asyncio
+import dataclasses
+from dataclasses import dataclass, field
+from typing import ClassVar
+
 import pytest
 
+from cyborg.transport import messages
+from cyborg.transport.base import MessageInfo
 from cyborg.transport.clock import VirtualClock
 from cyborg.transport.embedded import EmbeddedTransport
-from cyborg.transport.messages import EmotionalStateService, EmotionalStateServiceResponse, StateMachineAction
+from cyborg.transport.messages import (
+    EmotionalStateService,
+    EmotionalStateServiceResponse,
+    Message,
+    Point,
+    Pose,
+    PoseWithCovariance,
+    PoseWithCovarianceStamped,
+    StateMachineAction,
+    is_immutable,
+)
 
 
 @pytest.mark.parametrize("kind", ["action", "service"])
@@ -44,3 +62,54 @@ def test_a_waiter_gives_up_at_its_timeout(clock: VirtualClock) -> None:
         return await client.wait_for_server(1.5), clock.monotonic()
 
     assert clock.run(main()) == (False, pytest.approx(1.5))
+
+
+@dataclass(frozen=True)
+class _Scores(Message):
+    """A message type with a mutable field (a list): the transport must copy it for each subscriber."""
+
+    ros_type: ClassVar[str] = "test_msgs/Scores"
+    values: list[int] = field(default_factory=list)
+
+
+def test_every_packaged_message_is_frozen_and_shared_without_a_copy(clock: VirtualClock) -> None:
+    kinds = [c for c in vars(messages).values() if isinstance(c, type) and issubclass(c, Message)]
+    assert len(kinds) > 20 and all(is_immutable(kind) for kind in kinds)
+    transport = EmbeddedTransport(clock)
+    got: dict[str, PoseWithCovarianceStamped] = {}
+    for name in ("a", "b"):
+        transport.node(name).subscribe(
+            "/pose", PoseWithCovarianceStamped, lambda m, i, name=name: got.__setitem__(name, m)
+        )
+    sent = PoseWithCovarianceStamped(pose=PoseWithCovariance(Pose(Point(1.0, 2.0, 0.0))))
+    transport.node("base").publisher("/pose", PoseWithCovarianceStamped).publish(sent)
+    clock.run(asyncio.sleep(0))
+    assert got["a"] is sent and got["b"] is sent  # no copy
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        got["a"].pose.pose.position.x = 5.0  # type: ignore[misc]
+    assert got["b"].pose.pose.position.x == 1.0
+
+
+def test_a_subscriber_cannot_change_what_another_received_nor_what_was_sent(clock: VirtualClock) -> None:
+    transport = EmbeddedTransport(clock)
+    got: dict[str, list[int]] = {}
+
+    def spoil(message: _Scores, info: MessageInfo) -> None:
+        message.values.append(666)  # a careless subscriber changes its message
+        got["spoiler"] = message.values
+
+    def keep(message: _Scores, info: MessageInfo) -> None:
+        got["keeper"] = message.values
+
+    transport.node("spoiler").subscribe("/scores", _Scores, spoil)
+    transport.node("keeper").subscribe("/scores", _Scores, keep)
+    sent = _Scores([1, 2])
+    transport.node("judge").publisher("/scores", _Scores, latch=True).publish(sent)
+    sent.values.append(3)  # and the publisher reuses its object after publishing
+    clock.run(asyncio.sleep(0))
+    assert got == {"spoiler": [1, 2, 666], "keeper": [1, 2]}
+    assert sent.values == [1, 2, 3]
+    late: list[list[int]] = []
+    transport.node("late").subscribe("/scores", _Scores, lambda m, i: late.append(m.values))
+    clock.run(asyncio.sleep(0))
+    assert late == [[1, 2]]  # the latched message is what was sent, not what anyone made of it

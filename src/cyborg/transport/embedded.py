@@ -4,6 +4,11 @@ Messages, service calls and action traffic are delivered through the clock's
 event loop (``call_soon``), never synchronously, so a component sees the same
 ordering and re-entrancy as over a network. It is the default transport and the
 fake that the tests use; the contract tests run against it and ROS alike.
+
+Messages are frozen (:class:`~cyborg.transport.messages.Message`), so every subscriber gets the
+publisher's own object, without a copy. A message type with a mutable field (a list, a dict)
+is copied once when published and again for each subscriber that receives it, so no subscriber
+can change what another one received, nor the publisher what it sent.
 """
 
 from __future__ import annotations
@@ -15,7 +20,7 @@ import itertools
 import logging
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
-from typing import Any, Generic, cast
+from typing import Any, Generic, TypeVar, cast
 
 from cyborg.errors import ServiceTimeoutError, ServiceUnavailableError, TransportError
 from cyborg.transport._goals import ClientGoal
@@ -43,7 +48,7 @@ from cyborg.transport.base import (
     normalize_node_name,
 )
 from cyborg.transport.clock import Clock, RealClock
-from cyborg.transport.messages import ActionType, Message, ServiceType, is_nested
+from cyborg.transport.messages import ActionType, Message, ServiceType, is_immutable
 
 log = logging.getLogger(__name__)
 
@@ -57,8 +62,12 @@ class TransportStats:
     published: int = 0
 
 
-def _copier(cls: type[Message]) -> Callable[[Any], Any]:
-    return copy.deepcopy if is_nested(cls) else copy.copy
+T = TypeVar("T")
+
+
+def _own(message: T) -> T:
+    """``message`` itself if it cannot change (frozen), else a deep copy of it."""
+    return message if is_immutable(type(message)) else copy.deepcopy(message)  # type: ignore[arg-type]
 
 
 class _Topic:
@@ -67,7 +76,7 @@ class _Topic:
         self.msg_type = msg_type
         self.subscriptions: list[_EmbeddedSubscription[Any]] = []
         self.latched: tuple[Message, MessageInfo] | None = None
-        self.copy = _copier(msg_type)
+        self.immutable = is_immutable(msg_type)
 
 
 class EmbeddedTransport(Transport):
@@ -161,11 +170,17 @@ class EmbeddedTransport(Transport):
             )
         self.stats.published += 1
         info = MessageInfo(sender=sender, stamp=self.clock.now())
-        delivered = topic.copy(message)
+        if topic.immutable:
+            if latch:
+                topic.latched = (message, info)
+            for subscription in topic.subscriptions:
+                subscription._enqueue(message, info)
+            return
+        sent = copy.deepcopy(message)  # the publisher may change its object afterwards
         if latch:
-            topic.latched = (delivered, info)
+            topic.latched = (sent, info)
         for subscription in topic.subscriptions:
-            subscription._enqueue(delivered, info)
+            subscription._enqueue(copy.deepcopy(sent), info)  # each subscriber its own copy
 
 
 class EmbeddedNode(Node):
@@ -202,7 +217,8 @@ class EmbeddedNode(Node):
         t.subscriptions.append(sub)
         self._subscriptions.append(sub)
         if t.latched is not None:
-            sub._enqueue(*t.latched)
+            latched, info = t.latched
+            sub._enqueue(latched if t.immutable else copy.deepcopy(latched), info)
         return sub
 
     def advertise_service(
@@ -361,7 +377,7 @@ class _EmbeddedServiceProxy(ServiceProxy[Req, Resp]):
 
         async def handle() -> Resp:
             await asyncio.sleep(0)  # deliver on a later loop turn, as over a network
-            answer = server.handler(copy.deepcopy(req), info)
+            answer = server.handler(_own(req), info)
             if inspect.isawaitable(answer):
                 answer = await answer
             return answer  # type: ignore[return-value]
@@ -448,7 +464,7 @@ class _EmbeddedActionServer(ActionServer[G, R, F]):
     def _send_feedback(self, goal: _Goal[G, R, F], feedback: F) -> None:
         client = goal.client
         if client is not None:
-            self.node.clock.loop.call_soon(client.deliver_feedback, copy.deepcopy(feedback))
+            self.node.clock.loop.call_soon(client.deliver_feedback, _own(feedback))
 
     def shutdown(self) -> None:
         if not self.alive:
@@ -581,7 +597,7 @@ class _EmbeddedActionClient(ActionClient[G, R, F]):
         transport = self._node.transport
         record: _Goal[G, R, F] = _Goal(
             goal_id=f"{self._node.name}-{next(transport._goal_ids)}",
-            goal=copy.deepcopy(goal),
+            goal=_own(goal),
             sender=self._node.name,
         )
         handle = _EmbeddedClientGoalHandle(self, record, on_feedback, on_status)

@@ -12,9 +12,14 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar, Generic, TypeVar
 
 
-@dataclass
+@dataclass(frozen=True)
 class Message:
-    """Base class of all message types (a plain, mutable dataclass)."""
+    """Base class of all message types: a frozen dataclass, so a message cannot change once made.
+
+    The embedded transport hands the same object to every subscriber (no copy); a message type
+    with a mutable field (a list, a dict) is copied for each subscriber instead. Make a changed
+    message with ``dataclasses.replace``.
+    """
 
     ros_type: ClassVar[str] = ""
 
@@ -33,18 +38,18 @@ F = TypeVar("F", bound=Message)
 # --- std_msgs / std_srvs ---------------------------------------------------
 
 
-@dataclass
+@dataclass(frozen=True)
 class String(Message):
     ros_type: ClassVar[str] = "std_msgs/String"
     data: str = ""
 
 
-@dataclass
+@dataclass(frozen=True)
 class Empty(Message):
     ros_type: ClassVar[str] = "std_msgs/Empty"
 
 
-@dataclass
+@dataclass(frozen=True)
 class Clock(Message):
     """Simulated time on ``/clock`` (rosgraph_msgs/Clock): nodes with /use_sim_time follow it."""
 
@@ -55,7 +60,7 @@ class Clock(Message):
 # --- cyborg_controller -----------------------------------------------------
 
 
-@dataclass
+@dataclass(frozen=True)
 class SystemState(Message):
     """Published on every state change of the controller's state machine."""
 
@@ -65,7 +70,7 @@ class SystemState(Message):
     to_system_state: str = ""
 
 
-@dataclass
+@dataclass(frozen=True)
 class EmotionalFeedback(Message):
     """A change in the PAD values sent by a module (absolute values on set_emotional_values)."""
 
@@ -75,7 +80,7 @@ class EmotionalFeedback(Message):
     delta_dominance: float = 0.0
 
 
-@dataclass
+@dataclass(frozen=True)
 class EmotionalState(Message):
     ros_type: ClassVar[str] = "cyborg_controller/EmotionalState"
     from_emotional_state: str = ""
@@ -85,12 +90,12 @@ class EmotionalState(Message):
     current_dominance: float = 0.0
 
 
-@dataclass
+@dataclass(frozen=True)
 class EmotionalStateServiceRequest(Message):
     ros_type: ClassVar[str] = "cyborg_controller/EmotionalStateServiceRequest"
 
 
-@dataclass
+@dataclass(frozen=True)
 class EmotionalStateServiceResponse(Message):
     ros_type: ClassVar[str] = "cyborg_controller/EmotionalStateServiceResponse"
     emotional_state: str = ""
@@ -99,7 +104,7 @@ class EmotionalStateServiceResponse(Message):
     current_dominance: float = 0.0
 
 
-@dataclass
+@dataclass(frozen=True)
 class StateMachineGoal(Message):
     ros_type: ClassVar[str] = "cyborg_controller/StateMachineGoal"
     previous_state: str = ""
@@ -107,14 +112,14 @@ class StateMachineGoal(Message):
     current_state: str = ""
 
 
-@dataclass
+@dataclass(frozen=True)
 class StateMachineResult(Message):
     ros_type: ClassVar[str] = "cyborg_controller/StateMachineResult"
     status: str = ""
     message: str = ""
 
 
-@dataclass
+@dataclass(frozen=True)
 class StateMachineFeedback(Message):
     ros_type: ClassVar[str] = "cyborg_controller/StateMachineFeedback"
     status: str = ""
@@ -124,7 +129,7 @@ class StateMachineFeedback(Message):
 # --- geometry / navigation -------------------------------------------------
 
 
-@dataclass
+@dataclass(frozen=True)
 class Point(Message):
     ros_type: ClassVar[str] = "geometry_msgs/Point"
     x: float = 0.0
@@ -132,7 +137,7 @@ class Point(Message):
     z: float = 0.0
 
 
-@dataclass
+@dataclass(frozen=True)
 class Quaternion(Message):
     ros_type: ClassVar[str] = "geometry_msgs/Quaternion"
     x: float = 0.0
@@ -141,14 +146,14 @@ class Quaternion(Message):
     w: float = 1.0
 
 
-@dataclass
+@dataclass(frozen=True)
 class Pose(Message):
     ros_type: ClassVar[str] = "geometry_msgs/Pose"
     position: Point = field(default_factory=Point)
     orientation: Quaternion = field(default_factory=Quaternion)
 
 
-@dataclass
+@dataclass(frozen=True)
 class Header(Message):
     ros_type: ClassVar[str] = "std_msgs/Header"
     seq: int = 0
@@ -156,21 +161,21 @@ class Header(Message):
     frame_id: str = ""
 
 
-@dataclass
+@dataclass(frozen=True)
 class PoseStamped(Message):
     ros_type: ClassVar[str] = "geometry_msgs/PoseStamped"
     header: Header = field(default_factory=Header)
     pose: Pose = field(default_factory=Pose)
 
 
-@dataclass
+@dataclass(frozen=True)
 class PoseWithCovariance(Message):
     ros_type: ClassVar[str] = "geometry_msgs/PoseWithCovariance"
     pose: Pose = field(default_factory=Pose)
-    covariance: list[float] = field(default_factory=lambda: [0.0] * 36)
+    covariance: tuple[float, ...] = (0.0,) * 36
 
 
-@dataclass
+@dataclass(frozen=True)
 class PoseWithCovarianceStamped(Message):
     """The base's localised pose (rosarnl's ``amcl_pose``); covariance left at zero."""
 
@@ -179,29 +184,29 @@ class PoseWithCovarianceStamped(Message):
     pose: PoseWithCovariance = field(default_factory=PoseWithCovariance)
 
 
-@dataclass
+@dataclass(frozen=True)
 class MoveBaseGoal(Message):
     ros_type: ClassVar[str] = "move_base_msgs/MoveBaseGoal"
     target_pose: PoseStamped = field(default_factory=PoseStamped)
 
 
-@dataclass
+@dataclass(frozen=True)
 class MoveBaseFeedback(Message):
     ros_type: ClassVar[str] = "move_base_msgs/MoveBaseFeedback"
     base_position: PoseStamped = field(default_factory=PoseStamped)
 
 
-@dataclass
+@dataclass(frozen=True)
 class MoveBaseResult(Message):
     ros_type: ClassVar[str] = "move_base_msgs/MoveBaseResult"
 
 
-@dataclass
+@dataclass(frozen=True)
 class EmptyRequest(Message):
     ros_type: ClassVar[str] = "std_srvs/EmptyRequest"
 
 
-@dataclass
+@dataclass(frozen=True)
 class EmptyResponse(Message):
     ros_type: ClassVar[str] = "std_srvs/EmptyResponse"
 
@@ -243,10 +248,41 @@ MoveBaseAction: ActionType[MoveBaseGoal, MoveBaseResult, MoveBaseFeedback] = Act
 )
 
 
-def is_nested(cls: type[Message]) -> bool:
-    """True if some field of ``cls`` is itself a message (so copies must be deep)."""
-    return any(
-        isinstance(f.default_factory, type) and issubclass(f.default_factory, Message)
-        for f in dataclasses.fields(cls)
-        if f.default_factory is not dataclasses.MISSING
-    )
+_IMMUTABLE_VALUES = (str, int, float, bool, bytes, type(None))
+
+
+def _immutable_value(value: Any) -> bool:
+    if isinstance(value, _IMMUTABLE_VALUES):
+        return True
+    if isinstance(value, tuple):
+        return all(_immutable_value(item) for item in value)
+    return isinstance(value, Message) and is_immutable(type(value))
+
+
+def is_immutable(cls: type[Message]) -> bool:
+    """True if a ``cls`` message cannot change once made: frozen, and every field's default is a
+    number, string, tuple of those or an immutable message (so transports may share one object).
+
+    A message type with a list or dict field is mutable: the embedded transport gives each
+    subscriber its own copy of it.
+    """
+    cached = _immutable.get(cls)
+    if cached is None:
+        params = getattr(cls, "__dataclass_params__", None)
+        cached = bool(params is not None and params.frozen)
+        for f in dataclasses.fields(cls) if cached else ():
+            if f.default is not dataclasses.MISSING:
+                default = f.default
+            elif f.default_factory is not dataclasses.MISSING:
+                default = f.default_factory()
+            else:
+                cached = False
+                break
+            if not _immutable_value(default):
+                cached = False
+                break
+        _immutable[cls] = cached
+    return cached
+
+
+_immutable: dict[type[Message], bool] = {}

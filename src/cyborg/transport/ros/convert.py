@@ -63,7 +63,7 @@ def from_ros(ros_message: Any, cls: type[M]) -> M:
         elif hasattr(value, "to_sec"):
             values[field.name] = value.to_sec()
         elif isinstance(value, tuple):
-            values[field.name] = list(value)
+            values[field.name] = tuple(value)  # messages are frozen: tuples, not lists
         else:
             values[field.name] = value
     return cls(**values)
