@@ -96,6 +96,7 @@ def make_base(
     *,
     start: str = "information desk",
     seed: int = 7,
+    virtual_pose_rate: float | None = 1.0,
 ) -> SimulatedBase:
     return SimulatedBase(
         transport.node("rosarnl_node"),
@@ -104,6 +105,7 @@ def make_base(
         speed=SPEED,
         planner=planner,
         start=occupancy_map.pose(start),
+        virtual_pose_rate=virtual_pose_rate,
     )
 
 
@@ -172,7 +174,7 @@ def test_late_ticks_do_not_slow_the_trip_down(
 def test_feedback_reports_poses_along_the_way(
     clock: VirtualClock, transport: EmbeddedTransport, campus: OccupancyMap, campus_planner: RoutePlanner
 ) -> None:
-    make_base(transport, campus, campus_planner)
+    make_base(transport, campus, campus_planner, virtual_pose_rate=None)  # every step, as in real time
     client = Client(transport)
     entrance = campus.pose("entrance")
     start = campus.pose("information desk").position
@@ -325,13 +327,17 @@ def test_path_states_of_a_trip(
 
 
 def wander_run(
-    campus: OccupancyMap, planner: RoutePlanner, seed: int, seconds: float = 120.0
+    campus: OccupancyMap,
+    planner: RoutePlanner,
+    seed: int,
+    seconds: float = 120.0,
+    virtual_pose_rate: float | None = 1.0,
 ) -> tuple[list[tuple[float, float, float, float]], list[str]]:
     """Poses and path states while wandering ``seconds``, then stopping, on a fresh clock."""
     clock = VirtualClock()
     try:
         transport = EmbeddedTransport(clock)
-        make_base(transport, campus, planner, seed=seed)
+        make_base(transport, campus, planner, seed=seed, virtual_pose_rate=virtual_pose_rate)
         client = Client(transport)
 
         async def main() -> None:
@@ -369,8 +375,23 @@ def test_wander_is_deterministic_for_a_seed(campus: OccupancyMap, campus_planner
     again, _ = wander_run(campus, campus_planner, seed=11, seconds=60.0)
     other, _ = wander_run(campus, campus_planner, seed=3, seconds=60.0)
     assert first == again
-    assert len({(x, y) for _, x, y, _ in first}) > 100  # it did move
+    assert len({(x, y) for _, x, y, _ in first}) > 50  # it did move (about a pose a second)
     assert first != other  # the places come from the random generator
+
+
+def test_the_pose_rate_changes_how_often_it_says_where_it_is_not_where_it_goes(
+    campus: OccupancyMap, campus_planner: RoutePlanner
+) -> None:
+    """With virtual_pose_rate 1 at --speed max the base publishes a pose a second instead of every
+    step: the same trips, the same poses at the same times, the same place it stops at."""
+    every_step, states = wander_run(campus, campus_planner, seed=5, seconds=90.3, virtual_pose_rate=None)
+    a_second, same_states = wander_run(campus, campus_planner, seed=5, seconds=90.3)
+    assert same_states == states
+    assert len(every_step) > 5 * len(a_second) > 300
+    steps = {round(t, 6): (x, y, theta) for t, x, y, theta in every_step}
+    for t, x, y, theta in a_second[:-1]:
+        assert steps[round(t, 6)] == (x, y, theta)  # a step it also made, at the same time
+    assert a_second[-1][1:] == every_step[-1][1:]  # stopped at the same step (said when stopped)
 
 
 def test_a_goal_ends_wandering(

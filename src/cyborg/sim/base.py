@@ -7,6 +7,16 @@ current pose), the services ``/rosarnl_node/wander`` and ``/rosarnl_node/stop``
 ``/rosarnl_node/arnl_path_state``. Routes come from :class:`RoutePlanner`; the
 robot drives them at a set speed on the injected clock. Registered as the module kind
 ``simulated_base``.
+
+The pose moves in steps of ``1 / pose_rate`` seconds along each leg of a route (10 a second, as
+ROSARNL's), and each step is published. With ``virtual_pose_rate`` set, on a virtual clock that
+runs as fast as it can (``--speed max``) only every ``pose_rate / virtual_pose_rate``-th step,
+the end of each leg and the pose it stops at are published; the steps between still happen, at
+the same clock times, so where the base is at each moment, where it stops when halted and when it
+arrives do not change. What changes is what its subscribers see: a transcript's pose records
+(at most one a second) are sampled from fewer poses, and the navigation module's idea of where
+the robot is, which its calendar scheduler reads, can be up to ``1 / virtual_pose_rate`` s old.
+:meth:`SimulatedBase.status` (the dashboard) reads the current step.
 """
 
 from __future__ import annotations
@@ -50,7 +60,8 @@ from cyborg.transport.messages import (
 
 log = logging.getLogger(__name__)
 
-TICK = 0.1  # seconds between pose updates while moving
+DEFAULT_POSE_RATE = 10.0
+"""Pose updates a second while moving (ROSARNL publishes its pose at about 10 Hz)."""
 MAP_FRAME = "map"
 
 _MoveHandle = ServerGoalHandle[MoveBaseGoal, MoveBaseResult, MoveBaseFeedback]
@@ -84,7 +95,12 @@ def pose_stamped(x: float, y: float, theta: float, stamp: float = 0.0) -> PoseSt
 
 
 class SimulatedBase:
-    """A Pioneer LX on a map: plans, drives, wanders, reports its pose."""
+    """A Pioneer LX on a map: plans, drives, wanders, reports its pose.
+
+    ``pose_rate``: pose steps a second while moving, each published in real time;
+    ``virtual_pose_rate``: pose messages a second on a clock that runs as fast as it can (see the
+    module's docstring).
+    """
 
     def __init__(
         self,
@@ -96,9 +112,21 @@ class SimulatedBase:
         robot_radius: float = 0.35,
         start: NamedPose | Point | None = None,
         planner: RoutePlanner | None = None,
+        pose_rate: float = DEFAULT_POSE_RATE,
+        virtual_pose_rate: float | None = None,
     ) -> None:
         if speed <= 0:
             raise InvalidValueError(f"speed must be positive (m/s), got {speed}")
+        for name, rate in (("pose_rate", pose_rate), ("virtual_pose_rate", virtual_pose_rate or 1.0)):
+            if not (math.isfinite(rate) and rate > 0):
+                raise InvalidValueError(f"{name} must be a positive number of poses a second, got {rate!r}")
+        self.tick = 1.0 / pose_rate
+        """Seconds between pose steps while moving."""
+        self.steps_per_message = 1
+        """Pose steps per published pose: ``pose_rate / virtual_pose_rate`` on a clock that runs as fast
+        as it can, else 1 (every step)."""
+        if virtual_pose_rate is not None and node.clock.as_fast_as_possible:
+            self.steps_per_message = max(1, round(pose_rate / virtual_pose_rate))
         self.node = node
         self.map = occupancy_map
         self.planner = planner or RoutePlanner(occupancy_map, robot_radius)
@@ -116,6 +144,7 @@ class SimulatedBase:
         self._failure = ""
         self._motion: asyncio.Task[bool] | None = None
         self._goal: _MoveHandle | None = None
+        self._published: tuple[float, float, float] | None = None
         self._pose_pub = node.publisher(topics.AMCL_POSE, PoseWithCovarianceStamped, latch=True)
         self._state_pub = node.publisher(topics.ARNL_PATH_STATE, String, latch=True)
         node.action_server(topics.MOVE_BASE, MoveBaseAction, self._on_goal, self._on_cancel)
@@ -129,7 +158,8 @@ class SimulatedBase:
         self._halt()
 
     def status(self) -> BaseStatus:
-        """Pose, route and path state, for the dashboard (a :class:`~cyborg.app.view.BaseView`)."""
+        """Pose (the current step, also between published poses), route and path state, for the
+        dashboard (a :class:`~cyborg.app.view.BaseView`)."""
         return BaseStatus(
             x=self.x,
             y=self.y,
@@ -143,6 +173,7 @@ class SimulatedBase:
     # --- outputs ----------------------------------------------------------------------
 
     def _publish_pose(self) -> None:
+        self._published = (self.x, self.y, self.theta)
         stamped = pose_stamped(self.x, self.y, self.theta, self.node.clock.now())
         self._pose_pub.publish(PoseWithCovarianceStamped(stamped.header, PoseWithCovariance(stamped.pose)))
 
@@ -156,6 +187,8 @@ class SimulatedBase:
     def _halt(self) -> None:
         if self._motion is not None and not self._motion.done():
             self._motion.cancel()
+            if self._published != (self.x, self.y, self.theta):
+                self._publish_pose()  # where it stops, also when that step was not published
         self._motion = None
         self.route = None
         self.wandering = False
@@ -190,11 +223,12 @@ class SimulatedBase:
         duration = length / self.speed
         start = clock.monotonic()
         done = 0.0
+        unpublished = 0  # steps made since the last published one
         # The pose follows the clock, not the number of ticks: a tick that comes late (a loaded
         # machine, virtual time at 25x) moves the robot further, so a trip takes the same
         # virtual time however the ticks fall.
         while done < 1.0:
-            await clock.sleep(min(TICK, max(0.0, duration - (clock.monotonic() - start))))
+            await clock.sleep(min(self.tick, max(0.0, duration - (clock.monotonic() - start))))
             elapsed = clock.monotonic() - start
             # within a millisecond of the end counts as there: a clock far from its origin may
             # not move at all for a sleep of a few nanoseconds
@@ -202,9 +236,12 @@ class SimulatedBase:
             self.x, self.y = sx + dx * fraction, sy + dy * fraction
             self.distance_travelled += length * (fraction - done)
             done = fraction
-            self._publish_pose()
-            if on_pose is not None:
-                on_pose()
+            unpublished += 1
+            if unpublished == self.steps_per_message or done >= 1.0:
+                unpublished = 0
+                self._publish_pose()
+                if on_pose is not None:
+                    on_pose()
 
     # --- move_base ----------------------------------------------------------------------
 
@@ -309,6 +346,22 @@ class SimulatedBaseSettings(ModuleSettings):
     """A simulated Pioneer LX on the robot's map, with ROSARNL's interface (stands in for the real base)."""
 
     speed: float = Field(0.6, gt=0, description="driving speed in m/s")
+    pose_rate: float = Field(
+        DEFAULT_POSE_RATE,
+        gt=0,
+        le=1000,
+        description="pose steps a second while moving, each published on amcl_pose (and as move_base "
+        "feedback) unless virtual_pose_rate says otherwise; ROSARNL publishes about 10",
+    )
+    virtual_pose_rate: float | None = Field(
+        None,
+        gt=0,
+        le=1000,
+        description="pose messages a second while moving at --speed max (scenario scripts, benchmarks; "
+        "at most pose_rate; default: every step). 1 makes a simulated day faster (a transcript "
+        "records one pose a second anyway); the steps still come at pose_rate, so the base goes the "
+        "same way, but the navigation module's calendar scheduler may see a pose up to 1 s old",
+    )
     robot_radius: float = Field(0.35, ge=0, description="metres kept from walls when planning")
     start: str | None = Field(
         None, description="named pose to start at (default: the information desk, else RobotHome or Dock)"
@@ -325,6 +378,8 @@ def _build(node: Node, settings: SimulatedBaseSettings, context: BuildContext) -
         speed=settings.speed,
         robot_radius=settings.robot_radius,
         start=start,
+        pose_rate=settings.pose_rate,
+        virtual_pose_rate=settings.virtual_pose_rate,
     )
 
 

@@ -55,6 +55,12 @@ class Clock(ABC):
     def is_virtual(self) -> bool:
         return False
 
+    @property
+    def as_fast_as_possible(self) -> bool:
+        """True if the clock jumps to the next timer instead of waiting for it (virtual time at
+        ``--speed max``): work nobody waits for in real time is then all the run costs."""
+        return False
+
     def monotonic(self) -> float:
         """Seconds on the loop's monotonic time line (use for durations)."""
         return self.loop.time()
@@ -196,12 +202,17 @@ class RealClock(Clock):
         return time.time()
 
 
+POLL_INTERVAL = 0.001
+"""Real seconds between looks for I/O (sockets, other threads) while virtual time runs as fast as it can."""
+
+
 class _VirtualTimeSelector(selectors.BaseSelector):
     """Selector that advances virtual time instead of blocking on timers."""
 
     def __init__(self, clock: VirtualClock) -> None:
         self._inner = selectors.DefaultSelector()
         self._clock = clock
+        self._polled = -math.inf  # real time of the last look for I/O
 
     def register(self, fileobj: Any, events: int, data: Any = None) -> selectors.SelectorKey:
         return self._inner.register(fileobj, events, data)
@@ -226,13 +237,19 @@ class _VirtualTimeSelector(selectors.BaseSelector):
             if real_timeout and before_origin > 0:  # time stands still until the origin
                 real_timeout = None if math.isinf(before_origin) else real_timeout + before_origin
             return self._inner.select(real_timeout)
-        ready = self._inner.select(0)
-        if ready or timeout == 0:
-            return ready
         if timeout is None:
             # Nothing is scheduled: only I/O or another thread can wake us.
             return self._inner.select(None)
-        self._clock._advance(timeout)
+        # Look for I/O at most once a real millisecond: a system call on each of the millions of
+        # loop turns of a simulated day cost more than the work they ran.
+        now = time.monotonic()
+        if now - self._polled >= POLL_INTERVAL:
+            self._polled = now
+            ready = self._inner.select(0)
+            if ready:
+                return ready
+        if timeout > 0:
+            self._clock._advance(timeout)
         return []
 
 
@@ -305,6 +322,10 @@ class VirtualClock(Clock):
     @property
     def is_virtual(self) -> bool:
         return True
+
+    @property
+    def as_fast_as_possible(self) -> bool:
+        return self.speed is None
 
     def _make_loop(self) -> asyncio.AbstractEventLoop:
         return _VirtualTimeLoop(self)
