@@ -1,6 +1,7 @@
 """Validation of the state machine YAML.
 
-Every error names the file, where in it the problem is, what is wrong and how to fix it.
+Every error names the file, where in it the problem is, what is wrong and how to fix it; the same
+with libyaml's C loader (what the robot uses) and the Python one (every test runs with both).
 """
 
 from __future__ import annotations
@@ -13,7 +14,18 @@ import pytest
 import yaml
 
 from cyborg.app.config import load_config, parse_config
+from cyborg.configfile import reader
 from cyborg.errors import ConfigError
+
+
+@pytest.fixture(autouse=True, params=["C loader", "Python loader"])
+def yaml_loader(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Read every YAML of these tests with libyaml's C loader, then again with the Python one."""
+    if request.param == "Python loader":
+        monkeypatch.setattr(reader, "yaml_loader", lambda text: yaml.SafeLoader)
+    else:
+        assert reader.yaml_loader("initial: idle\n") is yaml.CSafeLoader
+
 
 VALID = """
 states:
