@@ -109,9 +109,38 @@ def _ros_support() -> ModuleType:
     return module
 
 
-@pytest.fixture(params=["embedded", "ros"])
+def _ros2_support() -> ModuleType:
+    """tests/ros2/support.py: the session's ROS 2 transport (only in .venv-ros2)."""
+    name = "cyborg_tests_ros2_support"
+    module = sys.modules.get(name)
+    if module is None:
+        path = Path(__file__).resolve().parent.parent / "ros2" / "support.py"
+        spec = importlib.util.spec_from_file_location(name, path)
+        assert spec is not None and spec.loader is not None
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
+        spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(params=["embedded", "ros", "ros2"])
 def graph(request: pytest.FixtureRequest) -> Iterator[Graph]:
     prefix = f"contract{next(_test_numbers)}"
+    if request.param == "ros2":  # in .venv-ros2 (tests/transport/conftest.py); every node a ROS 2 node
+        session2 = _ros2_support().ros2_session(request.config)
+        made2: list[Node] = []
+
+        def make2(name: str) -> Node:
+            node = session2.transport.node(name)
+            made2.append(node)
+            return node
+
+        try:
+            yield Graph(session2.clock, make2, prefix=prefix, sender=lambda node: node, ros=True)
+        finally:
+            for node in made2:
+                node.shutdown()
+        return
     if request.param == "embedded":
         clock = VirtualClock()
         embedded = EmbeddedTransport(clock)

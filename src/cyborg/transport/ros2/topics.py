@@ -1,0 +1,159 @@
+"""Topics of the ROS 2 transport: publishers and subscriptions on rclpy, and who sent a message.
+
+Part of :mod:`cyborg.transport.ros2`. Every received message names its sender, as under ROS 1:
+rclpy (Kilted) gives each message its publisher's GID, and the graph lists the GID of every
+publisher of a topic with its node's name (:class:`Senders`). A publisher the graph does not
+know yet is looked up again for up to SENDER_LOOKUP seconds; after that the sender is '' (a
+gatekeeper drops such a message: it fails closed).
+
+Latched topics are transient-local (the last message kept for late subscribers, depth 1). A
+transient-local subscription matches only transient-local publishers, and a volatile one
+every publisher, so each subscription is two: volatile (live messages from every publisher)
+and transient-local (what latched publishers kept). A message both deliver is taken once: per
+publisher, only a publication sequence number above the last one taken passes.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+from rclpy.event_handler import SubscriptionEventCallbacks
+from rclpy.node import Node as RclNode
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from cyborg.transport._queue import SubscriptionQueue
+from cyborg.transport.base import M, MessageInfo, Publisher, Subscription, normalize_node_name
+from cyborg.transport.ros2.convert import from_ros2, ros2_class, to_ros2
+from cyborg.transport.ros2.host import Host
+
+__all__ = ["SENDER_LOOKUP", "Ros2Publisher", "Ros2Subscription", "Senders", "latched_qos", "volatile_qos"]
+
+SENDER_LOOKUP = 0.5  # seconds a message from a publisher unknown to the graph waits for its name
+
+
+def volatile_qos(depth: int) -> QoSProfile:
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_LAST,
+        depth=depth,
+        reliability=ReliabilityPolicy.RELIABLE,
+        durability=DurabilityPolicy.VOLATILE,
+    )
+
+
+def latched_qos(depth: int = 1) -> QoSProfile:
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_LAST,
+        depth=depth,
+        reliability=ReliabilityPolicy.RELIABLE,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL,
+    )
+
+
+class Senders:
+    """Node names of a topic's publishers by GID, from the graph (refreshed on a miss)."""
+
+    def __init__(self, node: RclNode, topic: str) -> None:
+        self._node = node
+        self._topic = topic
+        self._names: dict[bytes, str] = {}
+        self._lock = threading.Lock()
+
+    def name_of(self, gid: bytes) -> str:
+        with self._lock:
+            name = self._names.get(gid)
+        if name is not None:
+            return name
+        deadline = time.monotonic() + SENDER_LOOKUP
+        while True:
+            names = {
+                bytes(info.endpoint_gid): normalize_node_name(info.node_name)
+                for info in self._node.get_publishers_info_by_topic(self._topic)
+            }
+            with self._lock:
+                self._names = names
+            if gid in names or time.monotonic() >= deadline:
+                return names.get(gid, "")
+            time.sleep(0.005)
+
+
+class Ros2Publisher(Publisher[M]):
+    def __init__(self, node: RclNode, topic: str, msg_type: type[M], queue_size: int, latch: bool) -> None:
+        self.topic = topic
+        self._cls = ros2_class(msg_type.ros_type)
+        qos = latched_qos() if latch else volatile_qos(queue_size)
+        self._node = node
+        self._pub = node.create_publisher(self._cls, topic, qos)
+
+    def publish(self, message: M) -> None:
+        self._pub.publish(to_ros2(message, self._cls))
+
+    def subscriber_count(self) -> int:
+        return int(self._pub.get_subscription_count())
+
+    def unregister(self) -> None:
+        self._node.destroy_publisher(self._pub)
+
+
+class Ros2Subscription(Subscription[M]):
+    """Two rclpy subscriptions (volatile and transient-local) feeding the shared bounded queue."""
+
+    def __init__(
+        self,
+        transport: Host,
+        node: RclNode,
+        topic: str,
+        msg_type: type[M],
+        callback: Callable[[M, MessageInfo], None],
+        queue_size: int,
+        callback_group: Any,
+    ) -> None:
+        self.topic = topic
+        self._transport = transport
+        self._node = node
+        self._type = msg_type
+        self._queue = SubscriptionQueue(transport.clock, callback, queue_size, transport.run_callback)
+        self._senders = Senders(node, topic)
+        self._last: dict[bytes, int] = {}
+        self._lock = threading.Lock()
+        cls = ros2_class(msg_type.ros_type)
+        depth = max(queue_size * 4, 100)  # DDS keeps more than our queue: our queue counts the drops
+        self._subs = [
+            node.create_subscription(
+                cls, topic, self._on_ros, volatile_qos(depth), callback_group=callback_group
+            ),
+            # A volatile publisher does not match this one, by design: no warning about it.
+            node.create_subscription(
+                cls,
+                topic,
+                self._on_ros,
+                latched_qos(depth),
+                callback_group=callback_group,
+                event_callbacks=SubscriptionEventCallbacks(incompatible_qos=lambda event: None),
+            ),
+        ]
+
+    @property
+    def dropped(self) -> int:
+        return self._queue.dropped
+
+    def _on_ros(self, ros_message: Any, ros_info: Any) -> None:  # executor thread
+        gid_info = ros_info.get("publisher_gid") or {}
+        gid = bytes(gid_info.get("data", b""))
+        sequence = ros_info.get("publication_sequence_number")
+        with self._lock:  # taken once, in order, whichever of the two delivers it first
+            if gid and sequence is not None:
+                if sequence <= self._last.get(gid, 0):
+                    return
+                self._last[gid] = sequence
+            sender = self._senders.name_of(gid) if gid else ""
+            info = MessageInfo(sender=sender, stamp=time.time())
+            self._transport.to_loop(self._queue.put, from_ros2(ros_message, self._type), info)
+
+    def unsubscribe(self) -> None:
+        self._queue.close()
+        for sub in self._subs:
+            self._node.destroy_subscription(sub)
+        self._subs = []

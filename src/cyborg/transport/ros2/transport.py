@@ -1,0 +1,337 @@
+"""The ROS 2 transport's entry point: :class:`Ros2Transport`, its nodes and parameters.
+
+Part of :mod:`cyborg.transport.ros2`. A Ros2Transport is one rclpy context (``ROS_DOMAIN_ID``
+and ``ROS_AUTOMATIC_DISCOVERY_RANGE`` from the environment) whose nodes are spun by one
+multi-threaded executor on a thread of its own. Unlike rospy, rclpy allows many nodes per
+process, so every logical node is a real ROS 2 node: a message's sender is the node that
+published it, as on the embedded transport. Callbacks arrive on the executor's threads and run
+on the clock's event loop (:meth:`Ros2Transport.to_loop`), one at a time.
+
+Parameters: ROS 2 has no parameter server. Our absolute parameters (``/state_resources``,
+``/cyborg_controller/transitions``, ...) live as ROS 2 parameters of one node, the parameter
+home ``/cyborg_parameters`` (names without the leading slash, ``/`` as ``.``; values as JSON
+strings, since a ROS 2 parameter cannot hold a dict). The first process that sets a parameter
+hosts it, unless the graph already has it; every other process reads and writes it through
+its standard parameter services (``get_parameters``, ``set_parameters``), waiting for the
+answer, as a rospy parameter call waits for the master. So the controller's ``set_param``
+of the active state's resources returns only once the home holds them, before the state
+change is published; a gatekeeper reads them when the state change arrives; a read that
+fails raises TransportError, and the gatekeeper passes nothing (fails closed).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import threading
+from collections.abc import Awaitable, Callable
+from typing import Any
+
+import rclpy
+from rcl_interfaces.msg import Parameter as RosParameter
+from rcl_interfaces.msg import ParameterType, ParameterValue
+from rcl_interfaces.srv import GetParameters, SetParameters
+from rclpy.callback_groups import ReentrantCallbackGroup
+from rclpy.context import Context
+from rclpy.executors import MultiThreadedExecutor
+from rclpy.node import Node as RclNode
+from rclpy.parameter import Parameter as RclParameter
+
+from cyborg.errors import TransportError
+from cyborg.transport._queue import CallbackRunner
+from cyborg.transport.base import (
+    DEFAULT_QUEUE_SIZE,
+    ActionClient,
+    ActionServer,
+    F,
+    G,
+    M,
+    MessageInfo,
+    Node,
+    Publisher,
+    R,
+    Req,
+    Resp,
+    ServerGoalHandle,
+    ServiceProxy,
+    ServiceServer,
+    Subscription,
+    Transport,
+    normalize_node_name,
+)
+from cyborg.transport.clock import Clock
+from cyborg.transport.messages import ActionType, ServiceType
+from cyborg.transport.ros2.actions import Ros2ActionClient, Ros2ActionServer
+from cyborg.transport.ros2.convert import ros2_class, ros2_type_name
+from cyborg.transport.ros2.services import Ros2ServiceProxy, Ros2ServiceServer
+from cyborg.transport.ros2.topics import Ros2Publisher, Ros2Subscription
+
+__all__ = ["PARAM_HOME", "PARAM_TIMEOUT", "Ros2Node", "Ros2Transport", "parameter_name"]
+
+log = logging.getLogger(__name__)
+
+PARAM_HOME = "cyborg_parameters"
+PARAM_TIMEOUT = 2.0  # seconds a parameter read or write waits for the home's answer
+EXECUTOR_THREADS = 32  # an action goal being executed holds one thread while it runs
+
+
+def parameter_name(key: str) -> str:
+    """The home's ROS 2 parameter for our absolute ``key``: ``/a/b`` -> ``a.b``."""
+    return key.strip("/").replace("/", ".")
+
+
+class Ros2Transport(Transport):
+    """Nodes of this process on a ROS 2 graph (one rclpy context, spun on its own thread)."""
+
+    def __init__(self, clock: Clock, *, args: list[str] | None = None) -> None:
+        self.clock = clock
+        self.callback_errors = 0
+        self.run_callback = CallbackRunner(log, self._count_callback_error)
+        self.context = Context()
+        rclpy.init(args=args, context=self.context)
+        self.executor = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS, context=self.context)
+        self._nodes: dict[str, Ros2Node] = {}
+        self._types: dict[str, str] = {}  # topic -> our ROS type, of this process's endpoints
+        self._home: RclNode | None = None
+        self._params: dict[str, Any] = {}
+        self._params_lock = threading.Lock()
+        self._param_node: RclNode | None = None
+        self._param_clients: dict[str, Any] = {}
+        self._spinner = threading.Thread(target=self._spin, name="ros2 executor", daemon=True)
+        self._spinner.start()
+
+    def _spin(self) -> None:
+        try:
+            self.executor.spin()
+        except Exception:  # the context was shut down under it
+            log.debug("executor stopped", exc_info=True)
+
+    def _count_callback_error(self) -> None:
+        self.callback_errors += 1
+
+    def node(self, name: str) -> Ros2Node:
+        name = normalize_node_name(name)
+        if not name:
+            raise TransportError("node name is empty: give every component a name, e.g. 'cyborg_idle'")
+        if name in self._nodes:
+            raise TransportError(f"node name {name!r} is already in use in this process")
+        node = Ros2Node(self, name)
+        self._nodes[name] = node
+        return node
+
+    def make_rcl_node(self, name: str) -> RclNode:
+        try:
+            rcl = RclNode(name, context=self.context, start_parameter_services=False)
+        except Exception as exc:
+            raise TransportError(
+                f"cannot make the ROS 2 node {name!r} ({exc}); fix: a node name has letters, digits and "
+                "underscores and does not start with a digit"
+            ) from exc
+        self.executor.add_node(rcl)
+        return rcl
+
+    def drop_rcl_node(self, rcl: RclNode) -> None:
+        self.executor.remove_node(rcl)
+        rcl.destroy_node()
+
+    def _forget_node(self, node: Ros2Node) -> None:
+        if self._nodes.get(node.name) is node:
+            del self._nodes[node.name]
+
+    def check_topic_type(self, topic: str, ros_type: str, probe: RclNode) -> None:
+        """A topic carries one type: refuse a publisher or subscriber of another (this process,
+        then the graph)."""
+        known = self._types.get(topic)
+        if known is None:
+            wanted = ros2_type_name(ros2_class(ros_type))
+            for name, types in probe.get_topic_names_and_types():
+                if name == topic and types and wanted not in types:
+                    package, _, rest = types[0].partition("/msg/")
+                    known = f"{package}/{rest}"
+        if known not in (None, ros_type):
+            raise TransportError(
+                f"topic {topic} carries {known}, not {ros_type}: "
+                "use the same message type on every publisher and subscriber of a topic"
+            )
+        self._types[topic] = ros_type
+
+    def to_loop(self, callback: Callable[..., object], *args: Any) -> None:
+        """Run ``callback(*args)`` on the loop (from an executor thread), as every callback runs."""
+        loop = self.clock.loop
+        if not loop.is_closed():
+            loop.call_soon_threadsafe(self.run_callback, callback, *args)
+
+    def wake(self) -> None:
+        self.executor.wake()
+
+    # --- parameters -------------------------------------------------------------------------
+
+    def _home_elsewhere(self, probe: RclNode) -> bool:
+        return any(
+            name == PARAM_HOME and namespace == "/"
+            for name, namespace in probe.get_node_names_and_namespaces()
+        )
+
+    def set_param(self, key: str, value: Any, probe: RclNode) -> None:
+        text = json.dumps(value, sort_keys=True)
+        if self._home is None and not self._home_elsewhere(probe):
+            self._home = RclNode(PARAM_HOME, context=self.context, allow_undeclared_parameters=True)
+            self.executor.add_node(self._home)
+        if self._home is not None:
+            with self._params_lock:
+                self._params[key] = json.loads(text)
+            self._home.set_parameters([RclParameter(parameter_name(key), value=text)])
+            return
+        request = SetParameters.Request()
+        request.parameters = [
+            RosParameter(
+                name=parameter_name(key),
+                value=ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=text),
+            )
+        ]
+        response = self._call_home(probe, "set_parameters", SetParameters, request, f"set {key}")
+        if not all(result.successful for result in response.results):
+            raise TransportError(f"the parameter home refused {key}: {response.results}")
+
+    def get_param(self, key: str, default: Any, probe: RclNode) -> Any:
+        if self._home is not None:
+            with self._params_lock:
+                return self._params.get(key, default)
+        if not self._home_elsewhere(probe):
+            return default
+        request = GetParameters.Request()
+        request.names = [parameter_name(key)]
+        response = self._call_home(probe, "get_parameters", GetParameters, request, f"read {key}")
+        values = list(response.values)
+        if not values or values[0].type != ParameterType.PARAMETER_STRING:
+            return default
+        return json.loads(values[0].string_value)
+
+    def _call_home(self, probe: RclNode, service: str, srv: Any, request: Any, what: str) -> Any:
+        """Call a parameter service of the home and wait for its answer (the loop waits too)."""
+        if self._param_node is None:
+            self._param_node = self.make_rcl_node(f"cyborg_parameter_client_{id(self):x}")
+        client = self._param_clients.get(service)
+        if client is None:
+            client = self._param_clients[service] = self._param_node.create_client(
+                srv, f"/{PARAM_HOME}/{service}", callback_group=ReentrantCallbackGroup()
+            )
+        done = threading.Event()
+        future = client.call_async(request)
+        future.add_done_callback(lambda _: done.set())
+        self.executor.wake()
+        if not done.wait(PARAM_TIMEOUT) or future.result() is None:
+            client.remove_pending_request(future)
+            raise TransportError(
+                f"could not {what}: the parameter home /{PARAM_HOME} did not answer within {PARAM_TIMEOUT} s; "
+                "fix: start the controller's node (it hosts the parameters)"
+            )
+        return future.result()
+
+    def shutdown(self) -> None:
+        for node in list(self._nodes.values()):
+            node.shutdown()
+        self._nodes.clear()
+
+    def close(self) -> None:
+        """Shut down every node of this process and leave the graph."""
+        self.shutdown()
+        for extra in (self._home, self._param_node):
+            if extra is not None:
+                self.drop_rcl_node(extra)
+        self._home = self._param_node = None
+        self.executor.shutdown(timeout_sec=1.0)
+        if self.context.ok():
+            self.context.try_shutdown()
+        self._spinner.join(timeout=2.0)
+
+
+class Ros2Node(Node):
+    """One logical node: one rclpy node."""
+
+    def __init__(self, transport: Ros2Transport, name: str) -> None:
+        self.transport = transport
+        self.name = name
+        self.clock = transport.clock
+        self.rcl = transport.make_rcl_node(name)
+        self._group = ReentrantCallbackGroup()
+        self._closers: list[Callable[[], None]] = []
+
+    def publisher(
+        self, topic: str, msg_type: type[M], *, queue_size: int = DEFAULT_QUEUE_SIZE, latch: bool = False
+    ) -> Publisher[M]:
+        resolved = self.resolve(topic)
+        self.transport.check_topic_type(resolved, msg_type.ros_type, self.rcl)
+        pub = Ros2Publisher[M](self.rcl, resolved, msg_type, queue_size, latch)
+        self._closers.append(pub.unregister)
+        return pub
+
+    def subscribe(
+        self,
+        topic: str,
+        msg_type: type[M],
+        callback: Callable[[M, MessageInfo], None],
+        *,
+        queue_size: int = DEFAULT_QUEUE_SIZE,
+    ) -> Subscription[M]:
+        resolved = self.resolve(topic)
+        self.transport.check_topic_type(resolved, msg_type.ros_type, self.rcl)
+        sub = Ros2Subscription(
+            self.transport, self.rcl, resolved, msg_type, callback, queue_size, self._group
+        )
+        self._closers.append(sub.unsubscribe)
+        return sub
+
+    def advertise_service(
+        self,
+        name: str,
+        srv_type: ServiceType[Req, Resp],
+        handler: Callable[[Req, MessageInfo], Resp | Awaitable[Resp]],
+    ) -> ServiceServer:
+        server = Ros2ServiceServer(
+            self.transport, self.rcl, self.resolve(name), srv_type, handler, self._group
+        )
+        self._closers.append(server.shutdown)
+        return server
+
+    def service_proxy(self, name: str, srv_type: ServiceType[Req, Resp]) -> ServiceProxy[Req, Resp]:
+        proxy = Ros2ServiceProxy(self.transport, self.rcl, self.resolve(name), srv_type, self._group)
+        self._closers.append(proxy.close)
+        return proxy
+
+    def action_server(
+        self,
+        name: str,
+        action_type: ActionType[G, R, F],
+        on_goal: Callable[[ServerGoalHandle[G, R, F]], None],
+        on_cancel: Callable[[ServerGoalHandle[G, R, F]], None],
+    ) -> ActionServer[G, R, F]:
+        server = Ros2ActionServer(
+            self.transport, self.rcl, self.resolve(name), action_type, on_goal, on_cancel, self._group
+        )
+        self._closers.append(server.shutdown)
+        return server
+
+    def action_client(self, name: str, action_type: ActionType[G, R, F]) -> ActionClient[G, R, F]:
+        client = Ros2ActionClient(self.transport, self.rcl, self.resolve(name), action_type, self._group)
+        self._closers.append(client.close)
+        return client
+
+    def get_param(self, name: str, default: Any = None) -> Any:
+        return self.transport.get_param(self.resolve(name), default, self.rcl)
+
+    def set_param(self, name: str, value: Any) -> None:
+        self.transport.set_param(self.resolve(name), value, self.rcl)
+
+    def shutdown(self) -> None:
+        for close in reversed(self._closers):
+            try:
+                close()
+            except Exception:
+                log.debug("closing failed", exc_info=True)
+        self._closers.clear()
+        try:
+            self.transport.drop_rcl_node(self.rcl)
+        except Exception:
+            log.debug("dropping the rclpy node failed", exc_info=True)
+        self.transport._forget_node(self)
