@@ -1,8 +1,9 @@
 """Behaviour controller for the NTNU Cyborg social robot.
 
-Layers (imports flow one way): ``cyborg.transport`` -> ``cyborg.controller``
-(state machine, emotion system, motivator) -> ``cyborg.modules`` /
-``cyborg.navigation`` -> ``cyborg.sim`` -> ``cyborg.interfaces`` (CLI, dashboard).
+The composition root :mod:`cyborg.app` builds the robot from its configuration; a module
+author needs :mod:`cyborg.modules` and :mod:`cyborg.testing`. The layers, and the one way
+imports flow through them, are in ``docs/architecture.md`` (``tests/test_layers.py``
+enforces them).
 """
 
 __version__ = "0.1.0"
