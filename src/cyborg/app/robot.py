@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from cyborg.app.config import LoadedConfig
+from cyborg.app.memory import freeze_built, thaw
 from cyborg.app.place import BuildPlace, calendar_of
 from cyborg.app.registry import KindRegistry, module_kinds
 from cyborg.app.view import BaseView
@@ -68,6 +69,9 @@ class Robot:
         return calendar_of(self.components.values())
 
     def start(self) -> None:
+        """Start the controller; what the build made is frozen out of garbage collections from now
+        on (:mod:`cyborg.app.memory`), so none walks the whole machine on the controller's loop."""
+        freeze_built()
         self.controller.start()
 
     # --- the RobotView the dashboard reads (cyborg.app.view) --------------------------------
@@ -103,6 +107,7 @@ class Robot:
                 log.exception("closing %s failed; closing the rest", component.node.name)
             component.node.shutdown()
         self.store.close()
+        thaw()
 
 
 def served_actions(components: Iterable[object]) -> set[str]:

@@ -39,6 +39,7 @@ from typing import IO, Any
 import click
 
 from cyborg.app.config import LoadedConfig
+from cyborg.app.memory import freeze_built
 from cyborg.app.parts import API, CONTROLLER, NodeContext, Part, build_part
 from cyborg.errors import CyborgError
 from cyborg.interfaces.access import Access, announcement
@@ -321,6 +322,7 @@ def run_node(
             url = await api.start(host, port)
             for text, colour in announcement(url, host, api.port or port, api.token, generated=not given):
                 click.secho(text, fg=colour, err=True)
+        freeze_built()  # what the part built lives as long as the node: out of GC's way (app.memory)
         controller_task = part.controller.start() if part.controller is not None else None
         click.echo(f"node {name} running", err=True)
         if driver is not None:
