@@ -75,6 +75,7 @@ class RobotAPI:
         self.guard = Guard(access or Access())
         self.extra_status = extra_status
         self.records: deque[Record] = deque(maxlen=RECORD_BUFFER)
+        self._events_of: dict[str, tuple[str, ...]] = {}  # state -> valid events, sorted
         self.sequence = 0
         self.status: dict[str, Any] = {
             "state": None,
@@ -140,10 +141,18 @@ class RobotAPI:
                     queue.get_nowait()  # a slow browser loses the oldest records, not the robot's time
                 queue.put_nowait(text)
 
+    def _valid_events(self, state: str) -> tuple[str, ...]:
+        """The events valid in ``state``, sorted; worked out once per state (the machine stays as built)."""
+        events = self._events_of.get(state)
+        if events is None:
+            assert self.machine is not None
+            events = self._events_of[state] = tuple(sorted(self.machine.transitions_of(state)))
+        return events
+
     def current_status(self) -> dict[str, Any]:
         status = dict(self.status)
         state = status.get("state")
-        status["valid_events"] = sorted(self.machine.transitions_of(state)) if self.machine and state else []
+        status["valid_events"] = list(self._valid_events(state)) if self.machine and state else []
         status["time"] = self.node.clock.now()
         if self.extra_status is not None:
             status.update(self.extra_status())

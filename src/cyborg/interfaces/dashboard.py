@@ -137,6 +137,7 @@ class Dashboard:
         self.left_at: dict[str, float] = {}  # module name -> when one of its states was last left
         self._png: dict[tuple[OccupancyMap, int], bytes] = {}  # (map, cells per pixel) -> PNG
         self._module_of = self._modules_by_action()
+        self._module_states = self._states_of_modules()
         robot.controller.add_state_listener(self._on_state_change)
 
     def routes(self) -> list[web.AbstractRouteDef]:
@@ -154,6 +155,22 @@ class Dashboard:
 
     def _modules_by_action(self) -> dict[str, str]:
         return {action: name for name, actions in self.robot.module_actions().items() for action in actions}
+
+    def _states_of_modules(self) -> dict[str, tuple[list[str], list[str]]]:
+        """Per module: its servers and the states whose action they serve, in the machine's order.
+        Worked out once (the machine and the modules stay as built): /api/health, polled every
+        second, then costs what the modules' entries do, not modules x states."""
+        by_action: dict[str, list[str]] = {}
+        for st in self.robot.config.machine.states.values():
+            if st.action:
+                by_action.setdefault(st.action.lstrip("/"), []).append(st.name)
+        order = {name: index for index, name in enumerate(self.robot.config.machine.states)}
+        table: dict[str, tuple[list[str], list[str]]] = {}
+        for name, actions in self.robot.module_actions().items():
+            servers = sorted(actions)
+            states = {state for server in set(servers) for state in by_action.get(server, ())}
+            table[name] = (servers, sorted(states, key=order.__getitem__))
+        return table
 
     def _module_of_state(self, state: str | None) -> str | None:
         if not state or state not in self.robot.config.machine.states:
@@ -218,13 +235,7 @@ class Dashboard:
         active_module = self._module_of_state(controller.active_state)
         goal = controller.goal_status
         modules = []
-        for name, actions in self.robot.module_actions().items():
-            servers = sorted(actions)
-            states = [
-                st.name
-                for st in self.robot.config.machine.states.values()
-                if st.action and st.action.lstrip("/") in servers
-            ]
+        for name, (servers, states) in self._module_states.items():
             active = name == active_module
             left = self.left_at.get(name)
             module: dict[str, Any] = {
