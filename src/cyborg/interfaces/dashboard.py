@@ -14,6 +14,7 @@ from __future__ import annotations
 import asyncio
 import dataclasses
 import itertools
+import json
 import math
 import struct
 import zlib
@@ -138,6 +139,8 @@ class Dashboard:
         self._png: dict[tuple[OccupancyMap, int], bytes] = {}  # (map, cells per pixel) -> PNG
         self._module_of = self._modules_by_action()
         self._module_states = self._states_of_modules()
+        self._feedback_keys: dict[str, dict[str, int]] = {}  # module -> key the controller may use -> rank
+        self._states_text: dict[str, str] = {}  # module -> its states as JSON
         robot.controller.add_state_listener(self._on_state_change)
 
     def routes(self) -> list[web.AbstractRouteDef]:
@@ -203,11 +206,14 @@ class Dashboard:
         """When module ``name`` last sent feedback, in clock seconds (``clock.now()``), if the controller
         says (by module name or action name); None if it does not."""
         known = self.robot.controller.last_feedback_at
-        for key in (name, *servers, *(f"/{server}" for server in servers)):
-            value = _finite(known.get(key))
-            if value is not None:
-                return value
-        return None
+        rank = self._feedback_keys.get(name)
+        if rank is None:  # once per module: its names in the order they count
+            keys = (name, *servers, *(f"/{server}" for server in servers))
+            rank = self._feedback_keys[name] = {key: index for index, key in reversed(list(enumerate(keys)))}
+        found = [
+            (rank[key], value) for key, value in known.items() if key in rank and _finite(value) is not None
+        ]
+        return _finite(min(found)[1]) if found else None  # O(modules that reported), not O(states)
 
     def _robot_time(self) -> float:
         """Seconds since the API's record stream started: the ``t`` of records."""
@@ -240,7 +246,6 @@ class Dashboard:
             left = self.left_at.get(name)
             module: dict[str, Any] = {
                 "name": name,
-                "states": states,
                 "active": active,
                 "goal_status": goal.name if active and goal is not None else None,
                 "seconds_since_active": 0.0
@@ -251,8 +256,9 @@ class Dashboard:
             if feedback_at is not None:
                 module["last_feedback_at"] = feedback_at
                 module["seconds_since_feedback"] = round(max(0.0, self.clock.now() - feedback_at), 1)
-            modules.append(module)
-        return web.json_response(
+            # the states, which never change, as JSON made once: a machine's size costs a copy
+            modules.append(f'{json.dumps(module)[:-1]}, "states": {self._states_json(name, states)}}}')
+        body = json.dumps(
             {
                 "t": self._robot_time(),
                 "time": self.clock.now(),
@@ -268,9 +274,17 @@ class Dashboard:
                 "storage": self._storage(),
                 "motivator": self._motivator_settings(),
                 "has_base": self._map() is not None,
-                "modules": modules,
             }
         )
+        return web.Response(
+            text=f'{body[:-1]}, "modules": [{", ".join(modules)}]}}', content_type="application/json"
+        )
+
+    def _states_json(self, module: str, states: list[str]) -> str:
+        text = self._states_text.get(module)
+        if text is None:
+            text = self._states_text[module] = json.dumps(states)
+        return text
 
     async def map_info(self, request: web.Request) -> web.Response:
         occupancy = self._map()
