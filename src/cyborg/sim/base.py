@@ -144,7 +144,7 @@ class SimulatedBase:
         self._failure = ""
         self._motion: asyncio.Task[bool] | None = None
         self._goal: _MoveHandle | None = None
-        self._published: tuple[float, float, float] | None = None
+        self._unpublished = False  # a step was made since the last pose message (virtual_pose_rate)
         self._pose_pub = node.publisher(topics.AMCL_POSE, PoseWithCovarianceStamped, latch=True)
         self._state_pub = node.publisher(topics.ARNL_PATH_STATE, String, latch=True)
         node.action_server(topics.MOVE_BASE, MoveBaseAction, self._on_goal, self._on_cancel)
@@ -173,7 +173,7 @@ class SimulatedBase:
     # --- outputs ----------------------------------------------------------------------
 
     def _publish_pose(self) -> None:
-        self._published = (self.x, self.y, self.theta)
+        self._unpublished = False
         stamped = pose_stamped(self.x, self.y, self.theta, self.node.clock.now())
         self._pose_pub.publish(PoseWithCovarianceStamped(stamped.header, PoseWithCovariance(stamped.pose)))
 
@@ -187,8 +187,8 @@ class SimulatedBase:
     def _halt(self) -> None:
         if self._motion is not None and not self._motion.done():
             self._motion.cancel()
-            if self._published != (self.x, self.y, self.theta):
-                self._publish_pose()  # where it stops, also when that step was not published
+            if self._unpublished:
+                self._publish_pose()  # where it stops, when that step was not published
         self._motion = None
         self.route = None
         self.wandering = False
@@ -237,6 +237,7 @@ class SimulatedBase:
             self.distance_travelled += length * (fraction - done)
             done = fraction
             unpublished += 1
+            self._unpublished = True
             if unpublished == self.steps_per_message or done >= 1.0:
                 unpublished = 0
                 self._publish_pose()
