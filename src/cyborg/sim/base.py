@@ -145,6 +145,7 @@ class SimulatedBase:
         self._motion: asyncio.Task[bool] | None = None
         self._goal: _MoveHandle | None = None
         self._unpublished = False  # a step was made since the last pose message (virtual_pose_rate)
+        self._heading = (math.nan, Quaternion())  # the last heading published, and its quaternion
         self._pose_pub = node.publisher(topics.AMCL_POSE, PoseWithCovarianceStamped, latch=True)
         self._state_pub = node.publisher(topics.ARNL_PATH_STATE, String, latch=True)
         node.action_server(topics.MOVE_BASE, MoveBaseAction, self._on_goal, self._on_cancel)
@@ -174,8 +175,11 @@ class SimulatedBase:
 
     def _publish_pose(self) -> None:
         self._unpublished = False
-        stamped = pose_stamped(self.x, self.y, self.theta, self.node.clock.now())
-        self._pose_pub.publish(PoseWithCovarianceStamped(stamped.header, PoseWithCovariance(stamped.pose)))
+        if self._heading[0] != self.theta:  # messages are frozen: one orientation serves a whole leg
+            self._heading = (self.theta, yaw_to_quaternion(self.theta))
+        pose = Pose(PointMsg(self.x, self.y, 0.0), self._heading[1])
+        header = Header(stamp=self.node.clock.now(), frame_id=MAP_FRAME)
+        self._pose_pub.publish(PoseWithCovarianceStamped(header, PoseWithCovariance(pose)))
 
     def _set_state(self, state: PathState) -> None:
         if state is not self.path_state:
