@@ -102,7 +102,17 @@ class RoutePlanner:
         """True when the robot can drive straight from ``start`` to ``end`` (metres)."""
         if not (self.map.contains(*start) and self.map.contains(*end)):
             return False
-        rows, cols = segment_cells(self.map.grid_coordinates(start), self.map.grid_coordinates(end))
+        (c0, r0), (c1, r1) = self.map.grid_coordinates(start), self.map.grid_coordinates(end)
+        # The cell of the middle is one of the segment's cells: blocked there is blocked, without
+        # the cut points (half of the checks while pulling a route taut end here).
+        row, col = math.floor((r0 + r1) / 2), math.floor((c0 + c1) / 2)
+        if (
+            0 <= row < self.inflated.shape[0]
+            and 0 <= col < self.inflated.shape[1]
+            and self.inflated[row, col]
+        ):
+            return False
+        rows, cols = segment_cells((c0, r0), (c1, r1))
         rows = np.clip(rows, 0, self.inflated.shape[0] - 1)  # a point on the map's outer edge
         cols = np.clip(cols, 0, self.inflated.shape[1] - 1)
         return not self.inflated[rows, cols].any()
