@@ -80,7 +80,8 @@ def test_the_drawing_has_the_ids_the_dashboard_reads(cyborg: MachineSpec) -> Non
     assert 'id="super:questions"' in svg and 'id="super:navigation"' in svg
     assert 'id="edge:idle:music_play"' in svg
     assert layout.edges["edge:conversation:follower_follow"][0] == ("conversation", "follower_follow")
-    assert ">follower_follow, joke_tell, selfie_take +2<" in svg  # five events on one arrow
+    assert ">5 events<" in svg  # five events on one arrow: counted, named in its tooltip
+    assert "follower_follow, joke_tell, selfie_take, simon_says_play, weather_tell" in svg
 
 
 def test_a_thousand_states_take_one_graphviz_run_per_depth() -> None:
@@ -109,3 +110,23 @@ def test_the_cache_key_follows_what_is_drawn(cyborg: MachineSpec) -> None:
     assert machine_key(machine_spec(structured(50, seed=1))) != machine_key(
         machine_spec(structured(50, seed=2))
     )
+
+
+def test_the_shipped_machine_is_drawn_about_as_wide_as_the_dashboard_panel(cyborg: MachineSpec) -> None:
+    """At 1280x800 the graph panel is about 786x274 px; one long line of events per arrow made the
+    drawing 2799x523 pt (5.4:1), its names 5 px high. Now each direction is tried per block, arrows
+    list at most two events, and the five questions (no arrows among them) sit in a grid."""
+    svg = draw(lay_out(cyborg)).decode()
+    found = re.search(r'<svg width="([\d.]+)pt" height="([\d.]+)pt"', svg)
+    assert found is not None
+    width, height = float(found.group(1)), float(found.group(2))
+    assert width / height < 3.6, f"{width:.0f}x{height:.0f} pt: too wide for the panel"
+    scale = min(786 / width, 274 / height)  # px per pt, fitted to the panel
+    assert 16 * scale >= 9, f"state names {16 * scale:.1f} px at 1280x800"
+    questions = [
+        tuple(float(v) for v in pos.split(","))
+        for pos in re.findall(
+            r'"(?:joke|weather|selfie|follower|simon_says)" \[pos="([^"]+)"', lay_out(cyborg).source
+        )
+    ]
+    assert len({x for x, _ in questions}) >= 2 and len({y for _, y in questions}) >= 2, "a grid"

@@ -55,6 +55,45 @@ def shown(page: Page, element_id: str) -> bool:
     return visible
 
 
+def state_name_heights(page: Page) -> dict[str, float]:
+    """The rendered height (px) of each state's name in the graph, as drawn now."""
+    heights: dict[str, float] = page.evaluate(
+        """() => Object.fromEntries([...document.querySelectorAll('#graph g.node[id^="state:"]')].map(
+             n => [n.id.slice(6), n.querySelector('text').getBoundingClientRect().height]))"""
+    )
+    return heights
+
+
+@pytest.mark.parametrize("size", [SMALL, (1400, 900)], ids=["1280x800", "1400x900"])
+def test_seventeen_states_are_readable_at_first_view(
+    browser: Browser,  # noqa: F811
+    sim: str,  # noqa: F811
+    size: tuple[int, int],
+) -> None:
+    """The shipped machine opens whole, fitted to the panel, its state names at least 10 px high
+    (5 px when the drawing was 5.4 times as wide as high) and its event labels about 6 px (1280x800) and 8 px (1400x900), 4 px before."""
+    errors: list[str] = []
+    page = open_page(browser, sim + "/", errors, size=size)
+    try:
+        expect(page.locator("#graph svg")).to_be_visible()
+        expect(page.locator("#conn")).to_have_attribute("data-state", "open")
+        graph = box_of(page, "#graph")
+        heights = state_name_heights(page)
+        assert len(heights) == 11, sorted(heights)
+        small = {name: round(h, 1) for name, h in heights.items() if h < 10}
+        assert not small, f"state names under 10 px at {size[0]}x{size[1]}: {small}"
+        for name in heights:  # the whole machine is in view
+            assert inside(box_of(page, f'[id="state:{name}"]'), graph), f"{name} is outside the panel"
+        events: list[float] = page.evaluate(
+            "() => [...document.querySelectorAll('#graph g.edge text')].map(t => t.getBoundingClientRect().height)"
+        )
+        assert events and min(events) >= 5.5, f"event labels {min(events):.1f} px high (4 px before)"
+        page.screenshot(path=str(SHOTS / f"cyborg-dashboard-big-17-first-{size[0]}x{size[1]}.png"))
+    finally:
+        page.context.close()
+    assert not errors, "the page logged errors:\n" + "\n".join(errors)
+
+
 def test_seventeen_states_collapse_expand_and_search(browser: Browser, sim: str) -> None:  # noqa: F811
     errors: list[str] = []
     page = open_page(browser, sim + "/", errors, size=SMALL)

@@ -19,6 +19,7 @@ import aiohttp
 import pytest
 
 from cyborg.app.config import load_config
+from cyborg.controller.layout import DIRECTIONS
 from cyborg.interfaces import api as api_module
 from cyborg.interfaces.api import RobotAPI
 from cyborg.transport.clock import RealClock
@@ -107,10 +108,13 @@ def test_many_requests_share_one_layout_run_under_a_memory_cap(tmp_path: Path, f
 
         answers = await asyncio.gather(*(graph() for _ in range(8)))  # eight dashboards open at once
         answers.append(await graph())  # and one later
-        assert len(runs(fake_dot)) == 1, f"{len(runs(fake_dot))} dot runs for one flat machine"
+        # one layout: a flat machine is one block, laid out in each direction by its own dot
+        assert len(runs(fake_dot)) == len(DIRECTIONS), f"{len(runs(fake_dot))} dot runs for one flat machine"
         assert {a[:2] for a in answers} == {(200, "graphviz")} and len({a[2] for a in answers}) == 1
         assert 'id="state:s3"' in answers[0][2].decode()
-        assert runs(fake_dot)[0][1] == api_module.GRAPH_MEMORY, "its address space is capped"
+        assert {limit for _, limit in runs(fake_dot)} == {api_module.GRAPH_MEMORY}, (
+            "their address space is capped"
+        )
 
     serve(tmp_path, 5, check)
 
@@ -127,8 +131,9 @@ def test_a_layout_past_the_time_cap_is_stopped_and_the_machine_listed(
             assert response.status == 200 and response.headers["X-Graph-Layout"] == "list"
         assert "longer than 1 s (the limit)" in svg and "cyborg graph FILE -o machine.svg" in svg
         assert svg.count('class="node"') == 5 and 'id="state:s3"' in svg and "next \u2192 s4" in svg
-        [(pid, _)] = runs(fake_dot)
-        assert not alive(pid), "the layout that ran too long was stopped"
+        pids = [pid for pid, _ in runs(fake_dot)]
+        assert len(pids) == len(DIRECTIONS)
+        assert not any(alive(pid) for pid in pids), "the layout that ran too long was stopped"
 
     serve(tmp_path, 5, check)
 
@@ -142,18 +147,18 @@ def test_stopping_the_robot_stops_a_layout_in_progress(
     async def check(api: RobotAPI, url: str, session: aiohttp.ClientSession) -> None:
         request = asyncio.ensure_future(session.get(url + "/api/graph.svg"))
         for _ in range(200):
-            if runs(fake_dot):
+            if len(runs(fake_dot)) == len(DIRECTIONS):
                 break
             await asyncio.sleep(0.05)
         started.extend(pid for pid, _ in runs(fake_dot))
-        assert len(started) == 1, "the layout is running"
+        assert len(started) == len(DIRECTIONS), "the layout is running, one dot per direction"
         request.cancel()
 
     serve(tmp_path, 5, check)  # leaving serve() stops the API
     deadline = time.monotonic() + 10
-    while alive(started[0]) and time.monotonic() < deadline:
+    while any(alive(pid) for pid in started) and time.monotonic() < deadline:
         time.sleep(0.05)
-    assert not alive(started[0]), "Graphviz was left running after the robot stopped"
+    assert not any(alive(pid) for pid in started), "Graphviz was left running after the robot stopped"
 
 
 def test_a_huge_machine_is_listed_without_running_graphviz(

@@ -6,7 +6,8 @@ a box whose inside does not depend on the outside, so here each superstate's con
 on their own (a *block*: its substates, superstates inside it as boxes of the size their own block
 needs) and the blocks are put together: the innermost first, all blocks of one depth in one ``dot``
 run. A transition is drawn in the innermost block that holds both of its ends, between the boxes
-that hold them; transitions between the same two boxes share one arrow and list their events.
+that hold them; transitions between the same two boxes share one arrow, labelled with up to two
+events (one a line) or how many. Each block is laid out in both directions and the better fit kept.
 The drawing is handed to Graphviz once more with every position fixed (``neato -n2``), so the
 output is Graphviz's own (SVG, PNG or PDF) with the ids the dashboard reads: ``state:<leaf>``,
 ``super:<superstate>`` and, per arrow, ``edge:<state>:<event>`` of the first transition it shows.
@@ -20,11 +21,13 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+import math
 import resource
 import shutil
 import subprocess
 import time
 from collections.abc import Callable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -48,14 +51,31 @@ START = "__start"
 PAD = 10.0  # points between a superstate's border and its contents
 LABEL = 24.0  # points of a superstate's title line
 CHAR = 8.0  # points per character of a superstate's title, for its width
-MAX_LABEL_EVENTS = 3  # an arrow lists this many events, then "+N"
+# An arrow's label lists up to this many events, one a line; with more it counts them ("5 events"),
+# all of them in its tooltip. One long line of events made the shipped machine's drawing five times
+# as wide as high and its names unreadable at first view (docs/benchmarks.md).
+MAX_LABEL_EVENTS = 2
 # A block with more arrows than this (per state in it) is dense: only each state's first arrow
 # places the states, and the others are drawn straight and unlabelled (their events in a tooltip).
 DENSE_PER_STATE = 2.0
-# Per block: an LR layered layout; crossing minimisation and network simplex bounded, so a dense
-# block cannot take minutes (measured in docs/benchmarks.md, "The dashboard for a robot that grows").
-DOT_ARGS = ["-Grankdir=LR", "-Gmclimit=0.5", "-Gnslimit=5", "-Gnslimit1=5", "-Gsearchsize=30"]
-NODE_STYLE = 'shape=box style="rounded,filled" fillcolor="#f4f4f4" fontname=Helvetica'
+# Per block: a layered layout, crossing minimisation and network simplex bounded, so a dense
+# block cannot take minutes (measured in docs/benchmarks.md, "The dashboard for a robot that grows");
+# states and ranks closer than dot's defaults (0.25 and 0.5 inches).
+DOT_ARGS = [
+    "-Gmclimit=0.5",
+    "-Gnslimit=5",
+    "-Gnslimit1=5",
+    "-Gsearchsize=30",
+    "-Gnodesep=0.15",
+    "-Granksep=0.3",
+]
+# Each block is laid out left to right and top to bottom (two dot processes side by side) and the one kept
+# that fits its place best: the whole machine the dashboard's graph panel, about ASPECT times as
+# wide as high (1280x800 and 1400x900 windows), a superstate's box a square (see ``choose``).
+DIRECTIONS = ("LR", "TB")
+ASPECT = 2.7
+# State names a little larger than Graphviz's 14 points (events are 10): they are what one reads first.
+NODE_STYLE = 'shape=box style="rounded,filled" fillcolor="#f4f4f4" fontname=Helvetica fontsize=16'
 
 
 @dataclass
@@ -123,10 +143,15 @@ def _quote(text: str) -> str:
     return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
 
 
-def _arrow_label(pairs: list[tuple[str, str]]) -> str:
+def _arrow_label(pairs: list[tuple[str, str]]) -> list[str]:
+    """The lines of an arrow's label: its events, or how many there are."""
     events = sorted({event for _, event in pairs})
-    shown = ", ".join(events[:MAX_LABEL_EVENTS])
-    return shown + (f" +{len(events) - MAX_LABEL_EVENTS}" if len(events) > MAX_LABEL_EVENTS else "")
+    return events if len(events) <= MAX_LABEL_EVENTS else [f"{len(events)} events"]
+
+
+def _label(lines: list[str]) -> str:
+    """A Graphviz label of ``lines``, each centred."""
+    return '"' + "\\n".join(line.replace("\\", "\\\\").replace('"', '\\"') for line in lines) + '"'
 
 
 def _arrow_id(tail: str, head: str, pairs: list[tuple[str, str]]) -> str:
@@ -136,11 +161,14 @@ def _arrow_id(tail: str, head: str, pairs: list[tuple[str, str]]) -> str:
     return f"edge:{state}:{event}"
 
 
-def block_source(block: Block, machine: MachineSpec, sizes: dict[str, tuple[float, float]]) -> str:
-    """The ``dot`` input of one block; ``sizes`` gives the width and height (points) of each
-    superstate in it (from its own block)."""
+def block_source(
+    block: Block, machine: MachineSpec, sizes: dict[str, tuple[float, float]], rankdir: str = "LR"
+) -> str:
+    """The ``dot`` input of one block, its ranks in direction ``rankdir``; ``sizes`` gives the
+    width and height (points) of each superstate in it (from its own block)."""
     lines = [
         f"digraph {_quote('block:' + block.owner)} {{",
+        f"rankdir={rankdir};",
         f"node [{NODE_STYLE}];",
         "edge [fontname=Helvetica fontsize=10];",
     ]
@@ -154,12 +182,27 @@ def block_source(block: Block, machine: MachineSpec, sizes: dict[str, tuple[floa
             lines.append(
                 f'{_quote(name)} [shape=box fixedsize=true label="" width={width / 72:.3f} height={height / 72:.3f}];'
             )
-    for (tail, head), pairs in placing_arrows(block).items():
+    placing = placing_arrows(block)
+    for (tail, head), pairs in placing.items():
         label = _arrow_label(pairs)
-        attrs = f"id={_quote(_arrow_id(tail, head, pairs))}" + (f" label={_quote(label)}" if label else "")
+        attrs = f"id={_quote(_arrow_id(tail, head, pairs))}" + (f" label={_label(label)}" if label else "")
         lines.append(f"{_quote(tail)} -> {_quote(head)} [{attrs}];")
+    for tail, head in grid_links(block, placing):
+        lines.append(f"{_quote(tail)} -> {_quote(head)} [style=invis];")
     lines.append("}")
     return "\n".join(lines) + "\n"
+
+
+def grid_links(block: Block, placing: dict[tuple[str, str], list[tuple[str, str]]]) -> list[tuple[str, str]]:
+    """Invisible links that put the states of ``block`` without an arrow among them in a grid
+    (lines of about the square root of their number, rows or columns by the direction) instead of
+    one long line: the five questions of the shipped machine each have only the superstate's arrows."""
+    linked = {end for arrow in placing for end in arrow}
+    alone = [name for name in block.members if name != START and name not in linked]
+    if len(alone) < 3:
+        return []
+    row = math.ceil(math.sqrt(len(alone)))
+    return [(alone[i - 1], alone[i]) for i in range(1, len(alone)) if i % row]
 
 
 def is_dense(block: Block) -> bool:
@@ -232,6 +275,21 @@ def _shift(points: str, dx: float, dy: float) -> str:
     return " ".join(out)
 
 
+def choose(owner: str, options: list[_Laid]) -> _Laid:
+    """Of one block's layouts (one per direction), the one that fits its place best: for the top
+    level the one shown biggest in a panel ``ASPECT`` times as wide as high, for a superstate the
+    one whose box is the most nearly square (it is one box among others in the block around it,
+    and what the dashboard zooms to when it opens the superstate)."""
+    if owner == ROOT:
+        return max(options, key=lambda laid: min(ASPECT / max(laid.width, 1.0), 1 / max(laid.height, 1.0)))
+
+    def elongation(laid: _Laid) -> float:
+        width, height = box_size(laid.width, laid.height, owner)
+        return max(width / height, height / width)
+
+    return min(options, key=elongation)
+
+
 def box_size(laid_width: float, laid_height: float, title: str) -> tuple[float, float]:
     """The box (points) a superstate needs around its laid out contents and its title."""
     return max(laid_width + 2 * PAD, len(title) * CHAR + 2 * PAD), laid_height + 2 * PAD + LABEL
@@ -281,12 +339,14 @@ def compose(
             out.append(f"{indent}}}")
         placed = set()
         for tail, head, arrow_id, pos, lp in block.edges:
+            if not arrow_id:  # a grid link (see grid_links), not drawn
+                continue
             placed.add((tail, head))
             pairs = arrows[owner].get((tail, head), [])
             attrs = [f"id={_quote(arrow_id)}", f'pos="{_shift(pos, dx, dy)}"']
             label = _arrow_label(pairs)
             if label:
-                attrs.append(f"label={_quote(label)}")
+                attrs.append(f"label={_label(label)}")
                 if lp:
                     attrs.append(f'lp="{_shift(lp, dx, dy)}"')
             edge_lines.append(_edge_line(tail, head, pairs, attrs, edges))
@@ -412,9 +472,11 @@ def run_graphviz(
 
 
 def lay_out(machine: MachineSpec, run: Runner | None = None, *, timeout: float | None = None) -> Layout:
-    """Lay ``machine`` out: one ``dot`` run per depth of superstates, innermost first.
+    """Lay ``machine`` out: one ``dot`` run per depth of superstates, innermost first, each block
+    in both directions (two ``dot`` processes side by side; see :func:`choose`).
 
-    ``run(args, input, timeout)`` runs a Graphviz program (default :func:`run_graphviz`);
+    ``run(args, input, timeout)`` runs a Graphviz program (default :func:`run_graphviz`; it is
+    called from two threads at once);
     ``timeout`` bounds each run and the layout as a whole (checked between runs).
     """
     runner: Runner = run or (lambda args, data, left: run_graphviz(args, data, left))
@@ -425,21 +487,27 @@ def lay_out(machine: MachineSpec, run: Runner | None = None, *, timeout: float |
     runs = 0
     for depth in sorted({block.depth for block in blocks.values()}, reverse=True):
         level = [block for block in blocks.values() if block.depth == depth]
-        source = "".join(block_source(block, machine, sizes) for block in level)
-        output = runner(["dot", "-Tjson0", *DOT_ARGS], source.encode(), timeout).decode()
+        sources = ["".join(block_source(block, machine, sizes, way) for block in level) for way in DIRECTIONS]
+        with ThreadPoolExecutor(len(DIRECTIONS)) as pool:  # one dot per direction, side by side
+            outputs = list(
+                pool.map(
+                    lambda source: runner(["dot", "-Tjson0", *DOT_ARGS], source.encode(), timeout), sources
+                )
+            )
         runs += 1
         if timeout is not None and time.perf_counter() - began > timeout:
             raise CyborgError(
                 f"Graphviz took longer than {timeout:g} s (the limit) to lay out this machine; "
                 "fix: draw it offline with `cyborg graph FILE -o machine.svg`, or group states in superstates"
             )
-        graphs = list(parse_json_graphs(output))
-        if len(graphs) != len(level):
+        ways = [list(parse_json_graphs(output.decode())) for output in outputs]
+        if any(len(graphs) != len(level) for graphs in ways):
             raise CyborgError(
-                f"Graphviz laid out {len(graphs)} of {len(level)} superstates; fix: report this"
+                f"Graphviz laid out {[len(graphs) for graphs in ways]} of {len(level)} superstates "
+                f"(directions {', '.join(DIRECTIONS)}); fix: report this"
             )
-        for block, graph in zip(level, graphs, strict=True):
-            laid[block.owner] = _laid(graph)
+        for index, block in enumerate(level):
+            laid[block.owner] = choose(block.owner, [_laid(graphs[index]) for graphs in ways])
             if block.owner != ROOT:
                 sizes[block.owner] = box_size(laid[block.owner].width, laid[block.owner].height, block.owner)
     source, edges = compose(machine, blocks, laid)

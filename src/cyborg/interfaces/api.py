@@ -71,7 +71,7 @@ class RobotAPI:
             else None
         )  # to refuse a name the emotion system does not know, as it would only log a warning
         self._graph: asyncio.Future[tuple[bytes, str, dict[str, Any]]] | None = None  # shared by all requests
-        self._dot: subprocess.Popen[bytes] | None = None
+        self._dots: list[subprocess.Popen[bytes]] = []  # Graphviz laying the machine out now
         self.guard = Guard(access or Access())
         self.extra_status = extra_status
         self.records: deque[Record] = deque(maxlen=RECORD_BUFFER)
@@ -314,7 +314,7 @@ class RobotAPI:
             return list_svg(machine, note), "list", {"edges": {}}
 
         def started(process: subprocess.Popen[bytes]) -> None:
-            self._dot = process
+            self._dots.append(process)
 
         def run(args: list[str], data: bytes, left: float | None) -> bytes:
             return run_graphviz(args, data, left, memory=GRAPH_MEMORY, started=started)
@@ -331,7 +331,7 @@ class RobotAPI:
             log.warning("the dashboard shows the state machine as a list: %s", exc)
             return list_svg(machine, f"Shown as a list: {exc}"), "list", {"edges": {}}
         finally:
-            self._dot = None
+            self._dots.clear()
         if len(_DRAWINGS) >= 4:
             _DRAWINGS.clear()
         _DRAWINGS[key] = (svg, "graphviz", info)
@@ -398,9 +398,9 @@ class RobotAPI:
         return self.guard.public_url
 
     async def stop(self) -> None:
-        dot = self._dot
-        if dot is not None and dot.poll() is None:
-            dot.kill()  # a layout still running is of no use once the robot stops
+        for dot in list(self._dots):
+            if dot.poll() is None:
+                dot.kill()  # a layout still running is of no use once the robot stops
         for socket in list(self._sockets):
             await socket.close(code=WSCloseCode.GOING_AWAY, message=b"the robot stopped")
         if self._server is not None:
