@@ -22,6 +22,7 @@ BUILT_IN = [
     "placeholder",
     "question",
     "simulated_base",
+    "speech_input",
     "tts",
 ]
 

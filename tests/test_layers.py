@@ -25,7 +25,7 @@ LAYERS: list[set[str]] = [
     {"emotion"},
     {"motivator"},
     {"modules"},
-    {"navigation"},
+    {"navigation", "hearing"},
     {"app"},
     {"sim", "testing"},
     {"interfaces"},

@@ -1,0 +1,15 @@
+"""The robot's ears: offline speech recognition that publishes what it hears on ``/text_from_speech``.
+
+:mod:`~cyborg.hearing.grammar` builds what the robot can hear from what it understands (pure),
+:mod:`~cyborg.hearing.recogniser` decodes with pocketsphinx and rejects speech outside the
+grammar, :mod:`~cyborg.hearing.audio` reads WAV files and the microphone, and
+:mod:`~cyborg.hearing.module` is the ``speech_input`` module kind.
+"""
+
+from cyborg.errors import CyborgError
+
+__all__ = ["HearingError"]
+
+
+class HearingError(CyborgError):
+    """Speech input cannot work: no audio library, no microphone, or an unreadable recording."""

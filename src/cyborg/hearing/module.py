@@ -1,0 +1,200 @@
+"""The ``speech_input`` module kind: the robot hears speech and publishes it on ``/text_from_speech``.
+
+It listens to the microphone (``source: microphone``) or to audio handed to it
+(:meth:`SpeechInput.hear`: a WAV file's samples or a stream of chunks), cuts the audio into
+utterances where the speaker pauses, decodes each against the grammar of what the robot
+understands and publishes the accepted text exactly as typed text is published. Every
+utterance, rejected ones too, goes to ``/cyborg_speech/heard`` as JSON (text, confidence,
+accepted) for the dashboard. The grammar holds the navigation database's places and aliases
+(read again every ``reload_interval`` seconds, so a place added with ``cyborg db`` is heard),
+the navigation module's request phrases and answers, the conversation module's greetings and
+the ``phrases`` of the settings.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+import time
+from collections import deque
+from pathlib import Path
+
+from pydantic import Field
+
+from cyborg.hearing.grammar import Grammar, PlaceWords, build_grammar
+from cyborg.hearing.recogniser import DEFAULT_MIN_CONFIDENCE, Heard, Recogniser, Utterances
+from cyborg.modules.conversation import ConversationSettings
+from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
+from cyborg.navigation.database import NavigationDatabase
+from cyborg.navigation.keywords import NO_PHRASES, TRIGGERS, YES_PHRASES
+from cyborg.transport import topics
+from cyborg.transport.base import Node
+from cyborg.transport.messages import String
+
+__all__ = ["HEARD_TOPIC", "KIND", "SpeechInput", "SpeechInputSettings", "grammar_of"]
+
+log = logging.getLogger(__name__)
+
+HEARD_TOPIC = "/cyborg_speech/heard"
+HEARD_KEPT = 200
+
+
+def understood_phrases(extra: tuple[str, ...] = ()) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """(phrases that take a place, phrases on their own) the robot's modules listen for."""
+    place_phrases = tuple(p for phrases in TRIGGERS.values() for p in phrases)
+    alone = (*ConversationSettings.model_validate({}).listens_for(), *YES_PHRASES, *NO_PHRASES, *extra)
+    return place_phrases, alone
+
+
+def grammar_of(places: list[PlaceWords], recogniser: Recogniser, extra: tuple[str, ...] = ()) -> Grammar:
+    """The grammar of ``places`` and of what the modules listen for, in ``recogniser``'s words."""
+    place_phrases, alone = understood_phrases(extra)
+    return build_grammar(places, place_phrases, alone, recogniser.known_word)
+
+
+class SpeechInput:
+    """Hears utterances and publishes what it believes on ``/text_from_speech``."""
+
+    def __init__(
+        self,
+        node: Node,
+        places: NavigationDatabase | None,
+        *,
+        recogniser: Recogniser | None = None,
+        phrases: tuple[str, ...] = (),
+        reload_interval: float = 10.0,
+        microphone: bool = False,
+        device: str | None = None,
+    ) -> None:
+        self.node = node
+        self.places = places
+        self.recogniser = recogniser or Recogniser()
+        self.extra_phrases = phrases
+        self.heard: deque[Heard] = deque(maxlen=HEARD_KEPT)
+        self.latencies: deque[float] = deque(maxlen=HEARD_KEPT)
+        """Seconds from the end of each utterance to its text on the topic (wall clock)."""
+        self._text = node.publisher(topics.TEXT_FROM_SPEECH, String)
+        self._records = node.publisher(HEARD_TOPIC, String)
+        self._utterances = Utterances()
+        self._known: list[PlaceWords] | None = None
+        self.reload()
+        self._reload = node.clock.every(
+            reload_interval, self.reload, name="speech grammar reload", logger=log
+        )
+        self._queue: asyncio.Queue[bytes] = asyncio.Queue()
+        self._task = node.clock.loop.create_task(self._consume(), name="speech input")
+        self._microphone = None
+        if microphone:
+            from cyborg.hearing.audio import Microphone
+
+            loop = node.clock.loop
+
+            def from_microphone(chunk: bytes) -> None:
+                loop.call_soon_threadsafe(self._queue.put_nowait, chunk)
+
+            self._microphone = Microphone(from_microphone, device=device)
+            log.info("listening to the microphone %s", self._microphone.name)
+
+    def reload(self) -> None:
+        """Read the places again and rebuild the grammar if they changed."""
+        places = (
+            [PlaceWords(p.name, tuple(p.aliases)) for p in self.places.list_locations()]
+            if self.places is not None
+            else []
+        )
+        if places != self._known:
+            self._known = places
+            grammar = grammar_of(places, self.recogniser, self.extra_phrases)
+            self.recogniser.use(grammar)
+            if grammar.unsayable:
+                log.info("cannot hear (words not in the dictionary): %s", ", ".join(grammar.unsayable))
+            log.info("listening for %d places and %d phrases", len(places), len(grammar.phrases))
+
+    def hear(self, audio: bytes) -> None:
+        """Hand 16 kHz 16-bit mono audio over (a chunk of a stream; see :meth:`end_of_stream`)."""
+        self._queue.put_nowait(audio)
+
+    def end_of_stream(self) -> None:
+        """The audio handed over so far is complete: decode what is still open."""
+        self._queue.put_nowait(b"")
+
+    async def listen_to(self, audio: bytes) -> list[Heard]:
+        """Decode a whole recording and publish what it holds; returns what was heard."""
+        found = [
+            self._publish(await self._decode(u), time.perf_counter()) for u in self._utterances.feed(audio)
+        ]
+        found += [
+            self._publish(await self._decode(u), time.perf_counter()) for u in self._utterances.finish()
+        ]
+        return found
+
+    async def _consume(self) -> None:
+        while True:
+            chunk = await self._queue.get()
+            utterances = list(self._utterances.finish() if not chunk else self._utterances.feed(chunk))
+            for utterance in utterances:
+                ended = time.perf_counter()
+                self._publish(await self._decode(utterance), ended)
+
+    async def _decode(self, utterance: bytes) -> Heard:
+        return await asyncio.get_running_loop().run_in_executor(None, self.recogniser.decode, utterance)
+
+    def _publish(self, heard: Heard, ended: float) -> Heard:
+        self.heard.append(heard)
+        if heard.accepted:
+            log.info("heard: %s (confidence %.2f)", heard.text, heard.confidence)
+            self._text.publish(String(data=heard.text))
+        self._records.publish(String(data=json.dumps(heard.as_json())))
+        self.latencies.append(time.perf_counter() - ended)
+        return heard
+
+    def close(self) -> None:
+        """Stop listening: the microphone, the grammar reload and the decoding task."""
+        if self._microphone is not None:
+            self._microphone.close()
+        self._reload.cancel()
+        self._task.cancel()
+        if self.places is not None:
+            self.places.close()
+
+
+class SpeechInputSettings(ModuleSettings):
+    """Speech input: hears speech offline (pocketsphinx) and publishes it on /text_from_speech."""
+
+    source: str = Field(
+        "none",
+        pattern="^(microphone|none)$",
+        description="'microphone' listens to the audio device; 'none' hears only audio handed to it",
+    )
+    device: str | None = Field(None, description="input device name or number (default: the system's)")
+    db: str | None = Field(
+        None, description="navigation database with the places (default: <data dir>/navigation.db)"
+    )
+    min_confidence: float = Field(
+        DEFAULT_MIN_CONFIDENCE, ge=0, le=1, description="lowest confidence (0-1) of a sentence it passes on"
+    )
+    phrases: tuple[str, ...] = Field(
+        (), description="more phrases to hear, besides what the modules listen for"
+    )
+    reload_interval: float = Field(10.0, gt=0, description="seconds between looks at the places")
+
+
+def _build(node: Node, settings: SpeechInputSettings, context: BuildContext) -> SpeechInput:
+    db = NavigationDatabase(Path(settings.db) if settings.db else context.data_dir / "navigation.db")
+    try:
+        return SpeechInput(
+            node,
+            db,
+            recogniser=Recogniser(min_confidence=settings.min_confidence),
+            phrases=settings.phrases,
+            reload_interval=settings.reload_interval,
+            microphone=settings.source == "microphone",
+            device=settings.device,
+        )
+    except BaseException:
+        db.close()
+        raise
+
+
+KIND = ModuleKind(SpeechInputSettings, _build)

@@ -1,0 +1,51 @@
+"""A full voice loop: the robot hears a synthesised "where is the cafeteria", offers to show the way
+(its text-to-speech WAV, heard back), hears "yes" and drives to the cafeteria."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from cyborg.hearing.audio import read_wav
+from cyborg.hearing.grammar import build_grammar
+from cyborg.hearing.module import SpeechInput
+from cyborg.hearing.recogniser import Recogniser
+from cyborg.hearing.synth import VOICES, as_heard, synthesise
+from cyborg.modules.speech import TextToSpeech
+from cyborg.navigation.database import NavigationDatabase
+from cyborg.transport.clock import VirtualClock
+from navigation.test_module import OFFER, Cyborg  # the default robot and a user, as in the navigation tests
+
+
+def test_where_is_the_cafeteria_then_yes_drives_there(tmp_path: Path) -> None:
+    clock = VirtualClock(speed=10.0)  # time runs while espeak-ng writes and pocketsphinx decodes
+    cyborg = Cyborg(clock, tmp_path / "data")
+    tts = cyborg.robot.components["cyborg_tts"]
+    assert isinstance(tts, TextToSpeech) and tts.espeak, (
+        "espeak-ng must be installed (scripts/install-system-deps)"
+    )
+    tts.wav_dir = tmp_path / "said"
+    tts.wav_dir.mkdir()
+    ears = SpeechInput(cyborg.transport.node("cyborg_speech_input"), NavigationDatabase(cyborg.nav.db.path))
+    person = Recogniser(min_confidence=0.0)  # a person who knows what the robot may offer
+    person.use(build_grammar([], [], [OFFER, "all right maybe another time"], person.known_word))
+
+    async def main() -> None:
+        await cyborg.settle()
+        [question] = await ears.listen_to(synthesise("where is the cafeteria", VOICES[3]))
+        assert question.accepted and question.text == "where is the cafeteria"
+        await cyborg.until(lambda: bool(list(tts.wav_dir.glob("*.wav"))), 30.0, "the offer's WAV")  # type: ignore[union-attr]
+        await clock.sleep(3.0)  # 0.3 s: espeak-ng finishes the file
+        [wav] = tts.wav_dir.glob("*.wav")  # type: ignore[union-attr]
+        offer = person.decode(as_heard(read_wav(wav)))
+        assert offer.text == "i think i know where that is would you like me to show you"
+        [answer] = await ears.listen_to(synthesise("yes", VOICES[0]))
+        assert answer.accepted and answer.text == "yes"
+        await cyborg.until(lambda: cyborg.at("cafeteria"), 300.0, "the robot at the cafeteria")
+
+    try:
+        clock.run(main())
+    finally:
+        ears.close()
+        cyborg.robot.close()
+        clock.close()
+    assert cyborg.sentences()[0] == OFFER
