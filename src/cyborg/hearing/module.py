@@ -37,7 +37,7 @@ __all__ = ["HEARD_TOPIC", "KIND", "SpeechInput", "SpeechInputSettings", "grammar
 log = logging.getLogger(__name__)
 
 HEARD_TOPIC = "/cyborg_speech/heard"
-HEARD_KEPT = 200
+HEARD_KEPT = 1000
 
 
 def understood_phrases(extra: tuple[str, ...] = ()) -> tuple[tuple[str, ...], tuple[str, ...]]:
@@ -95,6 +95,14 @@ class SpeechInput:
 
             self._microphone = Microphone(from_microphone, device=device)
             log.info("listening to the microphone %s", self._microphone.name)
+
+    def describe_source(self) -> str:
+        """Where it listens: the microphone's name, or audio handed to it."""
+        return (
+            f"the microphone {self._microphone.name}"
+            if self._microphone is not None
+            else "audio handed to it"
+        )
 
     def reload(self) -> None:
         """Read the places again and rebuild the grammar if they changed."""

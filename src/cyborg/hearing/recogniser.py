@@ -162,7 +162,7 @@ class Utterances:
     def finish(self) -> Iterator[bytes]:
         """Yield the utterance still open at the end of the stream, if any."""
         if self._endpointer.in_speech:
-            rest = self._endpointer.end_stream(self._pending[: self.frame_bytes])
+            rest = self._endpointer.end_stream((self._pending + bytes(self.frame_bytes))[: self.frame_bytes])
             if rest is not None:
                 self._speech.append(rest)
         self._pending = b""

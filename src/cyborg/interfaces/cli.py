@@ -63,6 +63,10 @@ class LazyGroup(click.Group):
             "cyborg.interfaces.db_cli:db_group",
             "Locations, calendar events and responses of the navigation module.",
         ),
+        "listen": (
+            "cyborg.interfaces.cli_listen:listen",
+            "Hear speech (offline) and print each sentence with its confidence; rejected ones are marked.",
+        ),
         "new": (
             "cyborg.interfaces.cli_new:new_group",
             "Start something new from a template: a behaviour module.",

@@ -1,0 +1,108 @@
+"""``cyborg listen``: hear the microphone or a WAV file, print what was heard, and send it to a running robot."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+from cyborg.errors import CyborgError
+from cyborg.interfaces.command_tool import RobotLink, ToolError, link_options
+
+__all__ = ["listen"]
+
+
+@click.command("listen")
+@click.option(
+    "--wav",
+    "wav",
+    type=click.Path(dir_okay=False, path_type=Path),
+    help="hear this WAV file instead of the microphone",
+)
+@click.option("--device", help="microphone name or number (default: the system's)")
+@click.option(
+    "--db",
+    type=click.Path(dir_okay=False, path_type=Path),
+    help="navigation database with the places (default: the robot's)",
+)
+@click.option(
+    "--min-confidence", type=click.FloatRange(0, 1), help="lowest confidence of a sentence it believes"
+)
+@click.option(
+    "--send/--no-send", default=True, show_default=True, help="send what it believes to the running robot"
+)
+@link_options
+def listen(
+    wav: Path | None,
+    device: str | None,
+    db: Path | None,
+    min_confidence: float | None,
+    send: bool,
+    link: RobotLink,
+) -> None:
+    """Hear speech (offline) and print each sentence with its confidence; rejected ones are marked.
+
+    With a running robot (cyborg sim, or --url / --ros) each believed sentence is sent to it as
+    if its own speech-to-text had heard it. Without --wav it listens to the microphone until Ctrl-C.
+    """
+    from cyborg.hearing.audio import read_wav
+    from cyborg.hearing.module import HEARD_TOPIC, SpeechInput
+    from cyborg.hearing.recogniser import DEFAULT_MIN_CONFIDENCE, Recogniser
+    from cyborg.hearing.synth import as_heard
+    from cyborg.navigation.database import NavigationDatabase
+    from cyborg.sim.runner import default_data_dir
+    from cyborg.transport.clock import RealClock
+    from cyborg.transport.embedded import EmbeddedTransport
+    from cyborg.transport.messages import String
+
+    sending = [send]
+
+    def show(message: String, info: object) -> None:
+        heard = json.loads(message.data)
+        mark = "" if heard["accepted"] else "  (rejected)"
+        click.echo(f"heard: {heard['text'] or '-'}  [confidence {heard['confidence']:.2f}]{mark}")
+        if heard["accepted"] and sending[0]:
+            try:
+                link.say(heard["text"])
+            except ToolError as exc:
+                sending[0] = False
+                click.echo(f"not sent: {exc.message}", err=True)
+
+    # quiet noise around a recording, as a microphone hears it: digital silence is no speech the model knows
+    audio = as_heard(read_wav(wav), noise=10.0, pad=0.5) if wav is not None else None
+    clock = RealClock()
+    transport = EmbeddedTransport(clock)
+    places = NavigationDatabase(db or default_data_dir() / "navigation.db")
+    try:
+        ears = SpeechInput(
+            transport.node("cyborg_listen"),
+            places,
+            recogniser=Recogniser(
+                min_confidence=DEFAULT_MIN_CONFIDENCE if min_confidence is None else min_confidence
+            ),
+            microphone=audio is None,
+            device=device,
+        )
+    except CyborgError:
+        places.close()
+        clock.close()
+        raise
+    transport.node("cyborg_listen_print").subscribe(HEARD_TOPIC, String, show)
+
+    async def hear_file(data: bytes) -> None:
+        await ears.listen_to(data)
+        await clock.sleep(0.05)
+
+    async def forever() -> None:
+        click.echo(f"listening to {ears.describe_source()} (Ctrl-C to stop)")
+        while True:
+            await clock.sleep(3600)
+
+    try:
+        clock.run(hear_file(audio) if audio is not None else forever())
+    except KeyboardInterrupt:
+        pass
+    finally:
+        ears.close()
+        clock.close()

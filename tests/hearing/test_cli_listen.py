@@ -1,0 +1,45 @@
+"""cyborg listen --wav prints what it hears with its confidence, and says when no robot takes it."""
+
+from __future__ import annotations
+
+import wave
+from pathlib import Path
+
+from click.testing import CliRunner
+
+from cyborg.hearing.synth import VOICES, synthesise
+from cyborg.interfaces.cli import cli
+
+
+def test_listen_to_a_wav_prints_the_sentence_and_that_no_robot_took_it(tmp_path: Path) -> None:
+    path = tmp_path / "question.wav"
+    with wave.open(str(path), "wb") as wav:
+        wav.setnchannels(1)
+        wav.setsampwidth(2)
+        wav.setframerate(16000)
+        wav.writeframes(synthesise("where is the cafeteria", VOICES[3]))
+    result = CliRunner().invoke(
+        cli,
+        [
+            "listen",
+            "--wav",
+            str(path),
+            "--db",
+            str(tmp_path / "nav.db"),
+            "--min-confidence",
+            "0",
+            "--url",
+            "http://127.0.0.1:9",
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    assert "heard: where is the cafeteria  [confidence" in result.output
+    assert "not sent: no robot answers at http://127.0.0.1:9" in result.output
+
+
+def test_listen_without_a_microphone_names_the_fix(tmp_path: Path) -> None:
+    result = CliRunner().invoke(
+        cli, ["listen", "--db", str(tmp_path / "nav.db"), "--device", "no such microphone"]
+    )
+    assert result.exit_code == 1
+    assert "no microphone to listen to" in result.output and "--wav FILE" in result.output
