@@ -36,7 +36,7 @@ __all__ = ["HEARD_TOPIC", "KIND", "SpeechInput", "SpeechInputSettings", "grammar
 
 log = logging.getLogger(__name__)
 
-HEARD_TOPIC = "/cyborg_speech/heard"
+HEARD_TOPIC = topics.SPEECH_HEARD
 HEARD_KEPT = 1000
 
 
@@ -78,14 +78,9 @@ class SpeechInput:
         self._records = node.publisher(HEARD_TOPIC, String)
         self._utterances = Utterances()
         self._known: list[PlaceWords] | None = None
-        self.reload()
-        self._reload = node.clock.every(
-            reload_interval, self.reload, name="speech grammar reload", logger=log
-        )
         self._queue: asyncio.Queue[bytes] = asyncio.Queue()
-        self._task = node.clock.loop.create_task(self._consume(), name="speech input")
         self._microphone = None
-        if microphone:
+        if microphone:  # first: without one, nothing else is started
             from cyborg.hearing.audio import Microphone
 
             loop = node.clock.loop
@@ -95,6 +90,11 @@ class SpeechInput:
 
             self._microphone = Microphone(from_microphone, device=device)
             log.info("listening to the microphone %s", self._microphone.name)
+        self.reload()
+        self._reload = node.clock.every(
+            reload_interval, self.reload, name="speech grammar reload", logger=log
+        )
+        self._task = node.clock.loop.create_task(self._consume(), name="speech input")
 
     def describe_source(self) -> str:
         """Where it listens: the microphone's name, or audio handed to it."""
@@ -129,12 +129,10 @@ class SpeechInput:
 
     async def listen_to(self, audio: bytes) -> list[Heard]:
         """Decode a whole recording and publish what it holds; returns what was heard."""
-        found = [
-            self._publish(await self._decode(u), time.perf_counter()) for u in self._utterances.feed(audio)
-        ]
-        found += [
-            self._publish(await self._decode(u), time.perf_counter()) for u in self._utterances.finish()
-        ]
+        found = []
+        for utterance in [*self._utterances.feed(audio), *self._utterances.finish()]:
+            ended = time.perf_counter()
+            found.append(self._publish(await self._decode(utterance), ended))
         return found
 
     async def _consume(self) -> None:

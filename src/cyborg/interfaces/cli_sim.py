@@ -70,6 +70,11 @@ if TYPE_CHECKING:
     is_flag=True,
     help="run every part as its own ROS 1 node (as `cyborg launch`); with --script, the script too",
 )
+@click.option(
+    "--mic",
+    is_flag=True,
+    help="the robot hears the machine's microphone (adds a speech_input module; offline, pocketsphinx)",
+)
 @access_options
 def sim(
     config_path: Path | None,
@@ -82,6 +87,7 @@ def sim(
     script_path: Path | None,
     transcript_path: Path | None,
     over_ros: bool,
+    mic: bool,
     access: Access,
 ) -> None:
     """Run the whole simulated robot in this process, with its API and dashboard.
@@ -91,6 +97,10 @@ def sim(
     """
     try:
         config = load_or_default(config_path)
+        if mic:
+            if over_ros or script_path is not None:
+                raise click.UsageError("--mic goes with the interactive sim, not with --ros or --script")
+            config.model.modules.setdefault(MIC_MODULE, {"kind": "speech_input", "source": "microphone"})
         check_modules(config)
         for warning in config.warnings:
             click.secho(f"warning: {warning}", fg="yellow", err=True)
@@ -127,6 +137,10 @@ def sim(
         fail(os_problem(exc))
     except KeyboardInterrupt:
         click.echo("stopped")
+
+
+MIC_MODULE = "cyborg_speech_input"
+"""The module ``cyborg sim --mic`` adds (unless the configuration has one of that name)."""
 
 
 def _ros_speed(speed: str | None) -> float | None:

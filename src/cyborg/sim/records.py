@@ -2,7 +2,8 @@
 
 One record per observation, each a dict with ``t`` (seconds since the run
 started, on the injected clock) and ``type``: ``state``, ``emotion``, ``say``
-(what was actually spoken, after the gatekeeper), ``heard``, ``pose`` (at most
+(what was actually spoken, after the gatekeeper), ``heard``, ``recognised`` (each utterance
+the speech input decoded: text, confidence, accepted), ``pose`` (at most
 once per second while the pose changes) and ``motivator``. The scenario
 transcript, the HTTP API and the dashboard all read these records.
 """
@@ -43,6 +44,7 @@ class RecordStream:
         node.subscribe(topics.EMOTIONAL_STATE, EmotionalState, self._on_emotion, queue_size=1000)
         node.subscribe(SPOKEN_TOPIC, String, self._on_spoken, queue_size=1000)
         node.subscribe(topics.TEXT_FROM_SPEECH, String, self._on_heard, queue_size=1000)
+        node.subscribe(topics.SPEECH_HEARD, String, self._on_recognised, queue_size=1000)
         node.subscribe(topics.AMCL_POSE, PoseWithCovarianceStamped, self._on_pose, queue_size=10)
         node.subscribe(topics.MOTIVATOR_DECISION, String, self._on_decision, queue_size=1000)
 
@@ -71,6 +73,18 @@ class RecordStream:
 
     def _on_heard(self, m: String, info: MessageInfo) -> None:
         self.emit("heard", text=m.data)
+
+    def _on_recognised(self, m: String, info: MessageInfo) -> None:
+        try:
+            heard = json.loads(m.data)
+            self.emit(
+                "recognised",
+                text=str(heard["text"]),
+                confidence=float(heard["confidence"]),
+                accepted=bool(heard["accepted"]),
+            )
+        except (ValueError, KeyError, TypeError):
+            return  # not a speech input's record
 
     def _on_pose(self, m: PoseWithCovarianceStamped, info: MessageInfo) -> None:
         p = m.pose.pose

@@ -24,6 +24,8 @@ EMOTION_ENABLED_PARAM = "/cyborg_controller/emotion_enabled"
 
 TEXT_TO_SPEECH = "/text_to_speech"
 TEXT_FROM_SPEECH = "/text_from_speech"
+# Ours: every utterance the speech input decoded, as JSON {text, confidence, accepted, raw} (std_msgs/String).
+SPEECH_HEARD = "/cyborg_speech/heard"
 
 MOVE_BASE = "/rosarnl_node/move_base"
 WANDER = "/rosarnl_node/wander"

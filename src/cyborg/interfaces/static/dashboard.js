@@ -1098,6 +1098,7 @@
       case "state": return `${r.from || "–"} —${r.event}→ ${r.to}`;
       case "say": return `“${r.text}”`;
       case "heard": return `“${r.text}”`;
+      case "recognised": return `“${r.text || "…"}” ${Math.round(r.confidence * 100)} %${r.accepted ? "" : " (rejected)"}`;
       case "emotion": return `${r.emotion}  P ${signed(r.pleasure)} A ${signed(r.arousal)} D ${signed(r.dominance)}`;
       case "pose": return `x ${r.x.toFixed(2)} y ${r.y.toFixed(2)} heading ${((r.theta * 180) / Math.PI).toFixed(0)}°`;
       case "motivator":
@@ -1138,6 +1139,7 @@
     const row = el("li");
     row.dataset.type = r.type;
     row.dataset.seq = r.seq;
+    if (r.type === "recognised" && !r.accepted) row.dataset.rejected = "yes"; // greyed: the robot did not believe it
     const t = el("span", "t", fmtClock(r.t));
     row.append(t);
     row.append(el("span", "kind", r.type));
