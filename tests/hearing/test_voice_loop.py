@@ -23,6 +23,9 @@ def test_where_is_the_cafeteria_then_yes_drives_there(tmp_path: Path) -> None:
     assert isinstance(tts, TextToSpeech) and tts.espeak, (
         "espeak-ng must be installed (scripts/install-system-deps)"
     )
+    cyborg.nav.answer_timeout = (
+        200.0  # 20 s of real time for the person to hear the offer and answer, on a busy machine
+    )
     tts.wav_dir = tmp_path / "said"
     tts.wav_dir.mkdir()
     ears = SpeechInput(cyborg.transport.node("cyborg_speech_input"), NavigationDatabase(cyborg.nav.db.path))
