@@ -3,7 +3,8 @@
 Part of :mod:`cyborg.transport.ros2`. Every received message names its sender, as under ROS 1:
 rclpy (Kilted) gives each message its publisher's GID, and the graph lists the GID of every
 publisher of a topic with its node's name (:class:`Senders`). A publisher the graph does not
-know yet is looked up again for up to SENDER_LOOKUP seconds; after that the sender is '' (a
+know yet (or whose node it names ``_NODE_NAME_UNKNOWN_``: the node's discovery lags its
+publisher's) is looked up again for up to SENDER_LOOKUP seconds; after that the sender is '' (a
 gatekeeper drops such a message: it fails closed).
 
 Latched topics are transient-local (the last message kept for late subscribers, depth 1). A
@@ -20,7 +21,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from rclpy.event_handler import SubscriptionEventCallbacks
+from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.node import Node as RclNode
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
@@ -31,6 +32,7 @@ from cyborg.transport.ros2.host import Host
 
 __all__ = ["SENDER_LOOKUP", "Ros2Publisher", "Ros2Subscription", "Senders", "latched_qos", "volatile_qos"]
 
+UNKNOWN_NODE = "_NODE_NAME_UNKNOWN_"  # what the graph names an endpoint whose node it does not know yet
 SENDER_LOOKUP = 0.5  # seconds a message from a publisher unknown to the graph waits for its name
 
 
@@ -71,6 +73,7 @@ class Senders:
             names = {
                 bytes(info.endpoint_gid): normalize_node_name(info.node_name)
                 for info in self._node.get_publishers_info_by_topic(self._topic)
+                if info.node_name != UNKNOWN_NODE  # its node's name not discovered yet: a miss
             }
             with self._lock:
                 self._names = names
@@ -85,7 +88,14 @@ class Ros2Publisher(Publisher[M]):
         self._cls = ros2_class(msg_type.ros_type)
         qos = latched_qos() if latch else volatile_qos(queue_size)
         self._node = node
-        self._pub = node.create_publisher(self._cls, topic, qos)
+        # Every subscription of ours has a transient-local half that a volatile publisher does
+        # not serve, by design (module docstring): no warning about it.
+        self._pub = node.create_publisher(
+            self._cls,
+            topic,
+            qos,
+            event_callbacks=PublisherEventCallbacks(incompatible_qos=lambda event: None),
+        )
 
     def publish(self, message: M) -> None:
         self._pub.publish(to_ros2(message, self._cls))
