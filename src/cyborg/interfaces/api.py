@@ -38,7 +38,8 @@ RECORD_BUFFER = 5000
 GRAPH_MAX_STATES = 10_000  # more leaf states are shown as a list (5,000 are laid out in about 2 s)
 GRAPH_TIMEOUT = 10.0  # real seconds Graphviz may take to lay out the machine (once per machine)
 GRAPH_MEMORY = 2**30  # bytes of address space each Graphviz run may use
-_DRAWINGS: dict[str, tuple[bytes, str, dict[str, Any]]] = {}  # machine hash -> svg, how, arrows: one per process
+# machine hash -> svg, how, arrows: one per process
+_DRAWINGS: dict[str, tuple[bytes, str, dict[str, Any]]] = {}
 
 
 class CommandError(CyborgError, web.HTTPBadRequest):
