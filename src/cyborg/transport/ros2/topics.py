@@ -21,6 +21,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.node import Node as RclNode
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -118,7 +119,7 @@ class Ros2Subscription(Subscription[M]):
         msg_type: type[M],
         callback: Callable[[M, MessageInfo], None],
         queue_size: int,
-        callback_group: Any,
+        callback_group: Any,  # unused: each subscription has a mutually exclusive group of its own
     ) -> None:
         self.topic = topic
         self._transport = transport
@@ -129,6 +130,9 @@ class Ros2Subscription(Subscription[M]):
         self._last: dict[bytes, int] = {}
         self._lock = threading.Lock()
         cls = ros2_class(msg_type.ros_type)
+        # One at a time and in order: the executor has many threads, and a message taken after a
+        # later one of the same publisher would count as a duplicate.
+        callback_group = MutuallyExclusiveCallbackGroup()
         depth = max(queue_size * 4, 100)  # DDS keeps more than our queue: our queue counts the drops
         self._subs = [
             node.create_subscription(
