@@ -29,6 +29,9 @@ def test_ros2_tests_pass_in_their_venv() -> None:
         PYTHONDONTWRITEBYTECODE="1",
     )
     env.pop("VIRTUAL_ENV", None)
+    # The ROS 1 tests put .venv/ros/lib/python (ROS 1's generated cyborg_controller, without the
+    # ROS 2 'action' module) on PYTHONPATH for their own processes: it would shadow ROS 2's here.
+    env.pop("PYTHONPATH", None)
     command = [
         str(VENV_PYTHON),
         "-m",
