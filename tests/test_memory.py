@@ -5,10 +5,8 @@ from __future__ import annotations
 
 import gc
 import resource
-import sys
 
 import numpy as np
-import pytest
 
 from cyborg.app.memory import freeze_built, thaw
 
@@ -23,7 +21,6 @@ def test_what_exists_when_the_robot_starts_is_left_out_of_collections_until_it_c
     assert gc.get_freeze_count() == 0
 
 
-@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's mallopt: Linux only")
 def test_a_big_array_freed_and_made_again_costs_no_fresh_pages() -> None:
     freeze_built()
     thaw()

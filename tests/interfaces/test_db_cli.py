@@ -262,7 +262,6 @@ def test_default_path_follows_cyborg_data_dir(tmp_path: Path, monkeypatch: pytes
 
 
 def test_import_map_reads_goals_of_a_real_arnl_map(db_path: Path, tmp_path: Path) -> None:
-    pytest.importorskip("cyborg.maps")
     map_file = tmp_path / "hall.map"
     map_file.write_text(
         "2D-Map\nMinPos: 0 0\nMaxPos: 10000 5000\n"

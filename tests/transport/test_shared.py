@@ -148,7 +148,6 @@ def test_client_goal_reports_each_status_once_and_finishes_once(clock: VirtualCl
 
 
 def test_importing_the_ros_transport_patches_nothing_and_loads_only_what_it_needs() -> None:
-    pytest.importorskip("rospy")
     script = """
 import json, sys
 import rospy

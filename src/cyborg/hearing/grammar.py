@@ -14,6 +14,8 @@ import re
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
+from cyborg.navigation.keywords import NUMBER_WORDS
+
 __all__ = ["LEAD_INS", "PLACE_SUFFIXES", "Grammar", "PlaceWords", "build_grammar", "spoken_forms"]
 
 LEAD_INS = ("what do you", "how do you", "can you", "could you", "please", "do you know")
@@ -25,28 +27,8 @@ PLACE_SUFFIXES = ("please",)
 GREETING_FOLLOWERS = ("there", "cyborg", "robot")
 """Words that may follow a greeting ("hello there")."""
 
-_ONES = [
-    "zero",
-    "one",
-    "two",
-    "three",
-    "four",
-    "five",
-    "six",
-    "seven",
-    "eight",
-    "nine",
-    "ten",
-    "eleven",
-    "twelve",
-    "thirteen",
-    "fourteen",
-    "fifteen",
-    "sixteen",
-    "seventeen",
-    "eighteen",
-    "nineteen",
-]
+_ONES = sorted((w for w, n in NUMBER_WORDS.items() if int(n) < 20), key=lambda w: int(NUMBER_WORDS[w]))
+"""zero ... nineteen: the navigation module's own number words (keywords.NUMBER_WORDS)."""
 _TENS = ["_", "_", "twenty", "thirty", "forty", "fifty", "sixty", "seventy", "eighty", "ninety"]
 
 
