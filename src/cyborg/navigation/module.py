@@ -2,8 +2,8 @@
 
 It listens to speech-to-text for commands and questions, keeps a calendar
 scheduler, and serves three states: planning (where to go, from the event and
-the emotion), moving (drives the base through the ROSARNL interface, or
-wanders) and talking (what to say, by event and emotion). It speaks on
+the emotion), moving (drives the base through the ROSARNL interface, or on ROS 2
+nav2's: :mod:`.base_link`; or wanders) and talking (what to say, by event and emotion). It speaks on
 ``/text_to_speech`` and sends emotional feedback like any module.
 """
 
@@ -19,6 +19,7 @@ from cyborg.errors import CyborgError
 from cyborg.modules.helper import Abort, BehaviourModule, GoalContext
 from cyborg.modules.kind import CalendarEntry
 from cyborg.modules.speech import estimated_duration
+from cyborg.navigation.base_link import base_link
 from cyborg.navigation.behaviour import (
     ANGRY,
     RESPONSE_FOR_TALK,
@@ -39,18 +40,7 @@ from cyborg.navigation.keywords import Intent, detect_answer, detect_navigation
 from cyborg.navigation.records import CalendarEvent, Location, ResponseType
 from cyborg.transport import topics
 from cyborg.transport.base import GoalStatus, MessageInfo, Node
-from cyborg.transport.messages import (
-    EmptyService,
-    Header,
-    MoveBaseAction,
-    MoveBaseGoal,
-    Point,
-    Pose,
-    PoseStamped,
-    PoseWithCovarianceStamped,
-    Quaternion,
-    SystemState,
-)
+from cyborg.transport.messages import PoseWithCovarianceStamped, SystemState
 
 log = logging.getLogger(__name__)
 
@@ -114,9 +104,7 @@ class NavigationModule(BehaviourModule):
         self.emotion_since = node.clock.monotonic()
         self._warned_off_map: set[str] = set()
         self._answer: asyncio.Future[Intent] | None = None
-        self.move_base = node.action_client(topics.MOVE_BASE, MoveBaseAction)
-        self.wander = node.service_proxy(topics.WANDER, EmptyService)
-        self.stop = node.service_proxy(topics.STOP, EmptyService)
+        self.base = base_link(node)
         node.subscribe(topics.AMCL_POSE, PoseWithCovarianceStamped, self._on_pose, queue_size=10)
         node.subscribe(topics.STATE_CHANGE, SystemState, self._on_state_change)
         self.on_speech_text(self._on_text)
@@ -295,22 +283,13 @@ class NavigationModule(BehaviourModule):
         if target.position is None:
             self.failed_target = target
             raise Abort(self.db.no_pose_reason(target))
-        if not await self.move_base.wait_for_server(2.0):
+        if not await self.base.ready(2.0):
             self.failed_target = target
-            raise Abort("no robot base: /rosarnl_node/move_base is not offered")
+            raise Abort(f"no robot base: {self.base.name} is not offered")
         x, y = target.position
-        goal = MoveBaseGoal(
-            PoseStamped(
-                Header(stamp=self.node.clock.now(), frame_id="map"),
-                Pose(
-                    Point(x, y, 0.0),
-                    Quaternion(0.0, 0.0, math.sin(target.heading / 2), math.cos(target.heading / 2)),
-                ),
-            )
-        )
         self.heading_to = target
         self.trip = Trip(self.origin, target)
-        handle = self.move_base.send_goal(goal)
+        handle = self.base.go(x, y, target.heading)
         try:
             while True:
                 try:
@@ -334,7 +313,7 @@ class NavigationModule(BehaviourModule):
 
         ``wander_limit`` is a safety cap for an emotion that never changes.
         """
-        await self.wander.call(timeout=5.0)
+        await self.base.wander()
         clock = self.node.clock
         started = last_feedback = clock.monotonic()
         self.wandering_now = True
@@ -360,7 +339,7 @@ class NavigationModule(BehaviourModule):
 
     async def _stop_base(self) -> None:
         try:
-            await self.stop.call(timeout=5.0)
+            await self.base.stop()
         except CyborgError as exc:
             log.warning("could not stop the base: %s", exc)
 

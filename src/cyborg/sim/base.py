@@ -4,9 +4,14 @@ It offers the ROSARNL interface the navigation module uses: the action
 ``/rosarnl_node/move_base`` (goal: a pose in the map frame; feedback: the
 current pose), the services ``/rosarnl_node/wander`` and ``/rosarnl_node/stop``
 (std_srvs/Empty), the pose on ``/rosarnl_node/amcl_pose`` and the path state on
-``/rosarnl_node/arnl_path_state``. Routes come from :class:`RoutePlanner`; the
-robot drives them at a set speed on the injected clock. Registered as the module kind
-``simulated_base``.
+``/rosarnl_node/arnl_path_state``. Routes come from :class:`RoutePlanner`; the robot drives
+them at a set speed on the injected clock. Registered as the module kind ``simulated_base``.
+
+On a ROS 2 graph (:attr:`Node.ros_version` 2) it offers nav2's action ``/navigate_to_pose``
+(our NavigateToPose interface) instead of ``move_base`` and the two services: goal a pose,
+feedback the current pose and the distance left along the route, an abort's reason in the
+result's ``error_msg``. A goal whose ``behavior_tree`` is ``wander`` wanders until it is
+cancelled; cancelling a goal stops the base.
 
 The pose moves in steps of ``1 / pose_rate`` seconds along each leg of a route (10 a second, as
 ROSARNL's), and each step is published. With ``virtual_pose_rate`` set, on a virtual clock that
@@ -23,10 +28,11 @@ from __future__ import annotations
 
 import asyncio
 import enum
+import itertools
 import logging
 import math
 import random
-from collections.abc import Sequence
+from collections.abc import Coroutine, Sequence
 from typing import Any
 
 from pydantic import Field
@@ -47,6 +53,10 @@ from cyborg.transport.messages import (
     MoveBaseFeedback,
     MoveBaseGoal,
     MoveBaseResult,
+    NavigateToPoseAction,
+    NavigateToPoseFeedback,
+    NavigateToPoseGoal,
+    NavigateToPoseResult,
     Pose,
     PoseStamped,
     PoseWithCovariance,
@@ -65,6 +75,8 @@ DEFAULT_POSE_RATE = 10.0
 MAP_FRAME = "map"
 
 _MoveHandle = ServerGoalHandle[MoveBaseGoal, MoveBaseResult, MoveBaseFeedback]
+_NavigateHandle = ServerGoalHandle[NavigateToPoseGoal, NavigateToPoseResult, NavigateToPoseFeedback]
+_AnyHandle = ServerGoalHandle[Any, Any, Any]
 
 
 class PathState(enum.Enum):
@@ -143,14 +155,20 @@ class SimulatedBase:
         self.wandering = False
         self._failure = ""
         self._motion: asyncio.Task[bool] | None = None
-        self._goal: _MoveHandle | None = None
+        self._goal: _AnyHandle | None = None
+        self._leg = 0  # the route's waypoint the base drives to now
         self._unpublished = False  # a step was made since the last pose message (virtual_pose_rate)
         self._heading = (math.nan, Quaternion())  # the last heading published, and its quaternion
         self._pose_pub = node.publisher(topics.AMCL_POSE, PoseWithCovarianceStamped, latch=True)
         self._state_pub = node.publisher(topics.ARNL_PATH_STATE, String, latch=True)
-        node.action_server(topics.MOVE_BASE, MoveBaseAction, self._on_goal, self._on_cancel)
-        node.advertise_service(topics.WANDER, EmptyService, self._on_wander)
-        node.advertise_service(topics.STOP, EmptyService, self._on_stop)
+        if node.ros_version == 2:
+            node.action_server(
+                topics.NAVIGATE_TO_POSE, NavigateToPoseAction, self._on_navigate, self._on_cancel
+            )
+        else:
+            node.action_server(topics.MOVE_BASE, MoveBaseAction, self._on_goal, self._on_cancel)
+            node.advertise_service(topics.WANDER, EmptyService, self._on_wander)
+            node.advertise_service(topics.STOP, EmptyService, self._on_stop)
         self._publish_pose()
         self._set_state(PathState.STOPPED)
 
@@ -208,7 +226,7 @@ class SimulatedBase:
             return False
         self.route = list(route.waypoints)
         self._set_state(PathState.WANDERING if self.wandering else PathState.MOVING_TO_GOAL)
-        for waypoint in route.waypoints[1:]:
+        for self._leg, waypoint in enumerate(route.waypoints[1:], 1):
             await self._drive_leg(waypoint, on_pose)
         if heading is not None:
             self.theta = heading
@@ -251,27 +269,64 @@ class SimulatedBase:
     # --- move_base ----------------------------------------------------------------------
 
     def _on_goal(self, handle: _MoveHandle) -> None:
-        if self._goal is not None and not self._goal.status.is_terminal:
-            self._goal.canceled(text="replaced by a new goal")
-        self._halt()
-        handle.accept()
-        self._goal = handle
-        pose = handle.goal.target_pose.pose
-        target = (pose.position.x, pose.position.y)
-        heading = quaternion_to_yaw(pose.orientation)
-        self._failure = ""
-
         def feedback() -> None:
             if not handle.status.is_terminal:
                 handle.publish_feedback(
                     MoveBaseFeedback(pose_stamped(self.x, self.y, self.theta, self.node.clock.now()))
                 )
 
-        motion = self.node.clock.loop.create_task(self._drive(target, heading, feedback), name="move_base")
-        motion.add_done_callback(lambda task: self._finish_goal(handle, task))
-        self._motion = motion
+        self._take_goal(handle)
+        self._start_motion(handle, self._drive_to(handle.goal.target_pose.pose, feedback), "move_base")
 
-    def _finish_goal(self, handle: _MoveHandle, task: asyncio.Task[bool]) -> None:
+    def _take_goal(self, handle: _AnyHandle) -> None:
+        if self._goal is not None and not self._goal.status.is_terminal:
+            self._goal.canceled(text="replaced by a new goal")
+        self._halt()
+        handle.accept()
+        self._goal = handle
+        self._failure = ""
+
+    def _drive_to(self, pose: Pose, on_pose: Any) -> Coroutine[Any, Any, bool]:
+        return self._drive((pose.position.x, pose.position.y), quaternion_to_yaw(pose.orientation), on_pose)
+
+    def _start_motion(self, handle: _AnyHandle, motion: Coroutine[Any, Any, bool], name: str) -> None:
+        task = self.node.clock.loop.create_task(motion, name=name)
+        task.add_done_callback(lambda done: self._finish_goal(handle, done))
+        self._motion = task
+
+    # --- navigate_to_pose (ROS 2) ---------------------------------------------------------
+
+    def _on_navigate(self, handle: _NavigateHandle) -> None:
+        started = self.node.clock.monotonic()
+
+        def feedback() -> None:
+            if not handle.status.is_terminal:
+                remaining = self._distance_remaining()
+                handle.publish_feedback(
+                    NavigateToPoseFeedback(
+                        current_pose=pose_stamped(self.x, self.y, self.theta, self.node.clock.now()),
+                        navigation_time=self.node.clock.monotonic() - started,
+                        estimated_time_remaining=remaining / self.speed,
+                        distance_remaining=remaining,
+                    )
+                )
+
+        self._take_goal(handle)
+        if handle.goal.behavior_tree == topics.WANDER_BEHAVIOR:
+            self.wandering = True
+            self._start_motion(handle, self._wander(feedback), "wander")
+        else:
+            self._start_motion(handle, self._drive_to(handle.goal.pose.pose, feedback), "navigate_to_pose")
+
+    def _distance_remaining(self) -> float:
+        """Metres along the route still to drive (0 when there is none)."""
+        route = self.route
+        if not route or self._leg >= len(route):
+            return 0.0
+        ahead = math.dist((self.x, self.y), route[self._leg])
+        return ahead + sum(math.dist(a, b) for a, b in itertools.pairwise(route[self._leg :]))
+
+    def _finish_goal(self, handle: _AnyHandle, task: asyncio.Task[bool]) -> None:
         if handle.status.is_terminal:
             return
         if task.cancelled():
@@ -283,12 +338,15 @@ class SimulatedBase:
             self._set_state(PathState.ABORTED_PATHPLAN)
         elif task.result():
             self._set_state(PathState.REACHED_GOAL)
-            handle.succeed(MoveBaseResult())
+            handle.succeed(NavigateToPoseResult() if self.node.ros_version == 2 else MoveBaseResult())
         else:
-            log.info("move_base goal aborted: %s", self._failure)
-            handle.abort(text=self._failure)
+            log.info("navigation goal aborted: %s", self._failure)
+            handle.abort(self._failed_result(), text=self._failure)
 
-    def _on_cancel(self, handle: _MoveHandle) -> None:
+    def _failed_result(self) -> NavigateToPoseResult | None:
+        return NavigateToPoseResult(error_msg=self._failure) if self.node.ros_version == 2 else None
+
+    def _on_cancel(self, handle: _AnyHandle) -> None:
         if handle.status.is_terminal:
             return  # finished already: a late cancel must not stop what the base does now (wandering)
         if handle is self._goal:
@@ -306,10 +364,10 @@ class SimulatedBase:
         self._motion = self.node.clock.loop.create_task(self._wander(), name="wander")
         return EmptyResponse()
 
-    async def _wander(self) -> bool:
+    async def _wander(self, on_pose: Any = None) -> bool:
         while self.wandering:
             target = self.planner.random_reachable_point(self.rng, near=(self.x, self.y))
-            if not await self._drive(target, None):
+            if not await self._drive(target, None, on_pose):
                 await self.node.clock.sleep(1.0)
         return True
 

@@ -224,6 +224,10 @@ class Node(ABC):
 
     name: str
     clock: Clock
+    ros_version: int = 1
+    """Whose conventions the graph follows where ROS 1 and ROS 2 differ: 1 (ROS 1; the embedded
+    transport mirrors it unless told otherwise) or 2 (e.g. the base drives through nav2's
+    ``navigate_to_pose`` action instead of ROSARNL's ``move_base``)."""
 
     @abstractmethod
     def publisher(

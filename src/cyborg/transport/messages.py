@@ -202,6 +202,37 @@ class MoveBaseResult(Message):
 
 
 @dataclass(frozen=True)
+class NavigateToPoseGoal(Message):
+    """Where the base is to go (ROS 2, nav2's fields); ``behavior_tree`` ``wander``
+    (:data:`~cyborg.transport.topics.WANDER_BEHAVIOR`) asks the simulated base to wander until cancelled."""
+
+    ros_type: ClassVar[str] = "cyborg_controller/NavigateToPoseGoal"
+    pose: PoseStamped = field(default_factory=PoseStamped)
+    behavior_tree: str = ""
+
+
+@dataclass(frozen=True)
+class NavigateToPoseFeedback(Message):
+    """Where the base is and how far it still has to drive (metres along its route); times in seconds."""
+
+    ros_type: ClassVar[str] = "cyborg_controller/NavigateToPoseFeedback"
+    current_pose: PoseStamped = field(default_factory=PoseStamped)
+    navigation_time: float = 0.0
+    estimated_time_remaining: float = 0.0
+    number_of_recoveries: int = 0
+    distance_remaining: float = 0.0
+
+
+@dataclass(frozen=True)
+class NavigateToPoseResult(Message):
+    """Empty on success; an aborted goal says why in ``error_msg`` (``error_code`` 0 unless set)."""
+
+    ros_type: ClassVar[str] = "cyborg_controller/NavigateToPoseResult"
+    error_code: int = 0
+    error_msg: str = ""
+
+
+@dataclass(frozen=True)
 class EmptyRequest(Message):
     ros_type: ClassVar[str] = "std_srvs/EmptyRequest"
 
@@ -245,6 +276,14 @@ StateMachineAction: ActionType[StateMachineGoal, StateMachineResult, StateMachin
 )
 MoveBaseAction: ActionType[MoveBaseGoal, MoveBaseResult, MoveBaseFeedback] = ActionType(
     "move_base_msgs/MoveBaseAction", MoveBaseGoal, MoveBaseResult, MoveBaseFeedback
+)
+NavigateToPoseAction: ActionType[NavigateToPoseGoal, NavigateToPoseResult, NavigateToPoseFeedback] = (
+    ActionType(
+        "cyborg_controller/NavigateToPoseAction",
+        NavigateToPoseGoal,
+        NavigateToPoseResult,
+        NavigateToPoseFeedback,
+    )
 )
 
 

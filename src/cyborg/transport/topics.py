@@ -32,3 +32,7 @@ WANDER = "/rosarnl_node/wander"
 STOP = "/rosarnl_node/stop"
 AMCL_POSE = "/rosarnl_node/amcl_pose"
 ARNL_PATH_STATE = "/rosarnl_node/arnl_path_state"
+# ROS 2: the base's navigation is nav2's action (our NavigateToPose interface; no wander/stop
+# services: a goal whose behavior_tree is WANDER_BEHAVIOR wanders until it is cancelled).
+NAVIGATE_TO_POSE = "/navigate_to_pose"
+WANDER_BEHAVIOR = "wander"

@@ -20,17 +20,10 @@ from cyborg.transport.messages import Message
 
 __all__ = ["from_ros2", "ros2_class", "ros2_type_name", "to_ros2"]
 
-# ROS 1 types with another home in ROS 2 (nav2_msgs has no wheel: our interface package has
-# the base's navigation action).
-RENAMED = {
-    "move_base_msgs/MoveBaseAction": "cyborg_controller/NavigateToPoseAction",
-}
-
 
 def ros2_class(ros_type: str, kind: str = "msg") -> Any:
     """The ROS 2 class for ``pkg/Name`` (``kind`` msg, srv or action; an action's ``Action``
     suffix is dropped: ``cyborg_controller/StateMachineAction`` -> ``cyborg_controller.action.StateMachine``)."""
-    ros_type = RENAMED.get(ros_type, ros_type)
     package, _, name = ros_type.partition("/")
     if kind == "action" and name.endswith("Action"):
         name = name[: -len("Action")]
