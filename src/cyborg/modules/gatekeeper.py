@@ -7,6 +7,13 @@ state change it reads the active state's resource list from the parameter
 If the parameter cannot be read (over ROS: the master does not answer), it passes
 nothing and reads it again every READ_RETRY seconds until it finds a resource
 list (a restarted master gets the list from the controller when it is back).
+
+The controller sets the parameter before it publishes the state change and sends the new
+state's goal, but the module's first message may still arrive before the state change does
+(they come from different nodes: nothing orders them; seen over ROS 2). So the first message a
+sender would have dropped in a state makes the gatekeeper read the parameter again (once per
+sender and state, so a flood costs no more reads), and it passes when the parameter already
+grants that sender the resource.
 """
 
 from __future__ import annotations
@@ -52,6 +59,7 @@ class Gatekeeper:
         self.known = False
         self.stats = GatekeeperStats()
         self._warned: set[str] = set()  # senders already logged at INFO in this state
+        self._read_for: set[str] = set()  # senders whose message made it read the resources again
         self._retry: asyncio.TimerHandle | None = None  # the next read while reading fails
         self._output = node.publisher(output_topic, msg_type)
         node.subscribe(topics.STATE_CHANGE, SystemState, self._on_state_change)
@@ -64,6 +72,7 @@ class Gatekeeper:
             self._retry = None
 
     def _on_state_change(self, message: SystemState, info: MessageInfo) -> None:
+        self._read_for.clear()
         if self._retry is not None:
             self._retry.cancel()
             self._retry = None
@@ -113,8 +122,14 @@ class Gatekeeper:
         self.allowed, self.known = None, False
         self._retry = self.node.clock.call_later(READ_RETRY, self._read_resources)
 
+    def _grants(self, sender: str) -> bool:
+        return self.known and self.allowed is not None and normalize_node_name(sender) == self.allowed
+
     def _on_message(self, message: Message, info: MessageInfo) -> None:
-        if self.known and self.allowed is not None and normalize_node_name(info.sender) == self.allowed:
+        if not self._grants(info.sender) and info.sender not in self._read_for and self._retry is None:
+            self._read_for.add(info.sender)
+            self._read_resources()  # its state change may not have reached us yet (module docstring)
+        if self._grants(info.sender):
             self.stats.passed += 1
             self._output.publish(message)
             return
