@@ -30,13 +30,23 @@ class Disk:
     """The disk under ``database``: ``fill()`` makes every write fail, ``free()`` makes room again."""
 
     def __init__(self, database: SQLiteFile) -> None:
-        database._conn.close()
-        self.conn = sqlite3.connect(database.path, isolation_level=None, factory=FullDiskConnection)
-        self.conn.execute("PRAGMA synchronous=FULL")
-        database._conn = self.conn
+        self.connections: list[FullDiskConnection] = []
+        # The file's connection, and a write-behind store's thread's own (ControllerStore).
+        for attribute in ("_conn", "_write_conn"):
+            if getattr(database, attribute, None) is None:
+                continue
+            getattr(database, attribute).close()
+            conn = sqlite3.connect(
+                database.path, isolation_level=None, factory=FullDiskConnection, check_same_thread=False
+            )
+            conn.execute("PRAGMA synchronous=FULL")
+            setattr(database, attribute, conn)
+            self.connections.append(conn)
 
     def fill(self) -> None:
-        self.conn.full = True
+        for conn in self.connections:
+            conn.full = True
 
     def free(self) -> None:
-        self.conn.full = False
+        for conn in self.connections:
+            conn.full = False

@@ -174,9 +174,10 @@ class SQLiteFile:
             raise
         return conn
 
-    def _connect(self) -> sqlite3.Connection:
+    def _connect(self, *, any_thread: bool = False) -> sqlite3.Connection:
+        """A connection in WAL mode, synchronous=FULL; ``any_thread``: usable by one other thread."""
         try:
-            conn = sqlite3.connect(self.path, isolation_level=None)
+            conn = sqlite3.connect(self.path, isolation_level=None, check_same_thread=not any_thread)
         except sqlite3.Error as exc:
             raise DatabaseError(f"cannot open {self.path}: {exc}; check the file's permissions") from exc
         try:
@@ -235,11 +236,13 @@ class SQLiteFile:
         return SaveStatus(str(self.path), False, problem, fix, self._failed_writes)
 
     @contextmanager
-    def _writing(self, what: str) -> Iterator[sqlite3.Connection]:
-        """One write transaction; a failure raises :class:`NotSaved` (logged once per episode)."""
+    def _writing(self, what: str, conn: sqlite3.Connection | None = None) -> Iterator[sqlite3.Connection]:
+        """One write transaction (on ``conn``, else the file's connection); a failure raises
+        :class:`NotSaved` (logged once per episode)."""
+        conn = self._conn if conn is None else conn
         try:
-            with transaction(self._conn):
-                yield self._conn
+            with transaction(conn):
+                yield conn
         except sqlite3.Error as exc:
             raise self._write_failed(what, exc) from exc
         if self._failure is not None:

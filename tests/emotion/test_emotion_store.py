@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import logging
 import sqlite3
+import threading
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -142,3 +144,51 @@ def test_hand_edited_nonsense_is_tolerated(tmp_path: Path, caplog: pytest.LogCap
 def test_a_folder_path_is_refused_with_a_fix(tmp_path: Path) -> None:
     with pytest.raises(DatabaseError, match="is a folder"):
         ControllerStore(tmp_path)
+
+
+class _SlowDisk(sqlite3.Connection):
+    """A connection whose COMMIT waits until the test lets it go (a disk slow to flush)."""
+
+    gate: threading.Event
+    commits = 0
+
+    def execute(self, sql: str, parameters: Any = (), /) -> sqlite3.Cursor:
+        if sql.strip().upper() == "COMMIT":
+            assert self.gate.wait(10), "the test never let the commit go"
+            type(self).commits += 1
+        return super().execute(sql, parameters)
+
+
+def test_write_behind_saves_never_wait_for_the_disk_and_the_latest_value_is_stored(tmp_path: Path) -> None:
+    """Issue 18: the controller's loop hands saves to the store's thread; a burst is one or two commits."""
+    path = tmp_path / "c.db"
+    store = ControllerStore(path, write_behind=True)
+    _SlowDisk.gate = threading.Event()
+    assert store._write_conn is not None
+    store._write_conn.close()
+    store._write_conn = sqlite3.connect(
+        path, isolation_level=None, factory=_SlowDisk, check_same_thread=False
+    )
+    try:
+        for step in range(1, 51):  # the first commit hangs on the "disk": none of these may wait for it
+            assert store.save_emotion(PAD(step / 100, 0.0, 0.0), float(step)) is True
+        assert store.save_status.saved and store.save_status.unsaved == ()  # nothing failed: nothing to say
+        _SlowDisk.gate.set()
+        stored = store.get_emotion()  # waits for the writes queued before it
+        assert stored.pad.pleasure == pytest.approx(0.5) and stored.updated_at == 50.0
+        assert 1 <= _SlowDisk.commits <= 2, _SlowDisk.commits
+    finally:
+        _SlowDisk.gate.set()
+        store.close()
+    assert ControllerStore(path).get_emotion().pad.pleasure == pytest.approx(0.5)
+
+
+def test_write_behind_close_writes_what_waits(tmp_path: Path) -> None:
+    path = tmp_path / "c.db"
+    store = ControllerStore(path, write_behind=True)
+    store.save_saturations({"music_play": 0.25})
+    store.set_emotion_enabled(False)
+    store.close()
+    reopened = ControllerStore(path)
+    assert reopened.get_saturations() == {"music_play": 0.25} and reopened.get_emotion().enabled is False
+    reopened.close()

@@ -300,6 +300,7 @@ def test_the_motivator_decides_and_rewards_while_the_disk_is_full(
 
         disk.free()
         clock.run(clock.sleep(1.5))
+        robot.store.flush()  # the store writes on its own thread, in real time
         assert robot.store.save_status.saved
         stored = ControllerStore(tmp_path / "controller.db").get_saturations()
         # those of the last reward (they are saved at a reward; in memory they decline between)

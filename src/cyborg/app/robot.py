@@ -128,7 +128,10 @@ def build_controller(
     data_dir.mkdir(parents=True, exist_ok=True)
     settings = config.model
     store = ControllerStore(
-        data_dir / "controller.db", seed_events=settings.motivator.events, clock=transport.clock
+        data_dir / "controller.db",
+        seed_events=settings.motivator.events,
+        clock=transport.clock,
+        write_behind=True,
     )
     for entry in settings.motivator.events:
         store.add_event(entry)  # the YAML is the source; entries added to the database stay too

@@ -58,6 +58,7 @@ class RobotAPI:
         *,
         machine: MachineSpec | None = None,
         extra_status: Callable[[], dict[str, Any]] | None = None,
+        settle: Callable[[], None] | None = None,
         emotions: dict[str, tuple[float, float, float]] | None = None,
         emotion_aliases: dict[str, str] | None = None,
         access: Access | None = None,
@@ -75,6 +76,9 @@ class RobotAPI:
         self._dots: list[subprocess.Popen[bytes]] = []  # Graphviz laying the machine out now
         self.guard = Guard(access or Access())
         self.extra_status = extra_status
+        self.settle = settle
+        """Waits (off the loop) until what the robot saves is written, so a command's answer can
+        say whether its change was saved (the in-process robot's store writes on its own thread)."""
         self.records: deque[Record] = deque(maxlen=RECORD_BUFFER)
         self._events_of: dict[str, tuple[str, ...]] = {}  # state -> valid events, sorted
         self.sequence = 0
@@ -185,8 +189,11 @@ class RobotAPI:
         in the status says so): the change is made in memory only. Nothing where that is not known.
 
         It first lets the loop run once: an emotion system in this process (the embedded transport
-        delivers with ``call_soon``) has then applied the command and tried to save it."""
+        delivers with ``call_soon``) has then applied the command and handed it to its store, whose
+        write it then waits for (``settle``)."""
         await asyncio.sleep(0)
+        if self.settle is not None:
+            await asyncio.get_running_loop().run_in_executor(None, self.settle)
         storage = self.extra_status().get("storage") if self.extra_status is not None else None
         if not isinstance(storage, dict) or storage.get("saved") is not False:
             return {}

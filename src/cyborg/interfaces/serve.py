@@ -42,6 +42,7 @@ def serve_api(
                 "emotion_enabled": robot.emotion.enabled,
                 "storage": robot.store.save_status.as_json(),
             },
+            settle=robot.store.flush,
             access=access,
         )
         for extend in EXTENSIONS:

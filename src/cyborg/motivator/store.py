@@ -5,6 +5,12 @@ the emotion system's on/off switch, the motivator's saturations and its table of
 motivational events. Every write is committed at once (WAL, synchronous=FULL),
 so a crash loses at most the write in flight.
 
+With ``write_behind`` (the controller's store, as the composition root builds it) the
+emotion, the switch and the saturations are committed by a thread of the store's own, so the
+controller's loop never waits for the disk's flush (1-3 ms a commit on the lab machine, more
+on a busy disk); what waits is latest-value-wins, so a burst of saves is one commit. Reads of
+those values first wait for the writes queued before them, and closing writes everything.
+
 A missing file is created with defaults (events seeded from the caller's list);
 a file that is not a database, fails ``PRAGMA integrity_check`` or has another
 schema is moved aside to ``<name>.corrupt-<timestamp>`` with a warning and
@@ -20,7 +26,10 @@ from __future__ import annotations
 import logging
 import math
 import sqlite3
+import threading
 from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import suppress
 from dataclasses import replace
 from pathlib import Path
 
@@ -81,45 +90,99 @@ class ControllerStore(SQLiteFile):
     what = "controller store"
 
     def __init__(
-        self, path: str | Path, seed_events: Sequence[MotivationalEvent] = (), *, clock: Clock | None = None
+        self,
+        path: str | Path,
+        seed_events: Sequence[MotivationalEvent] = (),
+        *,
+        clock: Clock | None = None,
+        write_behind: bool = False,
     ) -> None:
         self._seed = list(seed_events)
         self.clock = clock
         self._pending: dict[str, Write] = {}  # what is not stored yet (its name) -> how to write it
         self._retry: Periodic | None = None
+        self._pending_lock = threading.Lock()  # held for a moment: _pending and _queued
+        self._queued = False  # a write-behind job waits to start
+        self._writer = ThreadPoolExecutor(1, thread_name_prefix="controller-store") if write_behind else None
         super().__init__(path)
+        # The thread's own connection: in WAL mode the loop's reads never wait for its commits.
+        self._write_conn = self._connect(any_thread=True) if write_behind else None
 
     # --- saving what a failed write left in memory ---------------------------------------
 
     @property
     def save_status(self) -> SaveStatus:
         status = super().save_status
-        return replace(status, saved=status.saved and not self._pending, unsaved=tuple(self._pending))
+        with self._pending_lock:
+            unsaved = tuple(self._pending) if not status.saved or self._writer is None else ()
+        return replace(status, saved=status.saved and not unsaved, unsaved=unsaved)
 
     def _save_latest(self, name: str, write: Write) -> bool:
-        self._pending.pop(name, None)
-        self._pending[name] = write  # (last in the order of the pending ones)
-        return self.write_pending()
+        with self._pending_lock:
+            self._pending.pop(name, None)
+            self._pending[name] = write  # (last in the order of the pending ones)
+        if self._writer is None:
+            return self.write_pending()
+        self._write_behind()
+        return self.save_status.saved
 
     def write_pending(self) -> bool:
-        """Write what is kept in memory, in one transaction; True when everything is stored."""
-        if not self._pending:
+        """Write what is kept in memory; True when everything is stored (with ``write_behind``:
+        hands it to the store's thread and says whether writes worked so far)."""
+        if self._writer is not None:
+            self._write_behind()
+            return self.save_status.saved
+        stored = self._write_kept()
+        self._after_write(stored)
+        return stored
+
+    def flush(self) -> None:
+        """Wait until the writes handed to the store's thread are done (at once without ``write_behind``)."""
+        if self._writer is not None:
+            self._writer.submit(lambda: None).result()
+
+    def _write_behind(self) -> None:
+        with self._pending_lock:
+            if self._queued or not self._pending or self._writer is None:
+                return
+            self._queued = True
+        self._writer.submit(self._write_job)
+
+    def _write_job(self) -> None:
+        """On the store's thread: write what waits, then tell the loop (retries go by its clock)."""
+        with self._pending_lock:
+            self._queued = False
+        stored = self._write_kept()
+        clock = self.clock
+        if clock is not None and (not stored or self._retry is not None):
+            with suppress(RuntimeError):  # the loop is closed: nothing to retry on
+                clock.loop.call_soon_threadsafe(self._after_write, stored)
+
+    def _write_kept(self) -> bool:
+        """Write what waits in one transaction; what fails stays unless a newer value came."""
+        with self._pending_lock:
+            batch, self._pending = self._pending, {}
+        if not batch:
             return True
         try:
-            with self._writing("save " + " and ".join(self._pending)) as conn:
-                for write in self._pending.values():
+            with self._writing("save " + " and ".join(batch), self._write_conn) as conn:
+                for write in batch.values():
                     write(conn)
         except NotSaved:  # logged once per episode by _writing; the status says it
-            if self.clock is not None and self._retry is None:
-                self._retry = self.clock.every(
-                    SAVE_RETRY, self.write_pending, name=f"saving the {self.what}", logger=log
-                )
+            with self._pending_lock:
+                self._pending = {**batch, **self._pending}
             return False
-        self._pending.clear()
-        if self._retry is not None:
+        return True
+
+    def _after_write(self, stored: bool) -> None:
+        """On the loop: retry every SAVE_RETRY s on the clock while writes fail; stop when they work."""
+        if not stored and self.clock is not None and self._retry is None:
+            self._retry = self.clock.every(
+                SAVE_RETRY, self.write_pending, name=f"saving the {self.what}", logger=log
+            )
+        elif stored and self._retry is not None and not self._pending:
             self._retry.cancel()
             self._retry = None
-        return True
 
     def close(self) -> None:
         """Write what is kept in memory (a last try), then close; what cannot be written is logged."""
@@ -127,6 +190,9 @@ class ControllerStore(SQLiteFile):
         if self._retry is not None:
             self._retry.cancel()
             self._retry = None
+        if self._writer is not None:
+            self._writer.shutdown(wait=True)
+            self._writer = None
         if not self.write_pending():
             log.warning(
                 "%s %s closed with %s not saved: %s",
@@ -136,6 +202,8 @@ class ControllerStore(SQLiteFile):
                 self.save_status.problem,
             )
         super().close()
+        if self._write_conn is not None:
+            self._write_conn.close()
 
     def _prepare(self, conn: sqlite3.Connection) -> None:
         tables = {row[0] for row in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
@@ -162,6 +230,7 @@ class ControllerStore(SQLiteFile):
     # --- emotion ---------------------------------------------------------------------
 
     def get_emotion(self) -> StoredEmotion:
+        self.flush()
         [(p, a, d, updated_at, enabled)] = self._read(
             "SELECT pleasure, arousal, dominance, updated_at, enabled FROM emotion"
         )
@@ -186,6 +255,7 @@ class ControllerStore(SQLiteFile):
     # --- saturations -----------------------------------------------------------------
 
     def get_saturations(self) -> dict[str, float]:
+        self.flush()
         rows = self._read("SELECT event, value FROM saturations ORDER BY event")
         return {str(name): max(0.0, min(1.0, _finite(v, f"saturation of {name}"))) for name, v in rows}
 
