@@ -49,7 +49,7 @@ class CallbackRunner:
     def __call__(self, callback: Callable[..., object], *args: Any) -> None:
         try:
             result = callback(*args)
-            if inspect.isawaitable(result):
+            if result is not None and inspect.isawaitable(result):  # most callbacks return None
                 task = asyncio.ensure_future(result)
                 self._tasks.add(task)
                 task.add_done_callback(self._task_done)
