@@ -16,6 +16,7 @@ publisher, only a publication sequence number above the last one taken passes.
 
 from __future__ import annotations
 
+import logging
 import threading
 import time
 from collections.abc import Callable
@@ -23,6 +24,7 @@ from typing import Any
 
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
+from rclpy.exceptions import InvalidHandle
 from rclpy.node import Node as RclNode
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
@@ -34,7 +36,9 @@ from cyborg.transport.ros2.host import Host
 __all__ = ["SENDER_LOOKUP", "Ros2Publisher", "Ros2Subscription", "Senders", "latched_qos", "volatile_qos"]
 
 UNKNOWN_NODE = "_NODE_NAME_UNKNOWN_"  # what the graph names an endpoint whose node it does not know yet
-SENDER_LOOKUP = 0.5  # seconds a message from a publisher unknown to the graph waits for its name
+SENDER_LOOKUP = 0.5  # seconds a publisher unknown to the graph is waited for, from its first message
+
+log = logging.getLogger(__name__)
 
 
 def volatile_qos(depth: int) -> QoSProfile:
@@ -56,20 +60,26 @@ def latched_qos(depth: int = 1) -> QoSProfile:
 
 
 class Senders:
-    """Node names of a topic's publishers by GID, from the graph (refreshed on a miss)."""
+    """Node names of a topic's publishers by GID, from the graph (refreshed on a miss).
+
+    A publisher the graph cannot name is waited for up to SENDER_LOOKUP seconds from its first
+    message, not from each one: a flood from it costs that wait once (one executor thread
+    waiting 0.5 s per message held the subscription's delivery up for many seconds).
+    """
 
     def __init__(self, node: RclNode, topic: str) -> None:
         self._node = node
         self._topic = topic
         self._names: dict[bytes, str] = {}
+        self._deadlines: dict[bytes, float] = {}  # GID -> until when a miss is looked up again
         self._lock = threading.Lock()
 
     def name_of(self, gid: bytes) -> str:
         with self._lock:
             name = self._names.get(gid)
-        if name is not None:
-            return name
-        deadline = time.monotonic() + SENDER_LOOKUP
+            if name is not None:
+                return name
+            deadline = self._deadlines.setdefault(gid, time.monotonic() + SENDER_LOOKUP)
         while True:
             names = {
                 bytes(info.endpoint_gid): normalize_node_name(info.node_name)
@@ -91,7 +101,7 @@ class Ros2Publisher(Publisher[M]):
         self._node = node
         # Every subscription of ours has a transient-local half that a volatile publisher does
         # not serve, by design (module docstring): no warning about it.
-        self._pub = node.create_publisher(
+        self._pub: Any = node.create_publisher(
             self._cls,
             topic,
             qos,
@@ -99,13 +109,17 @@ class Ros2Publisher(Publisher[M]):
         )
 
     def publish(self, message: M) -> None:
+        if self._pub is None:
+            return  # unregistered (its node shut down): a late publish while a process stops goes nowhere
         self._pub.publish(to_ros2(message, self._cls))
 
     def subscriber_count(self) -> int:
-        return int(self._pub.get_subscription_count())
+        return 0 if self._pub is None else int(self._pub.get_subscription_count())
 
     def unregister(self) -> None:
-        self._node.destroy_publisher(self._pub)
+        publisher, self._pub = self._pub, None
+        if publisher is not None:
+            self._node.destroy_publisher(publisher)
 
 
 class Ros2Subscription(Subscription[M]):
@@ -154,6 +168,14 @@ class Ros2Subscription(Subscription[M]):
         return self._queue.dropped
 
     def _on_ros(self, ros_message: Any, ros_info: Any) -> None:  # executor thread
+        try:
+            self._take(ros_message, ros_info)
+        except InvalidHandle:  # the node is being destroyed under a message still coming in
+            log.debug("%s: message dropped, its subscription is closing", self.topic)
+        except Exception:  # never into rclpy's executor, which stops spinning on it
+            log.exception("%s: could not take a message; the subscription carries on", self.topic)
+
+    def _take(self, ros_message: Any, ros_info: Any) -> None:
         gid_info = ros_info.get("publisher_gid") or {}
         gid = bytes(gid_info.get("data", b""))
         sequence = ros_info.get("publication_sequence_number")

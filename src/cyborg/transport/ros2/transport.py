@@ -23,7 +23,9 @@ from __future__ import annotations
 
 import json
 import logging
+import os
 import threading
+import time
 from collections.abc import Awaitable, Callable
 from typing import Any
 
@@ -73,6 +75,7 @@ log = logging.getLogger(__name__)
 PARAM_HOME = "cyborg_parameters"
 PARAM_TIMEOUT = 2.0  # seconds a parameter read or write waits for the home's answer
 EXECUTOR_THREADS = 32  # an action goal being executed holds one thread while it runs
+NODE_GONE_WAIT = 1.0  # seconds a node's shutdown waits until the graph has lost it
 
 
 def parameter_name(key: str) -> str:
@@ -97,14 +100,24 @@ class Ros2Transport(Transport):
         self._params_lock = threading.Lock()
         self._param_node: RclNode | None = None
         self._param_clients: dict[str, Any] = {}
+        self._probe: RclNode | None = None
         self._spinner = threading.Thread(target=self._spin, name="ros2 executor", daemon=True)
         self._spinner.start()
 
     def _spin(self) -> None:
-        try:
-            self.executor.spin()
-        except Exception:  # the context was shut down under it
-            log.debug("executor stopped", exc_info=True)
+        """Spin until the transport closes. rclpy's ``spin()`` raises what a callback on one of
+        its threads raised and stops spinning: such a failure is logged and spinning goes on,
+        or every node of the process would fall silent."""
+        while True:
+            try:
+                self.executor.spin()
+                return  # shut down
+            except Exception:
+                if not self.context.ok():
+                    log.debug("executor stopped", exc_info=True)
+                    return
+                self.callback_errors += 1
+                log.exception("a ROS 2 callback failed; the executor carries on")
 
     def _count_callback_error(self) -> None:
         self.callback_errors += 1
@@ -131,8 +144,35 @@ class Ros2Transport(Transport):
         return rcl
 
     def drop_rcl_node(self, rcl: RclNode) -> None:
+        """Take ``rcl`` off the graph, and wait (up to NODE_GONE_WAIT s) until the graph has lost it.
+
+        rclpy destroys a node once the executor no longer uses it, a few ms after
+        ``destroy_node``. A node made with the same name before then shares the name with the
+        old one in the graph, and the old one's removal takes the new one's publishers with it:
+        the graph names their node _NODE_NAME_UNKNOWN_ for good, and a gatekeeper drops what
+        they send (seen when a test or a restarted module makes a node of a name just freed).
+        """
+        name, namespace = rcl.get_name(), rcl.get_namespace()
+        probe = self._graph_probe()
+        before = self._count_nodes(probe, name, namespace)
         self.executor.remove_node(rcl)
         rcl.destroy_node()
+        deadline = time.monotonic() + NODE_GONE_WAIT
+        while self._count_nodes(probe, name, namespace) >= before:
+            if time.monotonic() >= deadline:
+                log.debug("node %s still in the graph %.1f s after it was destroyed", name, NODE_GONE_WAIT)
+                return
+            time.sleep(0.001)
+
+    def _graph_probe(self) -> RclNode:
+        """A hidden node of this process that reads the graph while others come and go."""
+        if self._probe is None:
+            self._probe = RclNode(f"_cyborg_graph_{os.getpid()}_{id(self):x}", context=self.context)
+        return self._probe
+
+    @staticmethod
+    def _count_nodes(probe: RclNode, name: str, namespace: str) -> int:
+        return sum(1 for n, ns in probe.get_node_names_and_namespaces() if (n, ns) == (name, namespace))
 
     def _forget_node(self, node: Ros2Node) -> None:
         if self._nodes.get(node.name) is node:
@@ -240,6 +280,9 @@ class Ros2Transport(Transport):
             if extra is not None:
                 self.drop_rcl_node(extra)
         self._home = self._param_node = None
+        if self._probe is not None:
+            self._probe.destroy_node()
+            self._probe = None
         self.executor.shutdown(timeout_sec=1.0)
         if self.context.ok():
             self.context.try_shutdown()
