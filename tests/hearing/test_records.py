@@ -7,13 +7,14 @@ from pathlib import Path
 from cyborg.hearing.module import SpeechInput
 from cyborg.hearing.recogniser import Recogniser
 from cyborg.hearing.synth import VOICES, synthesise
+from cyborg.modules.kind import Listening
 from cyborg.navigation.database import NavigationDatabase
 from cyborg.sim.records import Record, RecordStream
 from cyborg.transport.clock import RealClock
 from cyborg.transport.embedded import EmbeddedTransport
 
 
-def test_believed_and_rejected_sentences_become_records(tmp_path: Path) -> None:
+def test_believed_and_rejected_sentences_become_records(tmp_path: Path, listening: Listening) -> None:
     clock = RealClock()
     transport = EmbeddedTransport(clock)
     records: list[Record] = []
@@ -22,6 +23,7 @@ def test_believed_and_rejected_sentences_become_records(tmp_path: Path) -> None:
         transport.node("ears"),
         NavigationDatabase(tmp_path / "nav.db"),
         recogniser=Recogniser(min_confidence=0.0),
+        listening=listening,
     )
 
     async def main() -> None:

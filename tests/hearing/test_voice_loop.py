@@ -7,11 +7,10 @@ from pathlib import Path
 
 from cyborg.hearing.audio import read_wav
 from cyborg.hearing.grammar import build_grammar
-from cyborg.hearing.module import SpeechInput
+from cyborg.hearing.module import KIND, SpeechInput, SpeechInputSettings
 from cyborg.hearing.recogniser import Recogniser
 from cyborg.hearing.synth import VOICES, as_heard, synthesise
 from cyborg.modules.speech import TextToSpeech
-from cyborg.navigation.database import NavigationDatabase
 from cyborg.transport.clock import VirtualClock
 from navigation.test_module import OFFER, Cyborg  # the default robot and a user, as in the navigation tests
 
@@ -28,7 +27,12 @@ def test_where_is_the_cafeteria_then_yes_drives_there(tmp_path: Path) -> None:
     )
     tts.wav_dir = tmp_path / "said"
     tts.wav_dir.mkdir()
-    ears = SpeechInput(cyborg.transport.node("cyborg_speech_input"), NavigationDatabase(cyborg.nav.db.path))
+    ears = KIND.build(  # built as the robot builds its modules: it hears what they listen for
+        cyborg.transport.node("cyborg_speech_input"),
+        SpeechInputSettings(db=str(cyborg.nav.db.path)),
+        cyborg.robot.place,
+    )
+    assert isinstance(ears, SpeechInput)
     person = Recogniser(min_confidence=0.0)  # a person who knows what the robot may offer
     person.use(build_grammar([], [], [OFFER, "all right maybe another time"], person.known_word))
 

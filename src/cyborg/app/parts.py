@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from cyborg.app.config import LoadedConfig
-from cyborg.app.place import BuildPlace, calendar_of
+from cyborg.app.place import BuildPlace, calendar_of, heard_by
 from cyborg.app.registry import KindRegistry, module_kinds
 from cyborg.errors import ConfigError
 from cyborg.modules.kind import CalendarEntry, Component
@@ -82,7 +82,10 @@ def build_part(
         )
         return Part(name, [controller, emotion, motivator], controller=controller)
     if name in model.modules:
-        kind, settings = (kinds or module_kinds()).parse(name, model.modules[name], source=config.source)
+        registry = kinds or module_kinds()
+        kind, settings = registry.parse(name, model.modules[name], source=config.source)
+        if context.heard is None:  # only a module that asks (speech input) imports the other kinds
+            context.heard = heard_by(config, registry)
         return Part(name, [kind.build(transport.node(name), settings, context)])
     if any(gate.name == name for gate in model.gatekeepers):
         from cyborg.app.robot import build_gatekeeper

@@ -12,12 +12,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from cyborg.modules.kind import CalendarEntry, KeepsCalendar
+from cyborg.modules.kind import CalendarEntry, KeepsCalendar, Listening, listening_of
 
 if TYPE_CHECKING:
+    from cyborg.app.config import LoadedConfig
+    from cyborg.app.registry import KindRegistry
     from cyborg.maps import OccupancyMap
 
-__all__ = ["BuildPlace", "calendar_of"]
+__all__ = ["BuildPlace", "calendar_of", "heard_by"]
 
 
 @dataclass
@@ -27,7 +29,10 @@ class BuildPlace:
     data_dir: Path
     rng: random.Random = field(default_factory=lambda: random.Random(0))
     map_path: Path | None = None
+    heard: Callable[[], Listening] | None = field(default=None, repr=False)
+    """Gathers what the configured modules listen for (called on the first :meth:`listening`)."""
     _map: OccupancyMap | None = field(default=None, repr=False)
+    _listening: Listening | None = field(default=None, repr=False)
 
     def occupancy_map(self) -> OccupancyMap:
         """The map of the world (``--map`` or the packaged campus), loaded once."""
@@ -36,6 +41,22 @@ class BuildPlace:
 
             self._map = load_map(self.map_path or default_map_path())
         return self._map
+
+    def listening(self) -> Listening:
+        """What the configured modules listen for in speech (nothing when built without a configuration)."""
+        if self._listening is None:
+            self._listening = self.heard() if self.heard is not None else Listening()
+        return self._listening
+
+
+def heard_by(config: LoadedConfig, kinds: KindRegistry) -> Callable[[], Listening]:
+    """What the modules of ``config`` listen for, gathered when first asked (it imports every module's kind)."""
+
+    def gather() -> Listening:
+        modules = config.model.modules
+        return listening_of(kinds.parse(name, raw, source=config.source)[1] for name, raw in modules.items())
+
+    return gather
 
 
 def calendar_of(components: Iterable[object]) -> Callable[[CalendarEntry], None] | None:

@@ -18,13 +18,13 @@ from typing import TYPE_CHECKING
 
 from cyborg.app.config import LoadedConfig
 from cyborg.app.memory import freeze_built, thaw
-from cyborg.app.place import BuildPlace, calendar_of
+from cyborg.app.place import BuildPlace, calendar_of, heard_by
 from cyborg.app.registry import KindRegistry, module_kinds
 from cyborg.app.view import BaseView
 from cyborg.controller.runtime import Controller, Phase
 from cyborg.emotion.system import EmotionSystem
 from cyborg.modules.gatekeeper import Gatekeeper
-from cyborg.modules.kind import CalendarEntry, Component, ServesStates
+from cyborg.modules.kind import CalendarEntry, Component, Listening, ServesStates
 from cyborg.motivator.component import Motivator
 from cyborg.motivator.store import ControllerStore
 from cyborg.storage import SaveStatus
@@ -62,6 +62,9 @@ class Robot:
 
     def occupancy_map(self) -> OccupancyMap:
         return self.place.occupancy_map()
+
+    def listening(self) -> Listening:
+        return self.place.listening()
 
     @property
     def calendar(self) -> Callable[[CalendarEntry], None] | None:
@@ -175,7 +178,9 @@ def build_robot(
     """
     registry = kinds or module_kinds()
     store, controller, emotion, motivator = build_controller(config, transport, data_dir)
-    place = BuildPlace(data_dir=data_dir, rng=rng or random.Random(0), map_path=map_path)
+    place = BuildPlace(
+        data_dir=data_dir, rng=rng or random.Random(0), map_path=map_path, heard=heard_by(config, registry)
+    )
     robot = Robot(transport, config, controller, emotion, motivator, store, place)
     try:
         for name, raw in config.model.modules.items():

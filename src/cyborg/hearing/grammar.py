@@ -10,13 +10,27 @@ names are turned into words the pronouncing dictionary knows: digits become numb
 
 from __future__ import annotations
 
+import itertools
 import re
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+from functools import cached_property
 
 from cyborg.navigation.keywords import NUMBER_WORDS
 
-__all__ = ["LEAD_INS", "PLACE_SUFFIXES", "Grammar", "PlaceWords", "build_grammar", "spoken_forms"]
+__all__ = [
+    "ALWAYS_HEARD",
+    "LEAD_INS",
+    "PLACE_SUFFIXES",
+    "Grammar",
+    "PlaceWords",
+    "build_grammar",
+    "spoken_forms",
+]
+
+ALWAYS_HEARD = ("hello", "hi", "good morning", "good afternoon", "good evening", "yes", "no")
+"""Greetings and answers the robot hears even when no configured module declares them (a question
+module takes any answer; the dashboard shows what was said)."""
 
 LEAD_INS = ("what do you", "how do you", "can you", "could you", "please", "do you know")
 """Words people put before a phrase that takes a place ("what do you think of", "can you go to")."""
@@ -88,6 +102,46 @@ class Grammar:
     phrases: tuple[str, ...] = ()
     unsayable: tuple[str, ...] = ()
     """Places and phrases left out: a word the dictionary does not know."""
+    triggers: tuple[str, ...] = ()
+    """Phrases that take a place ("where is"), as said."""
+
+    @property
+    def request_parts(self) -> list[tuple[str, ...]]:
+        """The slots of a request, in order; ``""`` in a slot means it may be left out."""
+        if not (self.triggers and self.place_forms):
+            return []
+        return [
+            ("", *LEAD_INS),
+            self.triggers,
+            ("", "the"),
+            tuple(sorted(self.place_forms)),
+            ("", *PLACE_SUFFIXES),
+        ]
+
+    def sentences(self) -> list[str]:
+        """Every sentence of the grammar (requests for every place in every form, and the phrases)."""
+        found = [
+            " ".join(word for word in choice if word) for choice in itertools.product(*self.request_parts)
+        ]
+        found += [f"{p} {f}".strip() for p in self.phrases for f in ("", *GREETING_FOLLOWERS)]
+        return found
+
+    @cached_property
+    def _pattern(self) -> re.Pattern[str]:
+        def slot(options: tuple[str, ...]) -> str:
+            words = "|".join(re.escape(o) for o in options if o)
+            return f"(?:(?:{words}) )?" if "" in options else f"(?:{words}) "
+
+        alternatives = []
+        if self.request_parts:
+            alternatives.append("".join(slot(part) for part in self.request_parts))
+        if self.phrases:
+            alternatives.append(slot(self.phrases) + slot(("", *GREETING_FOLLOWERS)))
+        return re.compile("|".join(alternatives) or "(?!)")
+
+    def holds(self, sentence: str) -> bool:
+        """Whether ``sentence`` (the dictionary's words) is a whole sentence of the grammar."""
+        return bool(sentence) and self._pattern.fullmatch(f"{sentence} ") is not None
 
     def canonical(self, heard: str) -> str:
         """``heard`` with a spoken place form replaced by the stored name (the longest form first)."""
@@ -147,4 +201,10 @@ def build_grammar(
         public.append("<phrase>")
         rules.append(f"<phrase> = ({_alternatives(alone)}) [{_alternatives(GREETING_FOLLOWERS)}];")
     rules.insert(2, f"public <heard> = {' | '.join(public)};")
-    return Grammar("\n".join(rules) + "\n", forms, tuple(sorted(set(alone))), tuple(unsayable))
+    return Grammar(
+        "\n".join(rules) + "\n",
+        forms,
+        tuple(sorted(set(alone))),
+        tuple(unsayable),
+        tuple(sorted(set(triggers))) if forms else (),
+    )

@@ -6,9 +6,11 @@ utterances where the speaker pauses, decodes each against the grammar of what th
 understands and publishes the accepted text exactly as typed text is published. Every
 utterance, rejected ones too, goes to ``/cyborg_speech/heard`` as JSON (text, confidence,
 accepted) for the dashboard. The grammar holds the navigation database's places and aliases
-(read again every ``reload_interval`` seconds, so a place added with ``cyborg db`` is heard),
-the navigation module's request phrases and answers, the conversation module's greetings and
-the ``phrases`` of the settings.
+(read again every ``reload_interval`` seconds, so a place added with ``cyborg db`` is heard)
+after the phrases modules say a place follows, what every module of the robot's configuration
+listens for (``ModuleSettings.listens_for``, handed over by the composition root as
+:class:`~cyborg.modules.kind.Listening`), greetings and yes/no answers, and the ``phrases``
+of the settings.
 """
 
 from __future__ import annotations
@@ -22,12 +24,10 @@ from pathlib import Path
 
 from pydantic import Field
 
-from cyborg.hearing.grammar import Grammar, PlaceWords, build_grammar
+from cyborg.hearing.grammar import ALWAYS_HEARD, Grammar, PlaceWords, build_grammar
 from cyborg.hearing.recogniser import DEFAULT_MIN_CONFIDENCE, Heard, Recogniser, Utterances
-from cyborg.modules.conversation import ConversationSettings
-from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
+from cyborg.modules.kind import BuildContext, Listening, ModuleKind, ModuleSettings
 from cyborg.navigation.database import NavigationDatabase
-from cyborg.navigation.keywords import NO_PHRASES, TRIGGERS, YES_PHRASES
 from cyborg.transport import topics
 from cyborg.transport.base import Node
 from cyborg.transport.messages import String
@@ -40,17 +40,14 @@ HEARD_TOPIC = topics.SPEECH_HEARD
 HEARD_KEPT = 1000
 
 
-def understood_phrases(extra: tuple[str, ...] = ()) -> tuple[tuple[str, ...], tuple[str, ...]]:
-    """(phrases that take a place, phrases on their own) the robot's modules listen for."""
-    place_phrases = tuple(p for phrases in TRIGGERS.values() for p in phrases)
-    alone = (*ConversationSettings.model_validate({}).listens_for(), *YES_PHRASES, *NO_PHRASES, *extra)
-    return place_phrases, alone
-
-
-def grammar_of(places: list[PlaceWords], recogniser: Recogniser, extra: tuple[str, ...] = ()) -> Grammar:
-    """The grammar of ``places`` and of what the modules listen for, in ``recogniser``'s words."""
-    place_phrases, alone = understood_phrases(extra)
-    return build_grammar(places, place_phrases, alone, recogniser.known_word)
+def grammar_of(
+    places: list[PlaceWords], recogniser: Recogniser, listening: Listening, extra: tuple[str, ...] = ()
+) -> Grammar:
+    """The grammar of ``places`` after the phrases that take one, of what the modules listen for,
+    greetings and yes/no (:data:`~cyborg.hearing.grammar.ALWAYS_HEARD`) and ``extra``, in
+    ``recogniser``'s words."""
+    alone = (*ALWAYS_HEARD, *listening.phrases, *extra)
+    return build_grammar(places, listening.place_phrases, alone, recogniser.known_word)
 
 
 class SpeechInput:
@@ -62,6 +59,7 @@ class SpeechInput:
         places: NavigationDatabase | None,
         *,
         recogniser: Recogniser | None = None,
+        listening: Listening | None = None,
         phrases: tuple[str, ...] = (),
         reload_interval: float = 10.0,
         microphone: bool = False,
@@ -70,6 +68,8 @@ class SpeechInput:
         self.node = node
         self.places = places
         self.recogniser = recogniser or Recogniser()
+        self.listening = listening or Listening()
+        """What the robot's modules listen for (from the composition root)."""
         self.extra_phrases = phrases
         self.heard: deque[Heard] = deque(maxlen=HEARD_KEPT)
         self.latencies: deque[float] = deque(maxlen=HEARD_KEPT)
@@ -113,7 +113,7 @@ class SpeechInput:
         )
         if places != self._known:
             self._known = places
-            grammar = grammar_of(places, self.recogniser, self.extra_phrases)
+            grammar = grammar_of(places, self.recogniser, self.listening, self.extra_phrases)
             self.recogniser.use(grammar)
             if grammar.unsayable:
                 log.info("cannot hear (words not in the dictionary): %s", ", ".join(grammar.unsayable))
@@ -178,10 +178,13 @@ class SpeechInputSettings(ModuleSettings):
         None, description="navigation database with the places (default: <data dir>/navigation.db)"
     )
     min_confidence: float = Field(
-        DEFAULT_MIN_CONFIDENCE, ge=0, le=1, description="lowest confidence (0-1) of a sentence it passes on"
+        DEFAULT_MIN_CONFIDENCE,
+        ge=0,
+        le=1,
+        description="lowest confidence (0-1, the decoder's posterior) of a sentence of the grammar it passes on",
     )
     phrases: tuple[str, ...] = Field(
-        (), description="more phrases to hear, besides what the modules listen for"
+        (), description="more phrases to hear, besides what the robot's modules listen for"
     )
     reload_interval: float = Field(10.0, gt=0, description="seconds between looks at the places")
 
@@ -193,6 +196,7 @@ def _build(node: Node, settings: SpeechInputSettings, context: BuildContext) -> 
             node,
             db,
             recogniser=Recogniser(min_confidence=settings.min_confidence),
+            listening=context.listening(),
             phrases=settings.phrases,
             reload_interval=settings.reload_interval,
             microphone=settings.source == "microphone",

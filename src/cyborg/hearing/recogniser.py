@@ -1,24 +1,30 @@
 """Decoding speech with pocketsphinx's bundled US English model, and rejecting what is outside the grammar.
 
-A grammar decoder maps any sound onto *some* sentence of the grammar, so each utterance is
-also decoded by a phone loop (pocketsphinx's ``allphone`` search: the phones heard, with no
-words). The phones of the grammar's sentence are compared with the phones heard; the
-confidence is one minus their normalised edit distance. An utterance whose confidence is
-below ``min_confidence`` is rejected and logged with its score. :class:`Utterances` cuts a
-stream of audio into utterances with pocketsphinx's own voice activity detection and
-end-pointing (:class:`pocketsphinx.Endpointer`).
+A grammar decoder maps any sound onto *some* sentence of the grammar, so the recogniser does
+not decode against the grammar alone. It decodes against a small language model made from
+the grammar's sentences (heavily weighted) and about a thousand common English words (the
+most frequent ones of pocketsphinx's general model, weakly weighted, none that sounds like a
+word of the grammar). Speech the robot understands comes out as a sentence of the grammar;
+speech it does not understand comes out with common words in it, or as a fragment, and is
+rejected and logged. The confidence is the decoder's posterior probability of the sentence
+(its lattice); an utterance is believed when it is a whole sentence of the grammar and its
+confidence is at least ``min_confidence``. :class:`Utterances` cuts a stream of audio into
+utterances with pocketsphinx's own voice activity detection and end-pointing
+(:class:`pocketsphinx.Endpointer`).
 """
 
 from __future__ import annotations
 
+import functools
+import io
 import logging
 import os
+import re
+import tempfile
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
-
-from rapidfuzz.distance import Levenshtein
 
 from cyborg.hearing.grammar import Grammar
 
@@ -28,7 +34,15 @@ log = logging.getLogger(__name__)
 
 SAMPLE_RATE = 16000
 """Samples per second of the audio the recogniser takes (16-bit mono)."""
-DEFAULT_MIN_CONFIDENCE = 0.3
+DEFAULT_MIN_CONFIDENCE = 0.0
+"""The whole-sentence test does the rejecting; a posterior threshold on top cost right sentences
+more than it saved (docs/benchmarks.md, "Speech recognition")."""
+BACKGROUND_WORDS = 1000
+"""How many common English words compete with the grammar (the rejection's "anything else")."""
+GRAMMAR_WEIGHT = 1000
+"""How many times each grammar sentence counts against once for each common word."""
+DISCOUNT_MASS = 0.02
+"""Probability the language model leaves for word sequences it has not seen (fixed back-off)."""
 
 
 @dataclass(frozen=True)
@@ -39,11 +53,11 @@ class Heard:
     confidence: float
     accepted: bool
     raw: str
-    """What the grammar decoder heard, in the dictionary's words."""
-    phones: str
-    """What the phone loop heard."""
+    """What the decoder heard, in the dictionary's words."""
     seconds: float
     """How long decoding took."""
+    reason: str = ""
+    """Why it was rejected ("" when accepted)."""
 
     def as_json(self) -> dict[str, object]:
         """The record the dashboard shows."""
@@ -62,69 +76,134 @@ def _model_paths() -> tuple[str, str, str]:
     return (
         os.path.join(base, "en-us"),
         os.path.join(base, "cmudict-en-us.dict"),
-        os.path.join(base, "en-us-phone.lm.bin"),
+        os.path.join(base, "en-us.lm.bin"),
     )
 
 
-def known_word_of(decoder: Any) -> Any:
-    """A check whether the decoder's pronouncing dictionary has a word."""
+@functools.cache
+def pronunciations() -> dict[str, tuple[str, ...]]:
+    """The bundled CMU dictionary: each word's pronunciations (phones separated by spaces)."""
+    _, dictionary, _ = _model_paths()
+    found: dict[str, list[str]] = {}
+    with open(dictionary, encoding="utf-8") as lines:
+        for line in lines:
+            word, _, phones = line.strip().partition(" ")
+            found.setdefault(word.split("(", 1)[0], []).append(phones.split("#", 1)[0].strip())
+    return {word: tuple(phones) for word, phones in found.items()}
 
-    def known(word: str) -> bool:
-        try:
-            return decoder.lookup_word(word) is not None
-        except (KeyError, RuntimeError):
-            return False
 
-    return known
+@functools.cache
+def common_words(limit: int = 5 * BACKGROUND_WORDS) -> tuple[str, ...]:
+    """The ``limit`` most frequent plain words of pocketsphinx's general English model, most frequent first."""
+    from pocketsphinx import NGramModel
+
+    _, _, general = _model_paths()
+    model = NGramModel.readfile(general)
+    scored = [(model.prob([word]), word) for word in pronunciations() if re.fullmatch(r"[a-z]+", word)]
+    scored.sort(key=lambda pair: (-pair[0], pair[1]))
+    return tuple(word for _, word in scored[:limit])
+
+
+def known_word(word: str) -> bool:
+    """Whether the bundled pronouncing dictionary has ``word``."""
+    return word in pronunciations()
+
+
+def known_word_of(decoder: Any) -> Callable[[str], bool]:
+    """Whether the dictionary has a word (kept for callers that pass a decoder; it reads the bundled one)."""
+    return known_word
+
+
+def language_model_words(grammar: Grammar) -> list[str]:
+    """The grammar's words, then the common English words that compete with them.
+
+    A common word that sounds like a grammar word ("know" for "no") is left out, or the
+    grammar's word would lose to it half the time.
+    """
+    said = pronunciations()
+    vocabulary = sorted({word for sentence in grammar.sentences() for word in sentence.split()})
+    sounds = {phones for word in vocabulary for phones in said.get(word, ())}
+    background = [
+        w for w in common_words() if w not in vocabulary and not sounds.intersection(said.get(w, ()))
+    ]
+    return vocabulary + background[:BACKGROUND_WORDS]
+
+
+def language_model_text(grammar: Grammar, words: list[str]) -> str:
+    """The ARPA language model of ``grammar``'s sentences against the other ``words``."""
+    from pocketsphinx.lm import ArpaBoLM
+
+    model = ArpaBoLM(text="\n".join(grammar.sentences()), add_start=True, discount_mass=DISCOUNT_MASS)
+    tables: list[dict[str, int]] = [model.grams_1, *model.grams_2.values()]
+    tables += [counts for follows in model.grams_3.values() for counts in follows.values()]
+    for counts in tables:  # each grammar sentence counts GRAMMAR_WEIGHT times, each other word once
+        for word in counts:
+            counts[word] *= GRAMMAR_WEIGHT
+    for word in words:
+        model.grams_1.setdefault(word, 1)
+    model.compute()
+    out = io.StringIO()
+    model.write(out)
+    return out.getvalue()
 
 
 class Recogniser:
     """Decodes 16 kHz 16-bit mono utterances against a grammar and says whether to believe them."""
 
     def __init__(self, *, min_confidence: float = DEFAULT_MIN_CONFIDENCE) -> None:
-        from pocketsphinx import Decoder
-
-        hmm, dictionary, phone_lm = _model_paths()
         self.min_confidence = min_confidence
-        self._words = Decoder(hmm=hmm, dict=dictionary, loglevel="FATAL", samprate=SAMPLE_RATE)
-        self._phones = Decoder(hmm=hmm, allphone=phone_lm, loglevel="FATAL", samprate=SAMPLE_RATE)
-        self.known_word = known_word_of(self._words)
+        self.known_word = known_word
         self.grammar: Grammar | None = None
+        self._decoder: Any = None
 
     def use(self, grammar: Grammar) -> None:
-        """Listen for ``grammar`` from the next utterance on."""
-        self._words.add_jsgf_string("robot", grammar.jsgf)
-        self._words.activate_search("robot")
-        self.grammar = grammar
+        """Listen for ``grammar`` from the next utterance on (builds a new decoder; a decode under way
+        finishes with the old one)."""
+        from pocketsphinx import Decoder
 
-    def _decode(self, decoder: Any, audio: bytes) -> str:
-        decoder.start_utt()
-        decoder.process_raw(audio, full_utt=True)
-        decoder.end_utt()
-        hypothesis = decoder.hyp()
-        return hypothesis.hypstr if hypothesis is not None else ""
-
-    def _phones_of(self, words: str) -> list[str]:
-        out: list[str] = []
-        for word in words.split():
-            out += (self._words.lookup_word(word) or "").split()
-        return out
+        hmm, _, _ = _model_paths()
+        words = language_model_words(grammar)
+        said = pronunciations()
+        entries = [
+            f"{word}{f'({i + 1})' if i else ''} {phones}"
+            for word in words
+            for i, phones in enumerate(said.get(word, ()))
+        ]
+        with tempfile.TemporaryDirectory() as folder:
+            dictionary, model = os.path.join(folder, "robot.dict"), os.path.join(folder, "robot.arpa")
+            with open(dictionary, "w", encoding="utf-8") as out:
+                out.write("\n".join(entries) + "\n")
+            with open(model, "w", encoding="utf-8") as out:
+                out.write(language_model_text(grammar, words))
+            decoder = Decoder(hmm=hmm, dict=dictionary, lm=model, loglevel="FATAL", samprate=SAMPLE_RATE)
+        self._decoder, self.grammar = decoder, grammar
 
     def decode(self, audio: bytes) -> Heard:
         """Decode one utterance (16-bit little-endian mono samples at :data:`SAMPLE_RATE`)."""
-        if self.grammar is None:
+        grammar, decoder = self.grammar, self._decoder
+        if grammar is None:
             from cyborg.hearing import HearingError
 
             raise HearingError("the recogniser has no grammar yet; fix: call use(grammar) first")
         started = time.perf_counter()
-        raw = self._decode(self._words, audio)
-        heard_phones = [p for p in self._decode(self._phones, audio).split() if p != "SIL"]
-        confidence = 1.0 - Levenshtein.normalized_distance(self._phones_of(raw), heard_phones) if raw else 0.0
-        accepted = bool(raw) and confidence >= self.min_confidence
-        text = self.grammar.canonical(raw) if raw else ""
-        heard = Heard(text, confidence, accepted, raw, " ".join(heard_phones), time.perf_counter() - started)
-        if not accepted:
-            log.info("rejected speech %r (confidence %.2f < %.2f)", raw, confidence, self.min_confidence)
+        decoder.start_utt()
+        decoder.process_raw(audio, full_utt=True)
+        decoder.end_utt()
+        hypothesis = decoder.hyp()
+        raw = hypothesis.hypstr if hypothesis is not None else ""
+        confidence = min(1.0, max(0.0, float(hypothesis.prob))) if hypothesis is not None and raw else 0.0
+        if not raw:
+            reason = "nothing heard"
+        elif not grammar.holds(raw):
+            reason = "not a sentence the robot understands"
+        elif confidence < self.min_confidence:
+            reason = f"confidence {confidence:.2f} < {self.min_confidence:.2f}"
+        else:
+            reason = ""
+        text = grammar.canonical(raw) if raw else ""
+        heard = Heard(text, confidence, not reason, raw, time.perf_counter() - started, reason)
+        if reason:
+            log.info("rejected speech %r (confidence %.2f): %s", raw, confidence, reason)
         return heard
 
 

@@ -22,6 +22,12 @@ __all__ = ["listen"]
 )
 @click.option("--device", help="microphone name or number (default: the system's)")
 @click.option(
+    "--config",
+    "config_path",
+    type=click.Path(dir_okay=False, path_type=Path),
+    help="robot whose modules' phrases it hears (default: the packaged Cyborg)",
+)
+@click.option(
     "--db",
     type=click.Path(dir_okay=False, path_type=Path),
     help="navigation database with the places (default: the robot's)",
@@ -36,6 +42,7 @@ __all__ = ["listen"]
 def listen(
     wav: Path | None,
     device: str | None,
+    config_path: Path | None,
     db: Path | None,
     min_confidence: float | None,
     send: bool,
@@ -43,13 +50,18 @@ def listen(
 ) -> None:
     """Hear speech (offline) and print each sentence with its confidence; rejected ones are marked.
 
-    With a running robot (cyborg sim, or --url / --ros) each believed sentence is sent to it as
-    if its own speech-to-text had heard it. Without --wav it listens to the microphone until Ctrl-C.
+    It hears the places of the navigation database and what the modules of the robot's
+    configuration listen for. With a running robot (cyborg sim, or --url / --ros) each believed
+    sentence is sent to it as if its own speech-to-text had heard it. Without --wav it listens
+    to the microphone until Ctrl-C.
     """
+    from cyborg.app.place import heard_by
+    from cyborg.app.registry import module_kinds
     from cyborg.hearing.audio import read_wav
     from cyborg.hearing.module import HEARD_TOPIC, SpeechInput
     from cyborg.hearing.recogniser import DEFAULT_MIN_CONFIDENCE, Recogniser
     from cyborg.hearing.synth import as_heard
+    from cyborg.interfaces.cli_common import load_or_default
     from cyborg.navigation.database import NavigationDatabase
     from cyborg.sim.runner import default_data_dir
     from cyborg.transport.clock import RealClock
@@ -57,6 +69,8 @@ def listen(
     from cyborg.transport.messages import String
 
     sending = [send]
+    config = load_or_default(config_path)
+    listening = heard_by(config, module_kinds())()  # what the robot's modules listen for
 
     def show(message: String, info: object) -> None:
         heard = json.loads(message.data)
@@ -81,6 +95,7 @@ def listen(
             recogniser=Recogniser(
                 min_confidence=DEFAULT_MIN_CONFIDENCE if min_confidence is None else min_confidence
             ),
+            listening=listening,
             microphone=audio is None,
             device=device,
         )

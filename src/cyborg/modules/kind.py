@@ -16,7 +16,7 @@ The composition root (:mod:`cyborg.app`) validates a block against ``settings``,
 from __future__ import annotations
 
 import random
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Generic, Protocol, TypeVar, runtime_checkable
@@ -33,9 +33,11 @@ __all__ = [
     "CalendarEntry",
     "Component",
     "KeepsCalendar",
+    "Listening",
     "ModuleKind",
     "ModuleSettings",
     "ServesStates",
+    "listening_of",
 ]
 
 
@@ -57,6 +59,13 @@ class ModuleSettings(BaseModel):
         """
         return ()
 
+    def listens_for_places(self) -> tuple[str, ...]:
+        """The phrases of :meth:`listens_for` that a place name follows ("where is" the cafeteria).
+
+        Speech recognition puts the navigation database's places after them. The default: none.
+        """
+        return ()
+
     def serves(self) -> tuple[str, ...]:
         """The action servers this module offers (states' ``action:``), known without starting it.
 
@@ -65,6 +74,22 @@ class ModuleSettings(BaseModel):
         """
         action = getattr(self, "action", None)
         return (action,) if isinstance(action, str) and action else ()
+
+
+@dataclass(frozen=True)
+class Listening:
+    """What the robot's modules listen for in speech: phrases said on their own, and phrases a place follows."""
+
+    phrases: tuple[str, ...] = ()
+    place_phrases: tuple[str, ...] = ()
+
+
+def listening_of(settings: Iterable[ModuleSettings]) -> Listening:
+    """What the modules with ``settings`` listen for, together (lower case, each phrase once)."""
+    modules = list(settings)
+    places = dict.fromkeys(p.strip().lower() for s in modules for p in s.listens_for_places())
+    alone = dict.fromkeys(p.strip().lower() for s in modules for p in s.listens_for())
+    return Listening(tuple(p for p in alone if p not in places), tuple(places))
 
 
 @runtime_checkable
@@ -120,6 +145,10 @@ class BuildContext(Protocol):
 
     def occupancy_map(self) -> OccupancyMap:
         """The map of the world the robot is in (``--map``, or the packaged one), loaded once."""
+        ...
+
+    def listening(self) -> Listening:
+        """What every module of the robot's configuration listens for in speech (its ears' grammar)."""
         ...
 
 

@@ -36,6 +36,10 @@ class NavigationSettings(ModuleSettings):
         """The phrases that start a request for a place (the place follows them), and the answers."""
         return (*(phrase for phrases in TRIGGERS.values() for phrase in phrases), *YES_PHRASES, *NO_PHRASES)
 
+    def listens_for_places(self) -> tuple[str, ...]:
+        """The phrases a place follows: "go to", "where is", "what do you think of" ..."""
+        return tuple(phrase for phrases in TRIGGERS.values() for phrase in phrases)
+
 
 def _build(node: Node, settings: NavigationSettings, context: BuildContext) -> NavigationModule:
     db = NavigationDatabase(Path(settings.db) if settings.db else context.data_dir / "navigation.db")
