@@ -21,12 +21,15 @@ fails raises TransportError, and the gatekeeper passes nothing (fails closed).
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
 import os
+import tempfile
 import threading
 import time
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Iterator
+from pathlib import Path
 from typing import Any
 
 import rclpy
@@ -78,6 +81,48 @@ EXECUTOR_THREADS = 32  # an action goal being executed holds one thread while it
 NODE_GONE_WAIT = 1.0  # seconds a node's shutdown waits until the graph has lost it
 
 
+PARTICIPANT_LEASE = 1.0  # seconds after a process's last sign of life until the others drop it
+LEASE_ANNOUNCEMENT = 0.25  # seconds between a process's signs of life
+PROFILE_VARIABLES = ("FASTDDS_DEFAULT_PROFILES_FILE", "FASTRTPS_DEFAULT_PROFILES_FILE")
+_PROFILE = f"""<?xml version="1.0" encoding="UTF-8" ?>
+<dds xmlns="http://www.eprosima.com">
+  <profiles>
+    <participant profile_name="cyborg_participant" is_default_profile="true">
+      <rtps><builtin><discovery_config>
+        <leaseDuration><sec>{int(PARTICIPANT_LEASE)}</sec>
+          <nanosec>{round(PARTICIPANT_LEASE % 1 * 1e9)}</nanosec></leaseDuration>
+        <leaseAnnouncement><sec>{int(LEASE_ANNOUNCEMENT)}</sec>
+          <nanosec>{round(LEASE_ANNOUNCEMENT % 1 * 1e9)}</nanosec></leaseAnnouncement>
+      </discovery_config></builtin></rtps>
+    </participant>
+  </profiles>
+</dds>
+"""
+
+
+@contextlib.contextmanager
+def _participant_profile() -> Iterator[None]:
+    """Fast DDS's participant, made while this is active, announces itself every
+    LEASE_ANNOUNCEMENT s and is dropped by every other process PARTICIPANT_LEASE s after its
+    last announcement (Fast DDS's default: 20 s). So a module process that is killed
+    mid-goal is gone from the controller's graph within about a second, and its goal ends
+    LOST (the controller takes 'aborted'), as under ROS 1, where its TCP connections close.
+    Fast DDS reads the profile from the environment when rclpy.init makes the participant; a
+    profile the user set (FASTDDS_DEFAULT_PROFILES_FILE) is left alone, and the environment is
+    restored afterwards, so processes started from this one keep Fast DDS's defaults."""
+    if any(os.environ.get(name) for name in PROFILE_VARIABLES):
+        yield
+        return
+    with tempfile.TemporaryDirectory(prefix="cyborg-fastdds-") as folder:
+        path = Path(folder) / "participant.xml"
+        path.write_text(_PROFILE)
+        os.environ[PROFILE_VARIABLES[0]] = str(path)
+        try:
+            yield
+        finally:
+            del os.environ[PROFILE_VARIABLES[0]]
+
+
 def parameter_name(key: str) -> str:
     """The home's ROS 2 parameter for our absolute ``key``: ``/a/b`` -> ``a.b``."""
     return key.strip("/").replace("/", ".")
@@ -91,7 +136,11 @@ class Ros2Transport(Transport):
         self.callback_errors = 0
         self.run_callback = CallbackRunner(log, self._count_callback_error)
         self.context = Context()
-        rclpy.init(args=args, context=self.context)
+        with _participant_profile():  # Fast DDS makes its participant with this process's first node
+            rclpy.init(args=args, context=self.context)
+            self._probe: RclNode | None = RclNode(
+                f"_cyborg_graph_{os.getpid()}_{id(self):x}", context=self.context
+            )
         self.executor = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS, context=self.context)
         self._nodes: dict[str, Ros2Node] = {}
         self._types: dict[str, str] = {}  # topic -> our ROS type, of this process's endpoints
@@ -100,7 +149,6 @@ class Ros2Transport(Transport):
         self._params_lock = threading.Lock()
         self._param_node: RclNode | None = None
         self._param_clients: dict[str, Any] = {}
-        self._probe: RclNode | None = None
         self._spinner = threading.Thread(target=self._spin, name="ros2 executor", daemon=True)
         self._spinner.start()
 
@@ -165,9 +213,9 @@ class Ros2Transport(Transport):
             time.sleep(0.001)
 
     def _graph_probe(self) -> RclNode:
-        """A hidden node of this process that reads the graph while others come and go."""
+        """The hidden node of this process that reads the graph while others come and go."""
         if self._probe is None:
-            self._probe = RclNode(f"_cyborg_graph_{os.getpid()}_{id(self):x}", context=self.context)
+            raise TransportError("the ROS 2 transport is closed; fix: make a new Ros2Transport")
         return self._probe
 
     @staticmethod
