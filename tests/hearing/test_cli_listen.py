@@ -43,3 +43,31 @@ def test_listen_without_a_microphone_names_the_fix(tmp_path: Path) -> None:
     )
     assert result.exit_code == 1
     assert "no microphone to listen to" in result.output and "--wav FILE" in result.output
+
+
+def test_sim_with_a_microphone_that_is_not_there_stops_with_the_fix(tmp_path: Path) -> None:
+    from cyborg.interfaces.cli import packaged_config
+
+    config = tmp_path / "robot.yaml"
+    config.write_text(
+        packaged_config("cyborg.yaml").read_text()
+        + "\n  cyborg_speech_input: {kind: speech_input, source: microphone, device: no such microphone}\n"
+    )
+    result = CliRunner().invoke(
+        cli,
+        [
+            "sim",
+            "--config",
+            str(config),
+            "--mic",
+            "--duration",
+            "1",
+            "--data-dir",
+            str(tmp_path),
+            "--port",
+            "0",
+        ],
+    )
+    assert result.exit_code == 1, result.output
+    assert "no microphone to listen to" in result.output and "fix: plug one in" in result.output
+    assert "Traceback" not in result.output

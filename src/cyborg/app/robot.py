@@ -9,6 +9,7 @@ The ROS nodes are built from the same pieces, one part per process (:mod:`cyborg
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import random
 from collections.abc import Callable, Iterable
@@ -192,9 +193,20 @@ def build_robot(
             robot.components[gate.name] = keeper
     except BaseException:
         robot.close()  # what was built so far: no timer or database left open
+        _finish_cancelled(transport)
         raise
     warn_unserved(config, served_actions(robot.components.values()))
     return robot
+
+
+def _finish_cancelled(transport: Transport) -> None:
+    """Let the tasks that closing a half-built robot cancelled finish, when no loop runs yet (``cyborg
+    sim`` builds before it runs): otherwise asyncio reports them as destroyed while pending."""
+    loop = transport.clock.loop
+    if not loop.is_running() and not loop.is_closed():
+        pending = [task for task in asyncio.all_tasks(loop) if task.cancelled() or task.cancelling()]
+        if pending:
+            loop.run_until_complete(asyncio.gather(*pending, return_exceptions=True))
 
 
 def warn_unserved(config: LoadedConfig, served: set[str]) -> None:
