@@ -719,3 +719,50 @@ def test_a_crowded_map_keeps_names_apart_and_zooms(browser: Browser, tmp_path: P
         page.context.close()
         robot.stop()
     assert not errors, "the page logged errors:\n" + "\n".join(errors)
+
+
+def test_heard_sentences_show_their_confidence_and_rejected_ones_are_greyed(
+    browser: Browser, sim: str
+) -> None:
+    errors: list[str] = []
+    socket: list[FakeSocket] = []
+    page = open_page(browser, sim + "/", errors, before=lambda tab: socket.append(FakeSocket(tab)))
+    try:
+        fake = socket[0]
+        seq = 2 * 10**6
+        base = {"type": "recognised", "raw": ""}
+        fake.send(
+            page,
+            {
+                **base,
+                "seq": seq,
+                "t": 60.0,
+                "text": "where is the cafeteria",
+                "confidence": 0.42,
+                "accepted": True,
+            },
+        )
+        fake.send(
+            page,
+            {
+                **base,
+                "seq": seq + 1,
+                "t": 61.0,
+                "text": "where is the like",
+                "confidence": 0.0,
+                "accepted": False,
+            },
+        )
+        believed, rejected = (
+            page.locator(f'#log li[data-seq="{seq}"]'),
+            page.locator(f'#log li[data-seq="{seq + 1}"]'),
+        )
+        expect(believed).to_contain_text("“where is the cafeteria” 42 %")
+        expect(rejected).to_contain_text("“where is the like” 0 % (rejected)")
+        opacity = lambda row: float(row.evaluate("e => getComputedStyle(e).opacity"))  # noqa: E731
+        assert opacity(believed) == 1.0 and opacity(rejected) < 0.6, "a rejected sentence is greyed"
+        page.locator('.log-filters input[data-type="recognised"]').uncheck()
+        expect(believed).to_be_hidden()
+    finally:
+        page.context.close()
+    assert not errors, "the page logged errors:\n" + "\n".join(errors)
