@@ -50,20 +50,7 @@ def test_scenario_over_ros(name: str, ros: RosSession, observe: Observers, tmp_p
     result = subprocess.run(command, capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
     records = [json.loads(line) for line in transcript.read_text().splitlines()]
-    try:
-        _expectations().CHECKS[name](records)
-    except AssertionError as exc:  # expectations.py is loaded without pytest's assert rewriting
-        story = [
-            f"{r['t']:8.1f} {r['type']:7} "
-            + (
-                f"{r['from']} -{r['event']}-> {r['to']}"
-                if r["type"] == "state"
-                else str(r.get("text", r.get("emotion")))
-            )
-            for r in records
-            if r["type"] in ("state", "say", "heard", "emotion")
-        ]
-        raise AssertionError(f"{exc!r}\ntranscript {transcript}:\n" + "\n".join(story[:400])) from exc
+    _expectations().check_transcript(name, records, transcript)
     assert records[-1]["t"] <= script.until + 1
 
     # Simulated time on /clock, from the simulated base, starting at the script's start.

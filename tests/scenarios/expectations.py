@@ -318,3 +318,22 @@ CHECKS = {
     "scenario_c": check_scenario_c,
     "scenario_d": check_scenario_d,
 }
+
+
+def check_transcript(name: str, records: list[Record], where: object) -> None:
+    """Scenario ``name``'s checks on a run's records (ROS runs); a failure shows the run's story
+    (states, sentences, emotions) with the transcript's path ``where``."""
+    try:
+        CHECKS[name](records)
+    except AssertionError as exc:  # this file is loaded without pytest's assert rewriting
+        story = [
+            f"{r['t']:8.1f} {r['type']:7} "
+            + (
+                f"{r['from']} -{r['event']}-> {r['to']}"
+                if r["type"] == "state"
+                else str(r.get("text", r.get("emotion")))
+            )
+            for r in records
+            if r["type"] in ("state", "say", "heard", "emotion")
+        ]
+        raise AssertionError(f"{exc!r}\ntranscript {where}:\n" + "\n".join(story[:400])) from exc

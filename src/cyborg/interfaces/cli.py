@@ -78,11 +78,11 @@ class LazyGroup(click.Group):
         "node": (
             "cyborg.interfaces.cli_ros:node",
             "Run one part of the robot as the ROS 1 node NAME (cyborg_controller, a module, a "
-            "gatekeeper, cyborg_api, or cyborg_scenario with --script).",
+            "gatekeeper, cyborg_api, or cyborg_scenario with --script); with --ros2 as a ROS 2 node.",
         ),
         "launch": (
             "cyborg.interfaces.cli_ros:launch_command",
-            "Start the whole robot over ROS 1: a master if none runs, then one process per part.",
+            "Start the whole robot over ROS 1 (a master if none runs) or ROS 2 (--ros2), a process a part.",
         ),
     },
 )

@@ -1,4 +1,4 @@
-"""``cyborg node`` and ``cyborg launch``: the robot over ROS 1, one process per part."""
+"""``cyborg node`` and ``cyborg launch``: the robot over ROS 1 (ROS 2 with ``--ros2``), a process a part."""
 
 from __future__ import annotations
 
@@ -78,6 +78,11 @@ _speed_help = "virtual time at this factor of real time (all nodes share one clo
     "without it a controller restarted after a crash resumes an emotion stored within "
     "resume_within_seconds",
 )
+@click.option(
+    "--ros2",
+    is_flag=True,
+    help="a ROS 2 node (rclpy, .venv-ros2; no master), with use_sim_time under --speed",
+)
 @access_options
 def node(
     name: str,
@@ -94,10 +99,18 @@ def node(
     script_path: Path | None,
     transcript_path: Path | None,
     fresh: bool,
+    ros2: bool,
     access: Access,
 ) -> None:
     """Run one part of the robot as the ROS 1 node NAME (cyborg_controller, a module, a gatekeeper,
-    cyborg_api, or cyborg_scenario with --script)."""
+    cyborg_api, or cyborg_scenario with --script); with --ros2 as a ROS 2 node."""
+    if ros2:
+        from cyborg.interfaces.ros2_env import run_in_ros2_venv
+
+        try:
+            run_in_ros2_venv()  # returns only in a Python that has rclpy
+        except CyborgError as exc:
+            fail(exc)
     from cyborg.interfaces.ros_commands import ScenarioFiles, SimTime, parse_epoch, parse_start, run_node
     from cyborg.sim.runner import default_data_dir
 
@@ -122,6 +135,7 @@ def node(
             scenario=scenario,
             resume=not fresh,
             access=access,
+            ros2=ros2,
         )
     except CyborgError as exc:
         fail(exc)
@@ -158,6 +172,11 @@ def node(
     "--speed", type=float, default=None, callback=check_factor, help=_speed_help + "; sets /use_sim_time"
 )
 @click.option("--start", "start_at", default=None, help="with --speed: virtual start, ISO date-time (UTC)")
+@click.option(
+    "--ros2",
+    is_flag=True,
+    help="ROS 2 nodes (rclpy, .venv-ros2): no master is started; with --speed each node sets use_sim_time",
+)
 @duration_option
 def launch_command(
     config_path: Path | None,
@@ -168,12 +187,14 @@ def launch_command(
     write_path: Path | None,
     speed: float | None,
     start_at: str | None,
+    ros2: bool,
     duration: float | None,
 ) -> None:
-    """Start the whole robot over ROS 1: a master if none runs, then one process per part.
+    """Start the whole robot over ROS 1 (a master if none runs) or ROS 2 (--ros2), a process a part.
 
     With --speed N every node runs in virtual time at N times real time from one shared origin,
-    /use_sim_time is set and the simulated base publishes /clock.
+    /use_sim_time is set and the simulated base publishes /clock. With --ros2 the parts are ROS 2
+    nodes (no master; each node's use_sim_time parameter is set instead).
     """
     from cyborg.interfaces.ros_commands import parse_start
     from cyborg.interfaces.ros_launch import all_parts, launch, roslaunch_xml
@@ -195,6 +216,8 @@ def launch_command(
             )
         folder = (data_dir or default_data_dir()).resolve()
         if write_path is not None:
+            if ros2:
+                raise click.UsageError("--write writes a ROS 1 roslaunch file; drop --ros2 or --write")
             if speed is not None:
                 raise click.UsageError(
                     "--speed needs `cyborg launch` itself (it fixes the nodes' shared origin); drop --write"
@@ -213,6 +236,7 @@ def launch_command(
             speed=speed,
             start=start,
             duration=duration,
+            ros2=ros2,
         )
     except CyborgError as exc:
         fail(exc)

@@ -71,6 +71,12 @@ if TYPE_CHECKING:
     help="run every part as its own ROS 1 node (as `cyborg launch`); with --script, the script too",
 )
 @click.option(
+    "--ros2",
+    "over_ros2",
+    is_flag=True,
+    help="as --ros, on ROS 2 (`cyborg launch --ros2`: rclpy nodes in .venv-ros2, no master)",
+)
+@click.option(
     "--mic",
     is_flag=True,
     help="the robot hears the machine's microphone (adds a speech_input module; offline, pocketsphinx)",
@@ -87,19 +93,25 @@ def sim(
     script_path: Path | None,
     transcript_path: Path | None,
     over_ros: bool,
+    over_ros2: bool,
     mic: bool,
     access: Access,
 ) -> None:
     """Run the whole simulated robot in this process, with its API and dashboard.
 
     With --script, run a scenario on a fresh robot in virtual time and write its transcript.
-    With --ros, the robot runs as ROS nodes, one process per part, in virtual time with --speed.
+    With --ros, the robot runs as ROS nodes, one process per part, in virtual time with --speed;
+    --ros2 the same on ROS 2.
     """
     try:
         config = load_or_default(config_path)
+        if over_ros and over_ros2:
+            raise click.UsageError("--ros and --ros2 exclude each other: pick one")
         if mic:
-            if over_ros or script_path is not None:
-                raise click.UsageError("--mic goes with the interactive sim, not with --ros or --script")
+            if over_ros or over_ros2 or script_path is not None:
+                raise click.UsageError(
+                    "--mic goes with the interactive sim, not with --ros, --ros2 or --script"
+                )
             config.model.modules.setdefault(MIC_MODULE, {"kind": "speech_input", "source": "microphone"})
         check_modules(config)
         for warning in config.warnings:
@@ -108,8 +120,18 @@ def sim(
             raise CyborgError(
                 f"map file {map_path} does not exist; fix: check the path (e.g. ../shared/maps/glassgarden.map)"
             )
-        if over_ros:
-            _sim_over_ros(config, speed, duration, port, data_dir, script_path, transcript_path, map_path)
+        if over_ros or over_ros2:
+            _sim_over_ros(
+                config,
+                speed,
+                duration,
+                port,
+                data_dir,
+                script_path,
+                transcript_path,
+                map_path,
+                ros2=over_ros2,
+            )
             return
         if script_path is not None:
             _run_script(config, script_path, transcript_path, speed, data_dir, map_path)
@@ -164,6 +186,8 @@ def _sim_over_ros(
     script_path: Path | None,
     transcript_path: Path | None,
     map_path: Path | None,
+    *,
+    ros2: bool = False,
 ) -> None:
     from cyborg.interfaces.ros_launch import all_parts, launch, run_scenario_ros
     from cyborg.sim.runner import default_data_dir
@@ -184,6 +208,7 @@ def _sim_over_ros(
             echo=True,
             speed=factor,
             duration=duration,
+            ros2=ros2,
         )
         return
     records = run_scenario_ros(
@@ -195,6 +220,7 @@ def _sim_over_ros(
         data_dir=data_dir.resolve() if data_dir else None,
         map_path=map_path.resolve() if map_path else None,
         echo=True,
+        ros2=ros2,
     )
     _echo_records(records)
     if transcript_path:

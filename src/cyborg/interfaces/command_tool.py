@@ -2,8 +2,9 @@
 
 ``cyborg event NAME``, ``cyborg say TEXT``, ``cyborg emotion set NAME``,
 ``cyborg emotion values P A D``, ``cyborg emotion on|off`` and
-``cyborg status [--follow]`` (thesis 1.4 and 10.1). With ``--ros`` the same commands go
-over the ROS graph instead (:mod:`cyborg.interfaces.ros_tool`).
+``cyborg status [--follow]`` (thesis 1.4 and 10.1). With ``--ros`` (``--ros2``) the same commands
+go over the ROS 1 (ROS 2) graph instead (:mod:`cyborg.interfaces.ros_tool`); ``--ros2`` typed in
+the main venv runs the command again in ``.venv-ros2``.
 """
 
 from __future__ import annotations
@@ -107,7 +108,7 @@ class HttpLink:
 
 
 class RobotLink(Protocol):
-    """What the commands need of a robot: the HTTP API by default, the ROS graph with --ros."""
+    """What the commands need of a robot: the HTTP API by default, the ROS graph with --ros/--ros2."""
 
     def close(self) -> None: ...
     def send_event(self, name: str) -> bool | None: ...
@@ -122,7 +123,7 @@ class RobotLink(Protocol):
 
 
 def link_options(command: Callable[..., None]) -> Callable[..., None]:
-    """--url and --ros; the command receives ``link``, an open :class:`RobotLink`, instead."""
+    """--url, --ros and --ros2; the command receives ``link``, an open :class:`RobotLink`, instead."""
 
     @click.option(
         "--url", default=DEFAULT_URL, show_default=True, envvar="CYBORG_URL", help="the running robot's API"
@@ -140,14 +141,29 @@ def link_options(command: Callable[..., None]) -> Callable[..., None]:
         envvar="CYBORG_ROS",
         help="talk to a robot of ROS nodes through its topics and services (ROS_MASTER_URI)",
     )
+    @click.option(
+        "--ros2",
+        "over_ros2",
+        is_flag=True,
+        envvar="CYBORG_ROS2",
+        help="talk to a robot of ROS 2 nodes through its topics and services (ROS_DOMAIN_ID)",
+    )
     @functools.wraps(command)
-    def wrapper(*args: Any, url: str, token: str | None, over_ros: bool, **kwargs: Any) -> None:
+    def wrapper(
+        *args: Any, url: str, token: str | None, over_ros: bool, over_ros2: bool, **kwargs: Any
+    ) -> None:
         link: RobotLink
-        if over_ros:
+        if over_ros and over_ros2:
+            raise click.UsageError("--ros and --ros2 exclude each other: the robot runs on one of them")
+        if over_ros or over_ros2:
             from cyborg.interfaces.ros_tool import RosLink
 
             try:
-                link = RosLink()
+                if over_ros2:
+                    from cyborg.interfaces.ros2_env import run_in_ros2_venv
+
+                    run_in_ros2_venv()  # returns only in a Python that has rclpy
+                link = RosLink(ros2=over_ros2)
             except CyborgError as exc:
                 raise ToolError(str(exc)) from None
         else:

@@ -1,16 +1,20 @@
-"""``cyborg node NAME``: one part of the robot as a ROS 1 node, and what launches share with it.
+"""``cyborg node NAME``: one part of the robot as a ROS node, and what launches share with it.
 
-Needs ROS 1 (scripts/install-ros) and a master (``roscore``; ``cyborg launch`` starts one when
-none answers at ``ROS_MASTER_URI``).
+ROS 1 needs scripts/install-ros and a master (``roscore``; ``cyborg launch`` starts one when
+none answers at ``ROS_MASTER_URI``). ROS 2 (``--ros2``) needs scripts/install-ros2 and no
+master: the node runs in ``.venv-ros2``'s Python (:mod:`cyborg.interfaces.ros2_env`), its
+nodes are rclpy nodes with ``use_sim_time`` set in virtual time, and a launch meets its nodes in
+a folder instead of on the parameter server (:class:`FolderRendezvous`).
 
 Simulated time (``--speed N``): every node runs a :class:`VirtualClock` at speed N from one
 origin, so their virtual times agree. ``cyborg node --epoch T`` gives the origin as a wall-clock
 time; ``cyborg launch --speed N`` sets ``/use_sim_time``, starts the nodes with ``--epoch
-param:NS`` and, once every node is built and waiting, fixes the origin in the parameter
-``NS/epoch`` (nodes take seconds to start, so a time chosen in advance would be missed or
-wasted). The simulated base (``rosarnl_node``; the controller when no base runs) publishes
-``/clock`` from its clock ~10 times a real second, so ``rostopic``, ``rosbag`` and actionlib's
-timers follow the simulated time too.
+param:NS`` (ROS 2: ``--epoch dir:FOLDER``) and, once every node is built and waiting, fixes the
+origin in the parameter ``NS/epoch`` (the file ``FOLDER/epoch``): nodes take seconds to start,
+so a time chosen in advance would be missed or wasted. The simulated base (``rosarnl_node``;
+the controller when no base runs) publishes ``/clock`` from its clock ~10 times a real second,
+so ``rostopic``, ``rosbag`` and actionlib's timers follow the simulated time too (ROS 2: every
+rclpy node of ours has ``use_sim_time``).
 
 ``cyborg sim --ros --script FILE`` runs a scenario script over ROS: the robot's nodes plus the
 node ``cyborg_scenario``, which plays the script and records the transcript
@@ -34,7 +38,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Any, Protocol
 
 import click
 
@@ -49,12 +53,17 @@ from cyborg.transport.clock import DEFAULT_VIRTUAL_START, Clock, RealClock, Virt
 from cyborg.transport.messages import Clock as ClockMessage
 from cyborg.transport.messages import String
 
+if TYPE_CHECKING:
+    from cyborg.transport.ros import RosTransport
+    from cyborg.transport.ros2 import Ros2Transport
+
 SCENARIO = "cyborg_scenario"
 CLOCK_TOPIC = "/clock"
 CLOCK_RATE = 10.0  # /clock messages per real second
 USE_SIM_TIME = "/use_sim_time"
 SIM_PARAMS = "/cyborg_sim"  # a launch's shared-time parameters live under SIM_PARAMS/<run id>
 EPOCH_PARAM_PREFIX = "param:"
+EPOCH_DIR_PREFIX = "dir:"
 EPOCH_MARGIN = 0.5  # real seconds between the last node being ready and virtual time starting
 READY_TIMEOUT = 120.0  # real seconds a launch waits for its nodes to be ready
 
@@ -105,6 +114,66 @@ class Master:
             self._proxy.deleteParam(self.caller, key)
 
 
+# --- where a launch and its nodes meet -----------------------------------------------------
+
+
+class Rendezvous(Protocol):
+    """Where a launch's nodes say they are ready and read the origin of virtual time."""
+
+    def mark_ready(self, name: str) -> None: ...
+    def ready_names(self) -> set[str]: ...
+    def set_epoch(self, epoch: float) -> None: ...
+    def epoch(self) -> float | None: ...
+
+
+class MasterRendezvous:
+    """ROS 1: parameters under ``namespace`` on the master (``NS/ready/NAME``, ``NS/epoch``)."""
+
+    def __init__(self, namespace: str, caller: str = "/cyborg_launch") -> None:
+        self.namespace = namespace.rstrip("/")
+        self.master = Master(caller=caller)
+
+    def mark_ready(self, name: str) -> None:
+        self.master.set(f"{self.namespace}/ready/{name}", True)
+
+    def ready_names(self) -> set[str]:
+        ready = self.master.get(f"{self.namespace}/ready", {})
+        return {name for name, value in ready.items() if value} if isinstance(ready, dict) else set()
+
+    def set_epoch(self, epoch: float) -> None:
+        self.master.set(f"{self.namespace}/epoch", epoch)
+
+    def epoch(self) -> float | None:
+        epoch = self.master.get(f"{self.namespace}/epoch")
+        return float(epoch) if isinstance(epoch, int | float) and not isinstance(epoch, bool) else None
+
+
+class FolderRendezvous:
+    """ROS 2 (no master): files in ``folder``, ``ready/NAME`` and ``epoch`` (written whole, then renamed)."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = folder
+
+    def mark_ready(self, name: str) -> None:
+        (self.folder / "ready").mkdir(parents=True, exist_ok=True)
+        (self.folder / "ready" / name).touch()
+
+    def ready_names(self) -> set[str]:
+        folder = self.folder / "ready"
+        return {path.name for path in folder.iterdir()} if folder.is_dir() else set()
+
+    def set_epoch(self, epoch: float) -> None:
+        partial = self.folder / "epoch.partial"
+        partial.write_text(repr(epoch), encoding="utf-8")
+        partial.replace(self.folder / "epoch")
+
+    def epoch(self) -> float | None:
+        try:
+            return float((self.folder / "epoch").read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            return None
+
+
 # --- time options of a node -------------------------------------------------------------
 
 
@@ -113,8 +182,8 @@ class SimTime:
     """How a node keeps time: real time, or virtual time at ``speed`` from a shared origin.
 
     ``epoch``: the wall-clock time (Unix seconds) at which virtual time reads ``start``; or
-    ``param:NS``, to wait for the launch to set ``NS/epoch`` once every node is ready; or
-    None: the moment the node starts.
+    ``param:NS`` (ROS 1) / ``dir:FOLDER`` (ROS 2), to wait for the launch to set ``NS/epoch``
+    (``FOLDER/epoch``) once every node is ready; or None: the moment the node starts.
     """
 
     speed: float | None = None
@@ -126,9 +195,14 @@ class SimTime:
         return self.speed is not None
 
     @property
-    def epoch_params(self) -> str | None:
+    def rendezvous(self) -> Rendezvous | None:
+        """Where the launch sets the origin, when it does."""
         if isinstance(self.epoch, str) and self.epoch.startswith(EPOCH_PARAM_PREFIX):
-            return self.epoch[len(EPOCH_PARAM_PREFIX) :].rstrip("/")
+            return MasterRendezvous(
+                self.epoch[len(EPOCH_PARAM_PREFIX) :], caller=f"/cyborg_node_{os.getpid()}"
+            )
+        if isinstance(self.epoch, str) and self.epoch.startswith(EPOCH_DIR_PREFIX):
+            return FolderRendezvous(Path(self.epoch[len(EPOCH_DIR_PREFIX) :]))
         return None
 
     def make_clock(self) -> Clock:
@@ -136,7 +210,7 @@ class SimTime:
             if self.epoch is not None:
                 raise CyborgError("--epoch goes with --speed: real time needs no shared origin")
             return RealClock()
-        if self.epoch_params is not None:
+        if isinstance(self.epoch, str):
             origin = math.inf  # stands still until the launch fixes the origin
         elif self.epoch is None:
             origin = time.time()
@@ -146,14 +220,15 @@ class SimTime:
 
 
 def parse_epoch(value: str | None) -> float | str | None:
-    """``--epoch``: Unix seconds (``1795424400.5``) or ``param:/cyborg_sim/RUN``."""
-    if value is None or value.startswith(EPOCH_PARAM_PREFIX):
+    """``--epoch``: Unix seconds (``1795424400.5``), ``param:/cyborg_sim/RUN`` or ``dir:FOLDER``."""
+    if value is None or value.startswith((EPOCH_PARAM_PREFIX, EPOCH_DIR_PREFIX)):
         return value
     try:
         return float(value)
     except ValueError:
         raise click.BadParameter(
-            f"{value!r} is neither a time in Unix seconds (e.g. {time.time():.1f}) nor param:NAMESPACE"
+            f"{value!r} is neither a time in Unix seconds (e.g. {time.time():.1f}) nor param:NAMESPACE "
+            "nor dir:FOLDER"
         ) from None
 
 
@@ -190,19 +265,18 @@ def clock_owner_of(config: LoadedConfig, parts: Sequence[str]) -> str:
     return CONTROLLER if CONTROLLER in parts else parts[0]
 
 
-def _wait_for_epoch(namespace: str, name: str) -> float:
-    """Report this node ready under ``namespace`` and wait for the launch to fix the origin."""
-    master = Master(caller=f"/{name}")
-    master.set(f"{namespace}/ready/{name}", True)
+def _wait_for_epoch(rendezvous: Rendezvous, name: str) -> float:
+    """Report this node ready and wait for the launch to fix the origin."""
+    rendezvous.mark_ready(name)
     deadline = time.monotonic() + READY_TIMEOUT + 30
     while True:
-        epoch = master.get(f"{namespace}/epoch")
-        if isinstance(epoch, int | float) and not isinstance(epoch, bool):
-            return float(epoch)
+        epoch = rendezvous.epoch()
+        if epoch is not None:
+            return epoch
         if time.monotonic() > deadline:
             raise CyborgError(
-                f"no origin of virtual time appeared at {namespace}/epoch; fix: start this node with "
-                "`cyborg launch --speed N`, or give it --epoch UNIX_SECONDS"
+                "no origin of virtual time appeared (the launch sets it once every node is ready); "
+                "fix: start this node with `cyborg launch --speed N`, or give it --epoch UNIX_SECONDS"
             )
         time.sleep(0.05)
 
@@ -232,24 +306,37 @@ def run_node(
     scenario: ScenarioFiles | None = None,
     resume: bool = True,
     access: Access | None = None,
+    ros2: bool = False,
 ) -> None:
     """Run part ``name`` as the ROS node of the same name until SIGINT/SIGTERM.
+
+    ``ros2``: on ROS 2 (rclpy, in this Python; no master), every node with ``use_sim_time`` in virtual
+    time; the log goes to :func:`node_log_file` as rospy's does.
 
     ``resume``: the controller may take over a recently stored emotion (see ``build_controller``).
 
     ``publish_clock_too``: publish /clock (with a speed only); None: when the part is a simulated base.
     ``cyborg_scenario`` (with ``scenario``) plays its script and stops at the script's end.
     """
-    require_ros()
-    if not master_running():
-        raise CyborgError(
-            f"no ROS master answers at {master_uri()}; fix: start roscore, or use `cyborg launch`"
-        )
-    from cyborg.transport.ros import RosTransport
-
     sim_time = sim_time or SimTime()
-    clock = sim_time.make_clock()
-    transport = RosTransport(clock, process_name=name)
+    transport: RosTransport | Ros2Transport
+    if ros2:
+        require_ros2()
+        from cyborg.transport.ros2 import Ros2Transport
+
+        log_to_file(name, ros2=True)
+        clock = sim_time.make_clock()
+        transport = Ros2Transport(clock, use_sim_time=sim_time.virtual)
+    else:
+        require_ros()
+        if not master_running():
+            raise CyborgError(
+                f"no ROS master answers at {master_uri()}; fix: start roscore, or use `cyborg launch`"
+            )
+        from cyborg.transport.ros import RosTransport
+
+        clock = sim_time.make_clock()
+        transport = RosTransport(clock, process_name=name)
     context = NodeContext(data_dir=data_dir, rng=random.Random(seed), map_path=map_path, resume=resume)
     driver = None
     if name == SCENARIO:
@@ -259,7 +346,8 @@ def run_node(
         part = Part(name, [driver])
     else:
         part = build_part(name, config, transport, context)
-    show_problems_on_stderr(name)
+    if not ros2:
+        show_problems_on_stderr(name)
     if publish_clock_too is None:
         publish_clock_too = is_simulated_base(config, name)
     clock_publisher = None
@@ -272,14 +360,14 @@ def run_node(
         stats_publisher = part.controller.node.publisher(topics.CONTROLLER_STATS, String, latch=True)
 
     try:
-        namespace = sim_time.epoch_params
-        if namespace is not None:
+        rendezvous = sim_time.rendezvous
+        if rendezvous is not None:
             assert isinstance(clock, VirtualClock)
-            clock.anchor(_wait_for_epoch(namespace, name))
+            clock.anchor(_wait_for_epoch(rendezvous, name))
         if isinstance(clock, VirtualClock) and clock.real_origin > time.time():
             time.sleep(clock.real_origin - time.time())  # everyone starts at the origin
     except KeyboardInterrupt:
-        transport.close("cyborg node stopped before it started")
+        transport.close()
         clock.close()
         return
 
@@ -362,11 +450,40 @@ def run_node(
         raise SystemExit(code)
 
 
-def node_log_file(name: str) -> Path:
-    """Where rospy writes every log line of node ``name`` in this environment."""
+def require_ros2() -> None:
+    try:
+        import cyborg.transport.ros2  # noqa: F401  (imports rclpy and our ROS 2 interfaces)
+    except ImportError as exc:
+        raise CyborgError(
+            f"ROS 2 is not available in this Python ({exc}); fix: run scripts/install-ros2 and use "
+            ".venv-ros2/bin/cyborg (a --ros2 command in the main venv runs there by itself)"
+        ) from None
+
+
+def node_log_file(name: str, *, ros2: bool = False) -> Path:
+    """Where every log line of node ``name`` goes in this environment: rospy's log folder, or
+    for ROS 2 ``$ROS_LOG_DIR`` (default ``$ROS_HOME/log``, ``~/.ros/log``)."""
+    if ros2:
+        home = Path(os.environ.get("ROS_HOME") or Path.home() / ".ros")
+        return Path(os.environ.get("ROS_LOG_DIR") or home / "log") / f"{name}.log"
     import rospkg  # type: ignore[import-not-found]
 
     return Path(rospkg.get_log_dir()) / f"{name}.log"
+
+
+def log_to_file(name: str, *, ros2: bool) -> None:
+    """Every log line of this node to :func:`node_log_file` (as rospy does on ROS 1), warnings and
+    errors also to stderr (:func:`show_problems_on_stderr`)."""
+    path = node_log_file(name, ros2=ros2)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    root = logging.getLogger()
+    for handler in list(root.handlers):
+        if isinstance(handler, logging.StreamHandler) and getattr(handler, "stream", None) is sys.stderr:
+            root.removeHandler(handler)
+    to_file = logging.FileHandler(path, encoding="utf-8")
+    to_file.setFormatter(logging.Formatter("%(asctime)s %(levelname)-7s %(name)s: %(message)s"))
+    root.addHandler(to_file)
+    show_problems_on_stderr(name)
 
 
 class _OneWrite(logging.Formatter):

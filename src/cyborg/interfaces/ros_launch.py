@@ -1,9 +1,13 @@
-"""``cyborg launch`` and ``cyborg sim --ros``: the whole robot as ROS 1 nodes, one process per part.
+"""``cyborg launch`` and ``cyborg sim --ros``: the whole robot as ROS nodes, one process per part.
 
 A master is started when none answers at ``ROS_MASTER_URI``; each part runs as ``cyborg node NAME``
-(:mod:`cyborg.interfaces.ros_commands`). With a speed, the launch sets ``/use_sim_time`` and fixes
-the shared origin of virtual time once every node is ready. ``cyborg sim --ros --script FILE``
-adds the ``cyborg_scenario`` node, which plays the script and writes the transcript.
+(:mod:`cyborg.interfaces.ros_commands`). With a speed, the launch sets ``/use_sim_time`` and
+fixes the shared origin of virtual time once every node is ready. ``cyborg sim --ros --script
+FILE`` adds the ``cyborg_scenario`` node, which plays the script and writes the transcript.
+
+With ``--ros2`` the parts are ROS 2 nodes (``cyborg node NAME --ros2``, in ``.venv-ros2``'s
+Python): no master, no ``/use_sim_time`` parameter (each node sets its own ``use_sim_time``),
+and the nodes meet the launch in a folder of its own to agree on the origin.
 
 ``cyborg launch`` keeps the robot running when a node stops: it says so and starts that node again
 (as roslaunch's ``respawn``), after RESPAWN_DELAY seconds, doubled for each stop within
@@ -18,6 +22,7 @@ import contextlib
 import json
 import os
 import random
+import shutil
 import signal
 import subprocess
 import sys
@@ -37,14 +42,19 @@ import click
 from cyborg.app.config import LoadedConfig
 from cyborg.app.parts import API, CONTROLLER, NodeContext, build_part, part_names
 from cyborg.errors import CyborgError
+from cyborg.interfaces.ros2_env import ros2_environment, ros2_python
 from cyborg.interfaces.ros_commands import (
+    EPOCH_DIR_PREFIX,
     EPOCH_MARGIN,
     EPOCH_PARAM_PREFIX,
     READY_TIMEOUT,
     SCENARIO,
     SIM_PARAMS,
     USE_SIM_TIME,
+    FolderRendezvous,
     Master,
+    MasterRendezvous,
+    Rendezvous,
     clock_owner_of,
     master_running,
     master_uri,
@@ -106,7 +116,10 @@ class Launch:
     master: subprocess.Popen[bytes] | None = None
     processes: dict[str, subprocess.Popen[bytes]] = field(default_factory=dict)
     respawn: bool = False
+    ros2: bool = False
     _namespace: str | None = None
+    _rendezvous: Rendezvous | None = None
+    _run_dir: Path | None = None
     _clock_owner: str | None = None
     _epoch: float | None = None
     _started_at: dict[str, float] = field(default_factory=dict)
@@ -117,7 +130,7 @@ class Launch:
 
     def command(self, name: str, clock_owner: str | None, *, fresh: bool = True) -> list[str]:
         command = [
-            sys.executable,
+            ros2_python() if self.ros2 else sys.executable,
             "-m",
             "cyborg.interfaces.cli",
             "node",
@@ -135,13 +148,16 @@ class Launch:
             command += ["--port", str(self.port)]
         if name == CONTROLLER and fresh:
             command += ["--fresh"]  # a launch is a fresh start: neutral, emotion system on
+        if self.ros2:
+            command += ["--ros2"]
         if self.speed is not None:
-            assert self._namespace is not None
             command += [
                 "--speed",
                 repr(self.speed),
                 "--epoch",
-                EPOCH_PARAM_PREFIX + self._namespace,
+                EPOCH_DIR_PREFIX + str(self._run_dir)
+                if self.ros2
+                else EPOCH_PARAM_PREFIX + str(self._namespace),
                 "--start",
                 self.start.isoformat(),
                 "--publish-clock" if name == clock_owner else "--no-publish-clock",
@@ -149,6 +165,9 @@ class Launch:
         return command + self.extra_args.get(name, [])
 
     def start_all(self) -> None:
+        if self.ros2:
+            self._start_all_ros2()
+            return
         require_ros()
         if not master_running():
             parsed = urllib.parse.urlparse(master_uri())
@@ -159,6 +178,7 @@ class Launch:
         clock_owner = None
         if self.speed is not None:
             self._namespace = f"{SIM_PARAMS}/run_{uuid.uuid4().hex[:12]}"
+            self._rendezvous = MasterRendezvous(self._namespace)
             clock_owner = clock_owner_of(self.config, self.parts)
             self.parts.sort(key=lambda name: name != clock_owner)  # /clock first: the others wait for it
             master.set(USE_SIM_TIME, True)
@@ -167,22 +187,35 @@ class Launch:
             master.set(USE_SIM_TIME, False)  # left over from a simulated run: nodes would wait for /clock
             self._touched_sim_time = True
         self._clock_owner = clock_owner
+        self._spawn_all()
+
+    def _start_all_ros2(self) -> None:
+        """ROS 2: no master to start or ask; virtual time's origin is set in a folder of this run."""
+        ros2_python()  # says how to install ROS 2 when it is not
+        if self.speed is not None:
+            self._run_dir = Path(tempfile.mkdtemp(prefix="cyborg-launch-"))
+            self._rendezvous = FolderRendezvous(self._run_dir)
+            self._clock_owner = clock_owner_of(self.config, self.parts)
+            self.parts.sort(key=lambda name: name != self._clock_owner)  # /clock first
+        self._spawn_all()
+
+    def _spawn_all(self) -> None:
         for name in self.parts:
             self._spawn(name, fresh=True)
         self.say(f"launched {len(self.processes)} nodes: {', '.join(self.parts)}")
         self.say(
             f"their warnings and errors show here, prefixed [node]; every log line is in "
-            f"{node_log_file('NODE').parent}/NODE.log"
+            f"{node_log_file('NODE', ros2=self.ros2).parent}/NODE.log"
         )
         if self.speed is not None:
-            self._start_virtual_time(master)
+            self._start_virtual_time()
 
-    def _start_virtual_time(self, master: Master) -> None:
-        assert self._namespace is not None
+    def _start_virtual_time(self) -> None:
+        assert self._rendezvous is not None
         deadline = time.monotonic() + READY_TIMEOUT
         while True:
-            ready = master.get(f"{self._namespace}/ready", {})
-            waiting = [name for name in self.parts if not (isinstance(ready, dict) and ready.get(name))]
+            ready = self._rendezvous.ready_names()
+            waiting = [name for name in self.parts if name not in ready]
             if not waiting:
                 break
             self.check_alive()
@@ -193,7 +226,7 @@ class Launch:
                 )
             time.sleep(0.05)
         epoch = self._epoch = time.time() + EPOCH_MARGIN
-        master.set(f"{self._namespace}/epoch", epoch)
+        self._rendezvous.set_epoch(epoch)
         self.say(
             f"virtual time: {self.start.isoformat()} at speed {self.speed:g}, "
             f"starting at {datetime.fromtimestamp(epoch, UTC):%H:%M:%S.%f} UTC"
@@ -203,6 +236,7 @@ class Launch:
         process = subprocess.Popen(
             self.command(name, self._clock_owner, fresh=fresh),
             stdout=None if self.echo else subprocess.DEVNULL,
+            env=ros2_environment() if self.ros2 else None,
         )
         self.processes[name] = process
         self._started_at[name] = time.monotonic()
@@ -279,7 +313,9 @@ class Launch:
                 if process.poll() is None:
                     process.kill()
                     process.wait(timeout=5)
-            if self.master is None and master_running():
+            if self._run_dir is not None:
+                shutil.rmtree(self._run_dir, ignore_errors=True)
+            if self.master is None and not self.ros2 and master_running():
                 master = Master()
                 if self._namespace is not None:
                     master.delete(self._namespace)
@@ -310,10 +346,11 @@ def launch(
     speed: float | None = None,
     start: datetime = DEFAULT_VIRTUAL_START,
     duration: float | None = None,
+    ros2: bool = False,
 ) -> None:
     """Start a master if needed, then every part as its own `cyborg node` process, until stopped.
 
-    ``duration``: stop after that many seconds (virtual with a speed).
+    ``duration``: stop after that many seconds (virtual with a speed). ``ros2``: ROS 2 nodes, no master.
     """
 
     def stop_on_term(signum: int, frame: object) -> None:
@@ -331,6 +368,7 @@ def launch(
         speed=speed,
         start=start,
         respawn=True,
+        ros2=ros2,
     )
     try:
         robot.start_all()
@@ -377,8 +415,10 @@ def run_scenario_ros(
     map_path: Path | None,
     echo: bool = False,
     say: Callable[[str], None] = click.echo,
+    ros2: bool = False,
 ) -> list[dict[str, Any]]:
-    """Run a scenario over ROS: the robot's nodes (no API) plus ``cyborg_scenario``; return the records."""
+    """Run a scenario over ROS (``ros2``: ROS 2): the robot's nodes (no API) plus ``cyborg_scenario``;
+    return the records."""
     from cyborg.sim.scenario import check_script, script_start
     from cyborg.sim.script import load_script
 
@@ -405,6 +445,7 @@ def run_scenario_ros(
                 SCENARIO: ["--script", str(script_path.resolve()), "--transcript", str(transcript_path)]
             },
             say=say,
+            ros2=ros2,
         )
         try:
             robot.start_all()

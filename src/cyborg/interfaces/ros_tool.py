@@ -1,9 +1,11 @@
-"""The command tool over ROS 1 (``cyborg event NAME --ros`` ...): the thesis's topics, no HTTP API.
+"""The command tool over ROS (``cyborg event NAME --ros`` / ``--ros2`` ...): the thesis's topics, no HTTP API.
 
-Each command joins the graph at ``ROS_MASTER_URI`` as a short-lived node
-``cyborg_tool_<pid>``, publishes on the controller's topics exactly as ``rostopic pub`` would
-(waiting first until the listening nodes are connected, so nothing is lost), reads the state
-from the latched ``state_change`` and the emotion from the ``get_emotional_state`` service.
+Each command joins the graph (ROS 1: at ``ROS_MASTER_URI``; ROS 2: its ``ROS_DOMAIN_ID``) as a
+short-lived node ``cyborg_tool`` (ROS 1: in the process ``cyborg_tool_<pid>``), publishes on the
+controller's topics exactly as ``rostopic pub`` / ``ros2 topic pub`` would (waiting first until
+the listening nodes are connected, so nothing is lost), reads the state from the latched
+``state_change`` and the emotion from the ``get_emotional_state`` service. ROS 2 has no master
+to ask who listens: the tool waits up to CONNECT_TIMEOUT for discovery to show the listeners.
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ import contextlib
 import os
 import signal
 from collections.abc import Callable, Coroutine
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from cyborg.errors import CyborgError, ServiceTimeoutError, ServiceUnavailableError, TransportError
 from cyborg.transport import topics
@@ -28,49 +30,81 @@ from cyborg.transport.messages import (
     SystemState,
 )
 
+if TYPE_CHECKING:
+    from cyborg.transport.ros import RosTransport
+    from cyborg.transport.ros2 import Ros2Transport
+
 T = TypeVar("T")
 CONNECT_TIMEOUT = 3.0  # seconds to wait for the listening nodes to connect, or for a latched message
 DELIVERY_GRACE = 0.3  # seconds rospy's writer threads get before the node leaves the graph
 
 
 class RosLink:
-    """One command's connection to a robot running as ROS nodes."""
+    """One command's connection to a robot running as ROS nodes (``ros2``: ROS 2 nodes)."""
 
-    def __init__(self) -> None:
-        from cyborg.interfaces.ros_commands import master_running, master_uri, require_ros
-
-        require_ros()
-        if not master_running():
-            raise CyborgError(
-                f"no ROS master answers at {master_uri()}; fix: start the robot with `cyborg launch` "
-                "(or `cyborg sim --ros`), or set ROS_MASTER_URI"
-            )
-        from cyborg.transport.ros import RosTransport
-
+    def __init__(self, *, ros2: bool = False) -> None:
         self._clock = RealClock()
-        self._transport = RosTransport(self._clock, process_name=f"cyborg_tool_{os.getpid()}")
+        self.ros2 = ros2
+        self._transport: RosTransport | Ros2Transport
+        if ros2:
+            from cyborg.interfaces.ros_commands import require_ros2
+
+            require_ros2()
+            from cyborg.transport.ros2 import Ros2Transport
+
+            self._transport = Ros2Transport(self._clock)
+        else:
+            from cyborg.interfaces.ros_commands import master_running, master_uri, require_ros
+
+            require_ros()
+            if not master_running():
+                raise CyborgError(
+                    f"no ROS master answers at {master_uri()}; fix: start the robot with `cyborg launch` "
+                    "(or `cyborg sim --ros`), or set ROS_MASTER_URI"
+                )
+            from cyborg.transport.ros import RosTransport
+
+            self._transport = RosTransport(self._clock, process_name=f"cyborg_tool_{os.getpid()}")
         self._node: Node = self._transport.node("cyborg_tool")
 
     def close(self) -> None:
-        self._transport.close("command done")
+        self._transport.close()
         self._clock.close()
 
     def _run(self, main: Coroutine[Any, Any, T]) -> T:
         return self._clock.run(main)
 
     async def _publish(self, topic: str, message: Message) -> None:
-        listeners = self._transport.subscribers_of(topic)
-        if not listeners:
-            raise CyborgError(
-                f"no node listens on {topic}; fix: start the robot (`cyborg launch`) or check ROS_MASTER_URI"
-            )
-        publisher = self._node.publisher(topic, type(message), latch=True)
         loop = asyncio.get_running_loop()
         deadline = loop.time() + CONNECT_TIMEOUT
+        listeners = self._transport.subscribers_of(topic)
+        while self.ros2 and not listeners and loop.time() < deadline:  # discovery takes a moment
+            await asyncio.sleep(0.02)
+            listeners = self._transport.subscribers_of(topic)
+        if not listeners:
+            where = "check ROS_DOMAIN_ID" if self.ros2 else "check ROS_MASTER_URI"
+            start = "`cyborg launch --ros2`" if self.ros2 else "`cyborg launch`"
+            raise CyborgError(f"no node listens on {topic}; fix: start the robot ({start}) or {where}")
+        # ROS 2: volatile, so each listening node matches once (a latched publisher matches both
+        # halves of our subscriptions); the tool waits for them anyway.
+        publisher = self._node.publisher(topic, type(message), latch=not self.ros2)
         while publisher.subscriber_count() < len(listeners) and loop.time() < deadline:
             await asyncio.sleep(0.01)
         publisher.publish(message)
         await asyncio.sleep(DELIVERY_GRACE)
+
+    async def _see_parameters(self) -> None:
+        """ROS 2: wait (up to CONNECT_TIMEOUT) until discovery shows the controller's parameter home,
+        which a fresh node may not see yet; a parameter read before that finds nothing."""
+        if not self.ros2:
+            return
+        from cyborg.transport.ros2 import Ros2Transport
+
+        assert isinstance(self._transport, Ros2Transport)
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + CONNECT_TIMEOUT
+        while not self._transport.parameter_home_visible() and loop.time() < deadline:
+            await asyncio.sleep(0.02)
 
     # --- the commands -------------------------------------------------------------------------
 
@@ -81,13 +115,10 @@ class RosLink:
         return None if valid is None else name in valid
 
     async def _valid_events(self) -> set[str] | None:
-        """The current state's events, from the latched state change and the controller's parameter."""
-        try:
-            transitions = self._node.get_param(topics.TRANSITIONS_PARAM, None)
-        except TransportError:
-            return None
-        if not isinstance(transitions, dict):
-            return None  # a controller that does not share them
+        """The current state's events, from the latched state change and the controller's parameter.
+
+        The state change first: once it has come, ROS 2's discovery knows the controller's process,
+        which hosts the parameters (asked earlier, a fresh node may not see them yet)."""
         current: list[str] = []
         subscription = self._node.subscribe(
             topics.STATE_CHANGE, SystemState, lambda m, i: current.append(m.to_system_state)
@@ -98,6 +129,13 @@ class RosLink:
                 await asyncio.sleep(0.02)  # latched: it comes as soon as we are connected
         finally:
             subscription.unsubscribe()
+        await self._see_parameters()
+        try:
+            transitions = self._node.get_param(topics.TRANSITIONS_PARAM, None)
+        except TransportError:
+            return None
+        if not isinstance(transitions, dict):
+            return None  # a controller that does not share them
         events = transitions.get(current[-1]) if current else None
         return set(events) if isinstance(events, list) else None
 
@@ -128,12 +166,14 @@ class RosLink:
         subscription = self._node.subscribe(topics.STATE_CHANGE, SystemState, on_change)
         try:
             proxy = self._node.service_proxy(topics.GET_EMOTIONAL_STATE, EmotionalStateService)
+            await proxy.wait_for_service(CONNECT_TIMEOUT)  # ROS 2: discovery takes a moment
             try:
                 answer = await proxy.call(timeout=CONNECT_TIMEOUT)
             except (ServiceUnavailableError, ServiceTimeoutError):
                 raise CyborgError(
                     f"no emotion system answers on {topics.GET_EMOTIONAL_STATE}; fix: start the node "
-                    "cyborg_controller (`cyborg launch`), or check ROS_MASTER_URI"
+                    "cyborg_controller (`cyborg launch`), or check "
+                    + ("ROS_DOMAIN_ID" if self.ros2 else "ROS_MASTER_URI")
                 ) from None
             status.update(
                 emotion=answer.emotional_state,
@@ -141,6 +181,7 @@ class RosLink:
                 arousal=answer.current_arousal,
                 dominance=answer.current_dominance,
             )
+            await self._see_parameters()
             enabled = self._node.get_param(topics.EMOTION_ENABLED_PARAM, None)
             status["emotion_enabled"] = enabled if isinstance(enabled, bool) else None
             with contextlib.suppress(TimeoutError):

@@ -384,9 +384,10 @@ class Ros2ActionClient(ActionClient[G, R, F]):
             RosString, self._text_topic, self._on_text, volatile_qos(100), callback_group=callback_group
         )
         self._watchdog: Any = None
+        self._closed = False
 
     def server_available(self) -> bool:
-        return bool(self._client.server_is_ready())
+        return not self._closed and bool(self._client.server_is_ready())
 
     async def wait_for_server(self, timeout: float) -> bool:
         clock = self.transport.clock
@@ -456,6 +457,8 @@ class Ros2ActionClient(ActionClient[G, R, F]):
         self._end(handle, status, from_ros2(response.result, self.action_type.result))
 
     def send_cancel(self, handle: _Ros2ClientGoalHandle[G, R, F]) -> None:
+        if self._closed:
+            return  # its goals ended LOST when it closed
         if handle.ros_handle is not None:
             handle.ros_handle.cancel_goal_async()
             if handle.status is GoalStatus.ACTIVE:
@@ -523,8 +526,14 @@ class Ros2ActionClient(ActionClient[G, R, F]):
         self._arm_watchdog()
 
     def close(self) -> None:
+        """Withdraw the client; a goal still under way ends LOST (a cancel after this does nothing)."""
+        if self._closed:
+            return
+        self._closed = True
         if self._watchdog is not None:
             self._watchdog.cancel()
             self._watchdog = None
+        for handle in list(self._active.values()):
+            handle.update_status(GoalStatus.LOST, None, "the action client was closed")
         self._node.destroy_subscription(self._text_sub)
         self._client.destroy()

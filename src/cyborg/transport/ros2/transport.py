@@ -131,8 +131,11 @@ def parameter_name(key: str) -> str:
 class Ros2Transport(Transport):
     """Nodes of this process on a ROS 2 graph (one rclpy context, spun on its own thread)."""
 
-    def __init__(self, clock: Clock, *, args: list[str] | None = None) -> None:
+    def __init__(self, clock: Clock, *, args: list[str] | None = None, use_sim_time: bool = False) -> None:
+        """``use_sim_time``: every rclpy node follows ``/clock`` (its parameter ``use_sim_time``), so
+        what rclpy stamps and times runs in the simulated time our clock publishes there."""
         self.clock = clock
+        self.use_sim_time = use_sim_time
         self.callback_errors = 0
         self.run_callback = CallbackRunner(log, self._count_callback_error)
         self.context = Context()
@@ -182,7 +185,12 @@ class Ros2Transport(Transport):
 
     def make_rcl_node(self, name: str) -> RclNode:
         try:
-            rcl = RclNode(name, context=self.context, start_parameter_services=False)
+            rcl = RclNode(
+                name,
+                context=self.context,
+                start_parameter_services=False,
+                parameter_overrides=[RclParameter("use_sim_time", value=True)] if self.use_sim_time else [],
+            )
         except Exception as exc:
             raise TransportError(
                 f"cannot make the ROS 2 node {name!r} ({exc}); fix: a node name has letters, digits and "
@@ -252,7 +260,20 @@ class Ros2Transport(Transport):
     def wake(self) -> None:
         self.executor.wake()
 
+    def subscribers_of(self, topic: str) -> list[str]:
+        """The nodes the graph knows as subscribers of ``topic`` (discovery may lag a moment)."""
+        probe = self._param_node or next((node.rcl for node in self._nodes.values()), None)
+        if probe is None:
+            return []
+        return sorted({info.node_name for info in probe.get_subscriptions_info_by_topic(topic)})
+
     # --- parameters -------------------------------------------------------------------------
+
+    def parameter_home_visible(self) -> bool:
+        """True once this process hosts the parameter home or the graph shows it (a fresh process
+        learns other nodes' names a moment after their topics and services)."""
+        probe = self._param_node or next((node.rcl for node in self._nodes.values()), None)
+        return self._home is not None or (probe is not None and self._home_elsewhere(probe))
 
     def _home_elsewhere(self, probe: RclNode) -> bool:
         return any(
@@ -304,11 +325,16 @@ class Ros2Transport(Transport):
             client = self._param_clients[service] = self._param_node.create_client(
                 srv, f"/{PARAM_HOME}/{service}", callback_group=ReentrantCallbackGroup()
             )
+        started = time.monotonic()
+        # A client made a moment ago may not have discovered the home's service yet: a request
+        # sent before that goes nowhere.
+        if not client.service_is_ready():
+            client.wait_for_service(timeout_sec=PARAM_TIMEOUT)
         done = threading.Event()
         future = client.call_async(request)
         future.add_done_callback(lambda _: done.set())
         self.executor.wake()
-        if not done.wait(PARAM_TIMEOUT) or future.result() is None:
+        if not done.wait(max(0.0, PARAM_TIMEOUT - (time.monotonic() - started))) or future.result() is None:
             client.remove_pending_request(future)
             raise TransportError(
                 f"could not {what}: the parameter home /{PARAM_HOME} did not answer within {PARAM_TIMEOUT} s; "
