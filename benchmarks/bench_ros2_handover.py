@@ -1,0 +1,360 @@
+"""Handover latency over ROS 2, beside the raw rclpy action floor measured in the same run.
+
+* ours: an event published on /cyborg_controller/register_event -> the next module's goal
+  accepted. The controller (``Controller`` on ``Ros2Transport``) runs in one process, two
+  modules that accept goals and acknowledge cancels at once (``Ros2Transport`` action servers)
+  in another, and this process publishes the events with plain rclpy.
+* floor: plain ``rclpy.action``, no controller: an ``ActionClient`` cancels the running goal,
+  waits for CANCELED, sends the next goal to the other server and waits for it to be accepted;
+  the two servers are plain ``ActionServer`` s in a third process that accept goals and end a
+  goal CANCELED as soon as its cancel is accepted (the execute callback waits for it on an
+  event, then for rcl to mark the goal canceling).
+
+Both are stamped on the server side, right after the goal was accepted, with
+``time.perf_counter()`` (CLOCK_MONOTONIC: one time line for every process of the machine),
+and reported back on a topic. Ours and the floor run in alternating blocks, so load changes of
+the shared machine hit both alike. Every process runs on one random ROS_DOMAIN_ID with
+discovery kept on this host.
+
+Run: .venv-ros2/bin/python benchmarks/bench_ros2_handover.py [--handovers 1000] [--block 100]
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import os
+import queue
+import random
+import signal
+import subprocess
+import sys
+import threading
+import time
+from typing import Any
+
+from _machine import machine_line, percentile
+
+MACHINE = """
+states:
+  idle: {action: bench/a, transitions: {to_b: b, aborted: idle}}
+  b: {action: bench/b, transitions: {to_a: idle, aborted: idle}}
+"""
+OURS_REPORT = "/bench/ours_active"
+FLOOR_REPORT = "/bench/floor_active"
+FLOOR_ACTIONS = ("/bench_floor/a", "/bench_floor/b")
+OUR_ACTIONS = ("/bench/a", "/bench/b")
+REGISTER_EVENT = "/cyborg_controller/register_event"
+
+
+def _run_until_signalled(clock: Any, transport: Any, start: Any = None) -> None:
+    async def main() -> None:
+        stop = asyncio.Event()
+        loop = asyncio.get_running_loop()
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            loop.add_signal_handler(sig, stop.set)
+        if start is not None:
+            start()
+        print("ready", flush=True)
+        await stop.wait()
+
+    try:
+        clock.run(main())
+    finally:
+        transport.close()
+        clock.close()
+
+
+def role_controller() -> None:
+    from cyborg.app.config import parse_config
+    from cyborg.controller.runtime import Controller
+    from cyborg.transport.clock import RealClock
+    from cyborg.transport.ros2 import Ros2Transport
+
+    clock = RealClock()
+    transport = Ros2Transport(clock)
+    controller = Controller(transport.node("cyborg_controller"), parse_config(MACHINE).machine)
+    _run_until_signalled(clock, transport, controller.start)
+
+
+def role_modules() -> None:
+    from cyborg.transport.base import GoalStatus, ServerGoalHandle
+    from cyborg.transport.clock import RealClock
+    from cyborg.transport.messages import StateMachineAction, String
+    from cyborg.transport.ros2 import Ros2Transport
+
+    clock = RealClock()
+    transport = Ros2Transport(clock)
+    report = transport.node("bench_report").publisher(OURS_REPORT, String, queue_size=1000)
+
+    def on_goal(handle: ServerGoalHandle[Any, Any, Any]) -> None:
+        handle.accept()
+        if handle.status is GoalStatus.ACTIVE:
+            report.publish(String(f"{handle.goal.event} {time.perf_counter()!r}"))
+
+    for name, action in zip(("mod_a", "mod_b"), OUR_ACTIONS, strict=True):
+        transport.node(name).action_server(action, StateMachineAction, on_goal, lambda h: h.canceled())
+    _run_until_signalled(clock, transport)
+
+
+def role_floor() -> None:
+    import rclpy
+    from cyborg_controller.action import StateMachine
+    from rclpy.action import ActionServer, CancelResponse, GoalResponse
+    from rclpy.callback_groups import ReentrantCallbackGroup
+    from rclpy.executors import MultiThreadedExecutor
+    from rclpy.node import Node
+    from std_msgs.msg import String
+
+    rclpy.init()
+    node = Node("bench_floor")
+    report = node.create_publisher(String, FLOOR_REPORT, 1000)
+    cancels: dict[bytes, threading.Event] = {}
+
+    def accepted(handle: Any) -> None:
+        cancels[bytes(handle.goal_id.uuid)] = threading.Event()
+        report.publish(String(data=f"{handle.request.event} {time.perf_counter()!r}"))
+        handle.execute()
+
+    def execute(handle: Any) -> Any:
+        cancels[bytes(handle.goal_id.uuid)].wait()
+        while not handle.is_cancel_requested:
+            time.sleep(0.0001)  # rcl marks it canceling just after the cancel callback
+        handle.canceled()
+        del cancels[bytes(handle.goal_id.uuid)]
+        return StateMachine.Result()
+
+    def cancel(handle: Any) -> CancelResponse:
+        event = cancels.get(bytes(handle.goal_id.uuid))
+        if event is not None:
+            event.set()
+        return CancelResponse.ACCEPT
+
+    group = ReentrantCallbackGroup()
+    servers = [  # noqa: F841 (kept alive)
+        ActionServer(
+            node,
+            StateMachine,
+            action,
+            execute_callback=execute,
+            goal_callback=lambda goal: GoalResponse.ACCEPT,
+            handle_accepted_callback=accepted,
+            cancel_callback=cancel,
+            callback_group=group,
+        )
+        for action in FLOOR_ACTIONS
+    ]
+    executor = MultiThreadedExecutor(num_threads=8)
+    executor.add_node(node)
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    threading.Thread(target=executor.spin, daemon=True).start()
+    print("ready", flush=True)
+    stop.wait()
+    executor.shutdown(timeout_sec=1)
+
+
+# --- the measuring process ---------------------------------------------------------------------
+
+
+class Reports:
+    """Stamps reported by the servers, as (event, stamp) in arrival order."""
+
+    def __init__(self, node: Any, topic: str) -> None:
+        from std_msgs.msg import String
+
+        self.items: queue.Queue[tuple[str, float]] = queue.Queue()
+        self.sub = node.create_subscription(String, topic, self._on, 1000)
+
+    def _on(self, message: Any) -> None:
+        event, _, stamp = str(message.data).partition(" ")
+        self.items.put((event, float(stamp)))
+
+    def next(self, event: str, timeout: float = 10.0) -> float:
+        deadline = time.monotonic() + timeout
+        while True:
+            got, stamp = self.items.get(timeout=max(0.0, deadline - time.monotonic()))
+            if got == event:
+                return stamp
+
+    def drain(self) -> None:
+        while not self.items.empty():
+            self.items.get_nowait()
+
+
+def wait_until(predicate: Any, timeout: float, what: str) -> None:
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > deadline:
+            raise SystemExit(f"timed out waiting for {what}")
+        time.sleep(0.01)
+
+
+class Ours:
+    def __init__(self, node: Any) -> None:
+        from std_msgs.msg import String
+
+        self.String = String
+        self.reports = Reports(node, OURS_REPORT)
+        self.pub = node.create_publisher(String, REGISTER_EVENT, 100)
+        self.count = 0
+
+    def ready(self) -> None:
+        wait_until(lambda: self.pub.get_subscription_count() >= 1, 30, "the controller to hear events")
+        wait_until(lambda: self.reports.sub.get_publisher_count() >= 1, 30, "the modules' reports")
+        self.warm(4)
+
+    def one(self) -> float:
+        event = "to_b" if self.count % 2 == 0 else "to_a"
+        self.count += 1
+        sent = time.perf_counter()
+        self.pub.publish(self.String(data=event))
+        return (self.reports.next(event) - sent) * 1000
+
+    def warm(self, n: int) -> None:
+        time.sleep(0.5)
+        self.reports.drain()
+        for _ in range(n):
+            self.one()
+
+
+class Floor:
+    """Plain rclpy.action: cancel, wait CANCELED, next goal to the other server, wait accepted."""
+
+    def __init__(self, node: Any) -> None:
+        from cyborg_controller.action import StateMachine
+        from rclpy.action import ActionClient
+
+        self.Goal = StateMachine.Goal
+        self.reports = Reports(node, FLOOR_REPORT)
+        self.clients = [ActionClient(node, StateMachine, name) for name in FLOOR_ACTIONS]
+        for client in self.clients:
+            if not client.wait_for_server(timeout_sec=30):
+                raise SystemExit("the floor's action servers did not come up")
+        self.count = 0
+        self.handle = self._send()
+
+    def _send(self) -> Any:
+        done = threading.Event()
+        event = f"e{self.count}"
+        client = self.clients[self.count % 2]
+        self.count += 1
+        future = client.send_goal_async(self.Goal(previous_state="x", event=event, current_state="y"))
+        future.add_done_callback(lambda _: done.set())
+        if not done.wait(10) or not future.result().accepted:
+            raise SystemExit(f"floor goal {event} was not accepted")
+        return future.result()
+
+    def ready(self) -> None:
+        wait_until(lambda: self.reports.sub.get_publisher_count() >= 1, 30, "the floor's reports")
+        time.sleep(0.5)
+        self.warm(4)
+
+    def one(self) -> float:
+        from action_msgs.msg import GoalStatus
+
+        event = f"e{self.count}"
+        start = time.perf_counter()
+        ended = threading.Event()
+        result = self.handle.get_result_async()
+        result.add_done_callback(lambda _: ended.set())
+        self.handle.cancel_goal_async()
+        if not ended.wait(10) or result.result().status != GoalStatus.STATUS_CANCELED:
+            raise SystemExit("floor: the cancel did not end the goal CANCELED")
+        self.handle = self._send()
+        return (self.reports.next(event) - start) * 1000
+
+    def warm(self, n: int) -> None:
+        self.reports.drain()
+        for _ in range(n):
+            self.one()
+
+
+def spawn(role: str, env: dict[str, str]) -> subprocess.Popen[str]:
+    child = subprocess.Popen(
+        [sys.executable, __file__, "--role", role], env=env, stdout=subprocess.PIPE, text=True
+    )
+    assert child.stdout is not None
+    if child.stdout.readline().strip() != "ready":
+        raise SystemExit(f"the {role} process did not start")
+    return child
+
+
+def bench(handovers: int, block: int) -> dict[str, Any]:
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    env.setdefault("ROS_DOMAIN_ID", str(random.randint(101, 200)))
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    os.environ.update({k: env[k] for k in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE")})
+    import rclpy
+    from rclpy.executors import MultiThreadedExecutor
+    from rclpy.node import Node
+
+    children: list[subprocess.Popen[str]] = []
+    try:
+        children.append(spawn("modules", env))
+        children.append(spawn("floor", env))
+        children.append(spawn("controller", env))
+        rclpy.init()
+        node = Node("bench_sender")
+        executor = MultiThreadedExecutor(num_threads=4)
+        executor.add_node(node)
+        threading.Thread(target=executor.spin, daemon=True).start()
+        ours, floor = Ours(node), Floor(node)
+        ours.ready()
+        floor.ready()
+        ours_ms: list[float] = []
+        floor_ms: list[float] = []
+        started = time.perf_counter()
+        while len(ours_ms) < handovers:
+            n = min(block, handovers - len(ours_ms))
+            ours_ms += [ours.one() for _ in range(n)]
+            floor_ms += [floor.one() for _ in range(n)]
+        elapsed = time.perf_counter() - started
+        for child in children:
+            if child.poll() is not None:
+                raise SystemExit(f"a benchmark process ended early (exit {child.returncode})")
+        executor.shutdown(timeout_sec=1)
+        return {"ours": ours_ms, "floor": floor_ms, "elapsed": elapsed}
+    finally:
+        for child in reversed(children):
+            child.send_signal(signal.SIGINT)
+            try:
+                child.wait(10)
+            except subprocess.TimeoutExpired:
+                child.kill()
+                child.wait(5)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=(__doc__ or "").split("\n\n")[0])
+    parser.add_argument("--handovers", type=int, default=1000, help="handovers of each kind")
+    parser.add_argument("--block", type=int, default=100, help="handovers per alternating block")
+    parser.add_argument("--role", choices=["controller", "modules", "floor"], help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.role is not None:
+        {"controller": role_controller, "modules": role_modules, "floor": role_floor}[args.role]()
+        return
+    result = bench(args.handovers, args.block)
+    ours, floor = result["ours"], result["floor"]
+
+    def row(label: str, values: list[float], target: str = "") -> str:
+        return (
+            f"| {label} | {percentile(values, 50):.2f} | {percentile(values, 99):.2f} | "
+            f"{max(values):.2f} | {len(values)} | {target} |"
+        )
+
+    print(f"machine: {machine_line()}")
+    print(f"wall time of the measured blocks: {result['elapsed']:.1f} s")
+    print("| handover | p50 ms | p99 ms | max ms | count | target |")
+    print("|---|---:|---:|---:|---:|---|")
+    print(row("ours: event -> next module's goal accepted (server side)", ours, "p50 <= 1.5x floor"))
+    print(row("floor: cancel -> CANCELED -> next goal accepted (server side)", floor))
+    print(
+        f"ratio ours/floor: p50 {percentile(ours, 50) / percentile(floor, 50):.2f}, "
+        f"p99 {percentile(ours, 99) / percentile(floor, 99):.2f}"
+    )
+
+
+if __name__ == "__main__":
+    main()
