@@ -108,3 +108,4 @@ def test_module_killed_mid_goal_makes_the_controller_take_aborted_within_2_s(
         for part in (controller, idle):
             part.close()
         observer.shutdown()
+        clock.run(clock.sleep(0.05))  # the closed parts' goal tasks end on the loop

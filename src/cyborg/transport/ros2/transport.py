@@ -157,18 +157,23 @@ class Ros2Transport(Transport):
 
     def _spin(self) -> None:
         """Spin until the transport closes. rclpy's ``spin()`` raises what a callback on one of
-        its threads raised and stops spinning: such a failure is logged and spinning goes on,
-        or every node of the process would fall silent."""
+        its threads raised, or what went wrong while it waited, and stops spinning: such a
+        failure is logged and spinning goes on, or every node of the process would fall silent."""
         while True:
             try:
                 self.executor.spin()
                 return  # shut down
-            except Exception:
+            except Exception as exc:
                 if not self.context.ok():
                     log.debug("executor stopped", exc_info=True)
                     return
-                self.callback_errors += 1
-                log.exception("a ROS 2 callback failed; the executor carries on")
+                # Also seen: rclpy building its wait set while an action client or server is
+                # destroyed ("action client pointer is invalid"); the next turn goes without it.
+                log.warning(
+                    "the ROS 2 executor raised (%s); it spins on",
+                    exc,
+                    exc_info=log.isEnabledFor(logging.DEBUG),
+                )
 
     def _count_callback_error(self) -> None:
         self.callback_errors += 1
@@ -443,6 +448,10 @@ class Ros2Node(Node):
         self.transport.set_param(self.resolve(name), value, self.rcl)
 
     def shutdown(self) -> None:
+        # Out of the executor first: an action server or client destroyed while the executor
+        # still gathers this node's entities left a dead one in its wait set, and every later
+        # turn of the executor failed on it ("action server pointer is invalid").
+        self.transport.executor.remove_node(self.rcl)
         for close in reversed(self._closers):
             try:
                 close()
