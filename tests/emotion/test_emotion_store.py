@@ -192,3 +192,17 @@ def test_write_behind_close_writes_what_waits(tmp_path: Path) -> None:
     reopened = ControllerStore(path)
     assert reopened.get_saturations() == {"music_play": 0.25} and reopened.get_emotion().enabled is False
     reopened.close()
+
+
+def test_events_another_program_adds_while_the_robot_runs_are_seen(tmp_path: Path) -> None:
+    """The motivator reads the events at every decision; the store keeps them until the file changes."""
+    path = tmp_path / "c.db"
+    with ControllerStore(path, [NAVIGATION]) as store:
+        assert [e.event for e in store.list_events("idle")] == ["navigation_emotional"]
+        with ControllerStore(path) as other:  # e.g. an sqlite3 shell on the robot
+            other.add_event(MUSIC)
+        assert [e.event for e in store.list_events("idle")] == ["music_play", "navigation_emotional"]
+        assert store.remove_event("idle", "music_play")
+        store.add_event(JOKE)
+        assert [e.event for e in store.list_events()] == ["joke_tell", "navigation_emotional"]
+        assert store.list_events("conversation") == [JOKE]

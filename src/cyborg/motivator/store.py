@@ -103,6 +103,7 @@ class ControllerStore(SQLiteFile):
         self._retry: Periodic | None = None
         self._pending_lock = threading.Lock()  # held for a moment: _pending and _queued
         self._queued = False  # a write-behind job waits to start
+        self._events: tuple[object, list[MotivationalEvent]] | None = None  # (data_version, events)
         self._writer = ThreadPoolExecutor(1, thread_name_prefix="controller-store") if write_behind else None
         super().__init__(path)
         # The thread's own connection: in WAL mode the loop's reads never wait for its commits.
@@ -272,14 +273,19 @@ class ControllerStore(SQLiteFile):
     # --- motivational events -------------------------------------------------------------
 
     def list_events(self, state: str | None = None) -> list[MotivationalEvent]:
-        sql = "SELECT * FROM events"
-        rows = (
-            self._read(sql + " ORDER BY state, event")
-            if state is None
-            else self._read(sql + " WHERE state = ? ORDER BY event", (state,))
-        )
+        """The motivational events (of ``state``), sorted by state and name.
+
+        Read again whenever the file changed (another program may edit the table while the robot
+        runs; SQLite's ``data_version`` says so), else taken from what was read last: the
+        motivator asks at every decision."""
+        [(version,)] = self._read("PRAGMA data_version")
+        if self._events is None or self._events[0] != version:
+            self._events = (version, self._read_events())
+        return [e for e in self._events[1] if state is None or e.state == state]
+
+    def _read_events(self) -> list[MotivationalEvent]:
         events = []
-        for row in rows:
+        for row in self._read("SELECT * FROM events ORDER BY state, event"):
             try:
                 row_data = dict(zip(_COLUMNS["events"], row, strict=True))
                 events.append(MotivationalEvent.model_validate(row_data))
@@ -291,12 +297,14 @@ class ControllerStore(SQLiteFile):
         """Add ``event``, replacing any event of the same name in the same state."""
         with self._writing(f"add event {event.event!r}") as conn:
             self._upsert_event(conn, event)
+        self._events = None  # (this connection's own writes leave data_version alone)
         self.write_pending()
 
     def remove_event(self, state: str, event: str) -> bool:
         """Remove an event; False if there was none of that name in that state."""
         with self._writing(f"remove event {event!r}") as conn:
             cursor = conn.execute("DELETE FROM events WHERE state = ? AND event = ?", (state, event))
+        self._events = None
         self.write_pending()
         return cursor.rowcount > 0
 
