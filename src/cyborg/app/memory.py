@@ -14,8 +14,7 @@ costs and parents) and frees them after. glibc handed those blocks back to the k
 so each search page-faulted them in afresh: ~4,700 faults and 11 ms of system time a route, a third
 of the planning time. :func:`freeze_built` also asks glibc (``mallopt``) to keep blocks under
 64 MB in its heap and to return freed memory only beyond 128 MB: the peak is the same, what the
-process holds between searches stays near it. The searches run on a thread of their own (the
-route lookahead), so glibc also keeps one heap for all threads, not one each.
+process holds between searches stays near it.
 """
 
 from __future__ import annotations
@@ -31,7 +30,6 @@ log = logging.getLogger(__name__)
 
 _M_TRIM_THRESHOLD = -1
 _M_MMAP_THRESHOLD = -3
-_M_ARENA_MAX = -8
 MMAP_THRESHOLD = 64 * 2**20
 """Blocks below this come from glibc's heap (reused), not fresh kernel pages."""
 TRIM_THRESHOLD = 128 * 2**20
@@ -60,11 +58,6 @@ def keep_freed_blocks() -> None:
         return
     if not (mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD) and mallopt(_M_TRIM_THRESHOLD, TRIM_THRESHOLD)):
         log.debug("mallopt refused the thresholds; freed blocks go back to the kernel as before")
-    # One heap for every thread: the route lookahead's searches (cyborg.sim.lookahead) then free
-    # their arrays into the heap the loop's thread allocates from, instead of a second heap that
-    # keeps its own freed blocks beside it.
-    if not mallopt(_M_ARENA_MAX, 1):
-        log.debug("mallopt refused one heap for every thread")
 
 
 def thaw() -> None:

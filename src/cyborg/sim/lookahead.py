@@ -45,7 +45,7 @@ def arrival(waypoints: Sequence[Point]) -> Point:
 
 
 class RouteLookahead:
-    """The routes of a base, planned on a thread of its own: the next one ahead, the others when asked."""
+    """The routes of a base: the next one prepared on a thread of its own, the others on the spot."""
 
     def __init__(self, planner: RoutePlanner) -> None:
         self.planner = planner
@@ -58,8 +58,10 @@ class RouteLookahead:
 
     def prepare(self, start: Point, goal: Point) -> None:
         """Start planning from ``start`` to ``goal`` on the lookahead thread (replaces what was prepared)."""
+        if self._thread is None:
+            self._thread = ThreadPoolExecutor(1, thread_name_prefix="route-lookahead")
         self._drop()
-        self._prepared = (start, goal, self._plan_on_thread(start, goal))
+        self._prepared = (start, goal, self._thread.submit(self.planner.plan, start, goal))
 
     def route(self, start: Point, goal: Point) -> Route:
         """The route from ``start`` to ``goal``: the prepared one if it is for exactly these, else
@@ -71,14 +73,7 @@ class RouteLookahead:
                 return prepared[2].result()  # usually done: it ran while the base drove
             prepared[2].cancel()
             self.misses += 1
-        # Every search runs on the one thread, prepared or not: glibc keeps a search's big arrays
-        # per thread, so searches on two threads would double the memory they keep.
-        return self._plan_on_thread(start, goal).result()
-
-    def _plan_on_thread(self, start: Point, goal: Point) -> Future[Route]:
-        if self._thread is None:
-            self._thread = ThreadPoolExecutor(1, thread_name_prefix="route-lookahead")
-        return self._thread.submit(self.planner.plan, start, goal)
+        return self.planner.plan(start, goal)
 
     def close(self) -> None:
         """Forget what was prepared and stop the thread (a search under way finishes on its own)."""
