@@ -17,7 +17,6 @@ import pytest
 from cyborg.errors import PlanningError
 from cyborg.maps import Cell, NamedPose, OccupancyMap, Point, default_map_path, load_map
 from cyborg.sim.base import PathState, SimulatedBase, pose_stamped, quaternion_to_yaw
-from cyborg.sim.lookahead import arrival
 from cyborg.sim.planner import RoutePlanner
 from cyborg.transport import topics
 from cyborg.transport.base import ClientGoalHandle, GoalStatus, MessageInfo
@@ -333,18 +332,12 @@ def wander_run(
     seed: int,
     seconds: float = 120.0,
     virtual_pose_rate: float | None = 1.0,
-    lookahead: bool = True,
-    bases: list[SimulatedBase] | None = None,
 ) -> tuple[list[tuple[float, float, float, float]], list[str]]:
     """Poses and path states while wandering ``seconds``, then stopping, on a fresh clock."""
     clock = VirtualClock()
     try:
         transport = EmbeddedTransport(clock)
-        base = make_base(transport, campus, planner, seed=seed, virtual_pose_rate=virtual_pose_rate)
-        if not lookahead:  # every route planned when its trip begins
-            base.routes.prepare = lambda start, goal: None  # type: ignore[method-assign]
-        if bases is not None:
-            bases.append(base)
+        make_base(transport, campus, planner, seed=seed, virtual_pose_rate=virtual_pose_rate)
         client = Client(transport)
 
         async def main() -> None:
@@ -384,36 +377,6 @@ def test_wander_is_deterministic_for_a_seed(campus: OccupancyMap, campus_planner
     assert first == again
     assert len({(x, y) for _, x, y, _ in first}) > 50  # it did move (about a pose a second)
     assert first != other  # the places come from the random generator
-
-
-def test_planning_the_next_wander_trip_ahead_changes_nothing_of_where_it_goes(
-    campus: OccupancyMap, campus_planner: RoutePlanner
-) -> None:
-    """Issue 18: the next trip's route is planned on another thread while the base drives; the
-    trips, poses and times are those of a base that plans each trip when it begins."""
-    bases: list[SimulatedBase] = []
-    ahead, states = wander_run(
-        campus, campus_planner, seed=5, seconds=400.0, virtual_pose_rate=None, bases=bases
-    )
-    on_the_spot, same_states = wander_run(
-        campus, campus_planner, seed=5, seconds=400.0, virtual_pose_rate=None, lookahead=False
-    )
-    assert ahead == on_the_spot and states == same_states
-    trips = states.count(PathState.PLANNING_PATH.value)
-    assert trips >= 4 and bases[0].routes.hits == trips - 1  # all but the first came ready
-
-
-def test_arrival_is_where_the_base_ends_to_the_last_bit(
-    clock: VirtualClock, transport: EmbeddedTransport, campus: OccupancyMap, campus_planner: RoutePlanner
-) -> None:
-    """The lookahead plans from ``arrival(route)``: it must be the base's own end point, float for float."""
-    base = make_base(transport, campus, campus_planner, virtual_pose_rate=None)
-    client = Client(transport)
-    cafeteria = campus.pose("cafeteria")
-    route = campus_planner.plan((base.x, base.y), cafeteria)
-    assert len(route.waypoints) > 2  # several legs, each ending in float arithmetic
-    assert clock.run(client.send_to(cafeteria).wait()) is GoalStatus.SUCCEEDED
-    assert client.position == arrival(route.waypoints) == (base.x, base.y)
 
 
 def test_the_pose_rate_changes_how_often_it_says_where_it_is_not_where_it_goes(

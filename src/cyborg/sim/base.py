@@ -41,8 +41,7 @@ from cyborg.app.view import BaseStatus
 from cyborg.errors import InvalidValueError, PlanningError
 from cyborg.maps import NamedPose, OccupancyMap, Point
 from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
-from cyborg.sim.lookahead import RouteLookahead, arrival
-from cyborg.sim.planner import Route, RoutePlanner
+from cyborg.sim.planner import RoutePlanner
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Node, ServerGoalHandle
 from cyborg.transport.messages import (
@@ -143,8 +142,6 @@ class SimulatedBase:
         self.node = node
         self.map = occupancy_map
         self.planner = planner or RoutePlanner(occupancy_map, robot_radius)
-        self.routes = RouteLookahead(self.planner)
-        """Plans (the next wander trip's route ahead, on its own thread)."""
         self.rng = rng
         self.speed = speed
         start_pose = start if start is not None else _default_start(occupancy_map)
@@ -178,7 +175,6 @@ class SimulatedBase:
     def close(self) -> None:
         """Stop driving (a goal under way ends as preempted)."""
         self._halt()
-        self.routes.close()
 
     def status(self) -> BaseStatus:
         """Pose (the current step, also between published poses), route and path state, for the
@@ -223,14 +219,12 @@ class SimulatedBase:
         """Plan and drive to ``target``; False if there is no route."""
         self._set_state(PathState.PLANNING_PATH)
         try:
-            route = self.routes.route((self.x, self.y), target)
+            route = self.planner.plan((self.x, self.y), target)
         except PlanningError as exc:
             self._set_state(PathState.FAILED_PLAN)
             self._failure = str(exc)
             return False
         self.route = list(route.waypoints)
-        if self.wandering:
-            self._prepare_next_wander(route)
         self._set_state(PathState.WANDERING if self.wandering else PathState.MOVING_TO_GOAL)
         for self._leg, waypoint in enumerate(route.waypoints[1:], 1):
             await self._drive_leg(waypoint, on_pose)
@@ -369,18 +363,6 @@ class SimulatedBase:
         self.wandering = True
         self._motion = self.node.clock.loop.create_task(self._wander(), name="wander")
         return EmptyResponse()
-
-    def _prepare_next_wander(self, route: Route) -> None:
-        """Plan, while this trip is driven, the trip :meth:`_wander` will want next: from where this
-        one ends to the point the random generator gives next (peeked: its state is put back)."""
-        state = self.rng.getstate()
-        try:
-            target = self.planner.random_reachable_point(self.rng, near=route.waypoints[-1])
-        except PlanningError:
-            return
-        finally:
-            self.rng.setstate(state)
-        self.routes.prepare(arrival(route.waypoints), target)
 
     async def _wander(self, on_pose: Any = None) -> bool:
         while self.wandering:
