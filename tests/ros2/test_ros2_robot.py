@@ -29,7 +29,7 @@ from types import ModuleType
 from typing import Any
 
 import pytest
-from support import isolate, ros2_session
+from support import Ros2Session, isolate, ros2_session
 
 from cyborg.sim.scenario import script_start
 from cyborg.sim.script import load_script
@@ -127,7 +127,26 @@ def _get(url: str) -> Any:
 
 
 @pytest.fixture
-def launched(tmp_path: Path) -> Iterator[tuple[subprocess.Popen[str], int]]:
+def own_domain(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A ROS 2 domain of this test's own for the launched robot, the tools and the test's listener.
+
+    This process's session has hosted the parameter home (``/cyborg_parameters``) since the
+    contract suite, holding other machines' transitions; on the session's domain the tool may ask
+    that home instead of the launched controller's. The runner picks domains 1-100, so +100 is free.
+    """
+    monkeypatch.setenv("ROS_DOMAIN_ID", str(int(os.environ.get("ROS_DOMAIN_ID", "0")) + 100))
+
+
+@pytest.fixture
+def own_session(own_domain: None) -> Iterator[Ros2Session]:
+    """A ROS 2 transport in this process on the test's own domain."""
+    session = Ros2Session()
+    yield session
+    session.close()
+
+
+@pytest.fixture
+def launched(tmp_path: Path, own_domain: None) -> Iterator[tuple[subprocess.Popen[str], int]]:
     """`cyborg launch --ros2` of TOOLS (real time, its API on a free port), until the API shows idle."""
     port = _free_port()
     env = {**os.environ, "ROS_LOG_DIR": str(tmp_path / "log")}
@@ -169,12 +188,12 @@ def _wait_state(api: str, state: str) -> None:
 
 
 def test_ros2_command_tool_and_api_drive_a_launched_robot(
-    launched: tuple[subprocess.Popen[str], int], pytestconfig: pytest.Config
+    launched: tuple[subprocess.Popen[str], int], own_session: Ros2Session
 ) -> None:
     process, port = launched
     api = f"http://127.0.0.1:{port}"
     heard: list[tuple[str, str]] = []
-    session = ros2_session(pytestconfig)
+    session = own_session
     listener = session.transport.node("speech_listener")
     listener.subscribe("/text_from_speech", String, lambda m, i: heard.append((m.data, i.sender)))
 

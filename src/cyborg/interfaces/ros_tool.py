@@ -37,6 +37,7 @@ if TYPE_CHECKING:
 T = TypeVar("T")
 CONNECT_TIMEOUT = 3.0  # seconds to wait for the listening nodes to connect, or for a latched message
 DELIVERY_GRACE = 0.3  # seconds rospy's writer threads get before the node leaves the graph
+DISCOVERY_SETTLE = 0.3  # ROS 2: seconds a topic's listeners stay the same before the tool publishes
 
 
 class RosLink:
@@ -81,6 +82,13 @@ class RosLink:
         while self.ros2 and not listeners and loop.time() < deadline:  # discovery takes a moment
             await asyncio.sleep(0.02)
             listeners = self._transport.subscribers_of(topic)
+        if self.ros2:  # the first listeners seen may be a few of them: wait until no more appear
+            settled = loop.time() + DISCOVERY_SETTLE
+            while listeners and loop.time() < min(settled, deadline):
+                await asyncio.sleep(0.02)
+                seen = self._transport.subscribers_of(topic)
+                if set(seen) != set(listeners):
+                    listeners, settled = seen, loop.time() + DISCOVERY_SETTLE
         if not listeners:
             where = "check ROS_DOMAIN_ID" if self.ros2 else "check ROS_MASTER_URI"
             start = "`cyborg launch --ros2`" if self.ros2 else "`cyborg launch`"
