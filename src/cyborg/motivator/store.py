@@ -122,10 +122,7 @@ class ControllerStore(SQLiteFile):
         with self._pending_lock:
             self._pending.pop(name, None)
             self._pending[name] = write  # (last in the order of the pending ones)
-        if self._writer is None:
-            return self.write_pending()
-        self._write_behind()
-        return self.save_status.saved
+        return self.write_pending()
 
     def write_pending(self) -> bool:
         """Write what is kept in memory; True when everything is stored (with ``write_behind``:
