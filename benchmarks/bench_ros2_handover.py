@@ -24,7 +24,6 @@ from __future__ import annotations
 import argparse
 import asyncio
 import os
-import queue
 import random
 import signal
 import subprocess
@@ -34,6 +33,7 @@ import time
 from typing import Any
 
 from _machine import machine_line, percentile
+from _stamps import StampQueue, wait_until
 
 MACHINE = """
 states:
@@ -158,37 +158,14 @@ def role_floor() -> None:
 # --- the measuring process ---------------------------------------------------------------------
 
 
-class Reports:
+class Reports(StampQueue):
     """Stamps reported by the servers, as (event, stamp) in arrival order."""
 
     def __init__(self, node: Any, topic: str) -> None:
         from std_msgs.msg import String
 
-        self.items: queue.Queue[tuple[str, float]] = queue.Queue()
+        super().__init__()
         self.sub = node.create_subscription(String, topic, self._on, 1000)
-
-    def _on(self, message: Any) -> None:
-        event, _, stamp = str(message.data).partition(" ")
-        self.items.put((event, float(stamp)))
-
-    def next(self, event: str, timeout: float = 10.0) -> float:
-        deadline = time.monotonic() + timeout
-        while True:
-            got, stamp = self.items.get(timeout=max(0.0, deadline - time.monotonic()))
-            if got == event:
-                return stamp
-
-    def drain(self) -> None:
-        while not self.items.empty():
-            self.items.get_nowait()
-
-
-def wait_until(predicate: Any, timeout: float, what: str) -> None:
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise SystemExit(f"timed out waiting for {what}")
-        time.sleep(0.01)
 
 
 class Ours:

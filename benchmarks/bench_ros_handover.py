@@ -27,7 +27,6 @@ import argparse
 import asyncio
 import contextlib
 import os
-import queue
 import shutil
 import signal
 import socket
@@ -41,6 +40,7 @@ from pathlib import Path
 from typing import Any
 
 from _machine import machine_line, percentile
+from _stamps import StampQueue, wait_until
 
 MACHINE = """
 states:
@@ -244,38 +244,15 @@ def spawn(role: str, env: dict[str, str]) -> subprocess.Popen[bytes]:
     return subprocess.Popen([sys.executable, __file__, "--role", role], env=env, start_new_session=True)
 
 
-class Reports:
+class Reports(StampQueue):
     """Stamps reported by the servers, as (event, stamp) in arrival order."""
 
     def __init__(self, topic: str) -> None:
         import rospy
         from std_msgs.msg import String
 
-        self.items: queue.Queue[tuple[str, float]] = queue.Queue()
+        super().__init__()
         self.sub = rospy.Subscriber(topic, String, self._on, queue_size=1000)
-
-    def _on(self, message: Any) -> None:
-        event, _, stamp = str(message.data).partition(" ")
-        self.items.put((event, float(stamp)))
-
-    def next(self, event: str, timeout: float = 10.0) -> float:
-        deadline = time.monotonic() + timeout
-        while True:
-            got, stamp = self.items.get(timeout=max(0.0, deadline - time.monotonic()))
-            if got == event:
-                return stamp
-
-    def drain(self) -> None:
-        while not self.items.empty():
-            self.items.get_nowait()
-
-
-def wait_until(predicate: Callable[[], bool], timeout: float, what: str) -> None:
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise SystemExit(f"timed out waiting for {what}")
-        time.sleep(0.01)
 
 
 class Ours:
