@@ -29,12 +29,14 @@ def main():
     rclpy.init()
     node = Node("cyborg_foreign_client")
     changed = threading.Event()
+    latched = threading.Event()
 
     def on_change(message):
         print(
             f"state_change {message.from_system_state} -{message.event}-> {message.to_system_state}",
             flush=True,
         )
+        latched.set()
         if message.event == event:
             changed.set()
 
@@ -46,6 +48,9 @@ def main():
     threading.Thread(target=executor.spin, daemon=True).start()
 
     deadline = time.monotonic() + 20
+    # The latched change first, as a client that starts from the robot's state would: the
+    # service can answer before the transient-local history arrives.
+    latched.wait(max(0.0, deadline - time.monotonic()))
     if not emotion.wait_for_service(timeout_sec=20):
         sys.exit("no get_emotional_state service")
     answer = emotion.call(EmotionalStateService.Request(), timeout_sec=20)

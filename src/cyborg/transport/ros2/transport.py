@@ -38,7 +38,6 @@ from rcl_interfaces.msg import ParameterType, ParameterValue
 from rcl_interfaces.srv import GetParameters, SetParameters
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.context import Context
-from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node as RclNode
 from rclpy.parameter import Parameter as RclParameter
 
@@ -68,6 +67,7 @@ from cyborg.transport.clock import Clock
 from cyborg.transport.messages import ActionType, ServiceType
 from cyborg.transport.ros2.actions import Ros2ActionClient, Ros2ActionServer
 from cyborg.transport.ros2.convert import ros2_class, ros2_type_name
+from cyborg.transport.ros2.executor import HandOffExecutor
 from cyborg.transport.ros2.services import Ros2ServiceProxy, Ros2ServiceServer
 from cyborg.transport.ros2.topics import Ros2Publisher, Ros2Subscription
 
@@ -144,7 +144,7 @@ class Ros2Transport(Transport):
             self._probe: RclNode | None = RclNode(
                 f"_cyborg_graph_{os.getpid()}_{id(self):x}", context=self.context
             )
-        self.executor = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS, context=self.context)
+        self.executor = HandOffExecutor(EXECUTOR_THREADS, context=self.context)
         self._nodes: dict[str, Ros2Node] = {}
         self._types: dict[str, str] = {}  # topic -> our ROS type, of this process's endpoints
         self._home: RclNode | None = None
