@@ -236,6 +236,7 @@ class SimulatedBase:
 
     async def _drive_leg(self, waypoint: Point, on_pose: Any) -> None:
         clock = self.node.clock
+        loop = clock.loop
         dx, dy = waypoint[0] - self.x, waypoint[1] - self.y
         length = math.hypot(dx, dy)
         if length < 1e-9:
@@ -246,14 +247,20 @@ class SimulatedBase:
         start = clock.monotonic()
         done = 0.0
         unpublished = 0  # steps made since the last published one
-        # The pose follows the clock, not the number of ticks: a tick that comes late (a loaded
-        # machine, virtual time at 25x) moves the robot further, so a trip takes the same
-        # virtual time however the ticks fall.
-        while done < 1.0:
-            await clock.sleep(min(self.tick, max(0.0, duration - (clock.monotonic() - start))))
+        arrived: asyncio.Future[None] = loop.create_future()
+        timer: asyncio.Handle
+
+        # Each step is a timer callback rather than a sleep of this coroutine: the same clock times,
+        # with no future, task wake-up or extra loop turn for each of the ~10 steps a second.
+        def step() -> None:
+            nonlocal done, unpublished, timer
+            if arrived.done():  # the drive was cancelled in this loop turn, before the step came
+                return
             elapsed = clock.monotonic() - start
-            # within a millisecond of the end counts as there: a clock far from its origin may
-            # not move at all for a sleep of a few nanoseconds
+            # The pose follows the clock, not the number of ticks: a tick that comes late (a loaded
+            # machine, virtual time at 25x) moves the robot further, so a trip takes the same
+            # virtual time however the ticks fall. Within a millisecond of the end counts as there:
+            # a clock far from its origin may not move at all for a sleep of a few nanoseconds.
             fraction = 1.0 if elapsed >= duration - 1e-3 else elapsed / duration
             self.x, self.y = sx + dx * fraction, sy + dy * fraction
             self.distance_travelled += length * (fraction - done)
@@ -265,6 +272,20 @@ class SimulatedBase:
                 self._publish_pose()
                 if on_pose is not None:
                     on_pose()
+            if done >= 1.0:
+                arrived.set_result(None)
+            else:
+                timer = schedule()
+
+        def schedule() -> asyncio.Handle:
+            delay = min(self.tick, max(0.0, duration - (clock.monotonic() - start)))
+            return loop.call_later(delay, step) if delay > 0 else loop.call_soon(step)
+
+        timer = schedule()
+        try:
+            await arrived
+        finally:
+            timer.cancel()
 
     # --- move_base ----------------------------------------------------------------------
 
