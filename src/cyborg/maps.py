@@ -165,6 +165,10 @@ class OccupancyMap:
         )
 
 
+_SEGMENT_ENDS = np.array([0.0, 1.0])
+_FIRST = np.array([True])
+
+
 def segment_cells(start: Point, end: Point) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     """Every cell (rows, cols) a segment touches, in continuous grid coordinates (col, row).
 
@@ -174,17 +178,22 @@ def segment_cells(start: Point, end: Point) -> tuple[NDArray[np.int64], NDArray[
     only grazes a cell still counts it. May repeat cells.
     """
     (x0, y0), (x1, y1) = start, end
-    cuts = [np.array([0.0, 1.0])]
+    cuts = [_SEGMENT_ENDS]
     for a, b in ((x0, x1), (y0, y1)):
         if a != b:
-            low, high = sorted((a, b))
+            low, high = (a, b) if a < b else (b, a)
             borders = np.arange(math.floor(low) + 1, math.ceil(high), dtype=float)
             cuts.append((borders - a) / (b - a))
     # Rounding merges a corner's two crossings, which floating point would leave a hair apart.
-    t = np.unique(np.round(np.concatenate(cuts), 9))
-    t = np.concatenate([t, (t[:-1] + t[1:]) / 2])
-    cols, on_col_border = _cells_touching(x0 + t * (x1 - x0))
-    rows, on_row_border = _cells_touching(y0 + t * (y1 - y0))
+    # (np.unique's own steps, without its wrapper: the route planner checks ~60,000 segments a day.)
+    t = np.round(np.concatenate(cuts), 9)
+    t.sort()
+    t = t[np.concatenate((_FIRST, t[1:] != t[:-1]))]
+    t = np.concatenate((t, (t[:-1] + t[1:]) / 2))
+    # x and y in one array: half the numpy calls, the same numbers
+    (cols, rows), (on_col_border, on_row_border) = _cells_touching(
+        np.array([[x0], [y0]]) + t * np.array([[x1 - x0], [y1 - y0]])
+    )
     return (
         np.concatenate([rows, rows - on_row_border, rows, rows - on_row_border]),
         np.concatenate([cols, cols, cols - on_col_border, cols - on_col_border]),

@@ -116,8 +116,9 @@ class RoutePlanner:
         ):
             return False
         rows, cols = segment_cells((c0, r0), (c1, r1))
-        rows = np.clip(rows, 0, self.inflated.shape[0] - 1)  # a point on the map's outer edge
-        cols = np.clip(cols, 0, self.inflated.shape[1] - 1)
+        # a point on the map's outer edge (np.clip's wrapper costs more than the two ufuncs)
+        rows = np.minimum(np.maximum(rows, 0), self.inflated.shape[0] - 1)
+        cols = np.minimum(np.maximum(cols, 0), self.inflated.shape[1] - 1)
         return not self.inflated[rows, cols].any()
 
     def plan(self, start: Location, goal: Location) -> Route:
