@@ -467,8 +467,7 @@ class Ros2ActionClient(ActionClient[G, R, F]):
         future = self._client.send_goal_async(
             to_ros2(goal, self.classes.Goal), feedback_callback=feedback, goal_uuid=UUID(uuid=list(goal_id))
         )
-        self._client.when_done(future, answered)
-        self.transport.wake()
+        self._client.when_done(future, answered)  # its client is in the executor's wait set: no wake
         self._arm_watchdog()
         return handle
 
@@ -489,7 +488,6 @@ class Ros2ActionClient(ActionClient[G, R, F]):
         self._client.when_done(ros_handle.get_result_async(), result)
         if handle.cancel_asked:
             self.send_cancel(handle)
-        self.transport.wake()
 
     def _resulted(self, handle: _Ros2ClientGoalHandle[G, R, F], response: Any) -> None:
         if response is None:
@@ -512,7 +510,6 @@ class Ros2ActionClient(ActionClient[G, R, F]):
             # cancel once they accept it (_answered).
             pending = RclClientGoalHandle(self._client, UUID(uuid=list(handle.goal_id)), None)
             self._client._cancel_goal_async(pending)
-        self.transport.wake()
 
     def _end(self, handle: _Ros2ClientGoalHandle[G, R, F], status: GoalStatus, result: R | None) -> None:
         """Finish ``handle`` with its text: now, or when its text arrives (up to TEXT_WAIT s)."""
