@@ -31,6 +31,9 @@ def whole_robot(hours: float, src: str | None, config: str | None) -> dict[str, 
         script, transcript = Path(scratch) / "day.yaml", Path(scratch) / "t.jsonl"
         script.write_text(f"until: {int(hours * 3600)}\n", encoding="utf-8")
         env = dict(os.environ)
+        # As on a user's machine, Python keeps compiled modules: without this (some sandboxes set
+        # it) every run compiles the package's sources again.
+        env.pop("PYTHONDONTWRITEBYTECODE", None)
         if src:
             env["PYTHONPATH"] = os.pathsep.join(filter(None, [src, env.get("PYTHONPATH")]))
         args = [str(CYBORG), "--log-level", "ERROR", "sim", "--script", str(script), "--speed", "max"]
