@@ -60,6 +60,12 @@ TEXT_WAIT = 0.3  # seconds a finished goal waits for its text from one of our se
 WATCHDOG_PERIOD = 0.2
 DECISION_LIMIT = 3600.0  # seconds a goal may stay pending before the server gives up on it
 CANCEL_SETTLE = 1.0  # seconds the execute thread waits for rcl to mark a goal canceling
+# Seconds a finished goal stays in our server's status (and its result for a late request), as
+# actionlib's status_list_timeout (rclpy's default: 10). Every status message lists every goal
+# kept, and every client of the action turns it into Python objects, in the executor (1.6 ms a
+# message with 150 goals kept, at the handover benchmark's pace); our clients ask for the result
+# as soon as a goal is accepted, so none comes late.
+RESULT_KEPT = 5
 
 _ACCEPT, _REJECT, _RECALL = "accept", "reject", "recall"
 
@@ -231,6 +237,7 @@ class Ros2ActionServer(ActionServer[G, R, F]):
             handle_accepted_callback=self._accepted,
             cancel_callback=self._cancel,
             callback_group=callback_group,
+            result_timeout=RESULT_KEPT,
         )
         self._server.owner = self
 
