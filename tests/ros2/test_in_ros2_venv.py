@@ -46,10 +46,10 @@ def test_ros2_tests_pass_in_their_venv() -> None:
         "tests/test_errors.py::test_every_exception_class_is_in_the_tree_or_says_why_not",
         "-k",
         # The whole robot launched over ROS 2 (scenarios A-D, the command tool against a launched
-        # robot) loses simulated seconds when a process falls behind (each node's clock follows
-        # wall time at a fixed speed) and failed in about half the full runs on this 2-core
-        # machine: out of the default run until simulated time waits for lagging nodes (issue 17,
-        # open; docs/ros2.md). CYBORG_ROS2_ROBOT_TESTS=1 runs them too.
+        # robot) runs in wall-clock-paced simulated time at 25x: about 3.5 minutes more, which
+        # would take CI past its 15, and a process held back loses simulated seconds (each node's
+        # clock follows the wall clock). Out of the default run until simulated time advances when
+        # every node is idle (issue 17, open; docs/ros2.md). CYBORG_ROS2_ROBOT_TESTS=1 runs them.
         "ros2"
         if os.environ.get("CYBORG_ROS2_ROBOT_TESTS") == "1"
         else "ros2 and not test_ros2_scenario and not test_ros2_command_tool_and_api",
