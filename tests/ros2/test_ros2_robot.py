@@ -29,7 +29,7 @@ from types import ModuleType
 from typing import Any
 
 import pytest
-from support import Ros2Session, isolate, ros2_session
+from support import Ros2Session, isolate
 
 from cyborg.sim.scenario import script_start
 from cyborg.sim.script import load_script
@@ -51,8 +51,11 @@ def _expectations() -> ModuleType:
 
 
 @pytest.mark.parametrize("name", ["scenario_a", "scenario_b", "scenario_c", "scenario_d"])
-def test_ros2_scenario(name: str, pytestconfig: pytest.Config, tmp_path: Path) -> None:
-    session = ros2_session(pytestconfig)  # this process on the same domain, to hear /clock
+def test_ros2_scenario(name: str, own_session: Ros2Session, tmp_path: Path) -> None:
+    # The robot and this process (to hear /clock) on a domain of the test's own: on the session's
+    # domain the contract suite's parameter home and nodes were there too, and scenario A's
+    # scripted user went unheard in 3 of 3 runs after the suite (never when run alone).
+    session = own_session
     heard: list[tuple[float, str]] = []
 
     def on_clock(message: Clock, info: MessageInfo) -> None:
