@@ -88,15 +88,14 @@ class RecordStream:
 
     def _on_pose(self, m: PoseWithCovarianceStamped, info: MessageInfo) -> None:
         p = m.pose.pose
-        position, orientation = p.position, p.orientation
         pose = (
-            round(position.x, 3),
-            round(position.y, 3),
-            round(2.0 * math.atan2(orientation.z, orientation.w), 3),  # yaw_of, inline: 10 a second
+            round(p.position.x, 3),
+            round(p.position.y, 3),
+            round(yaw_of(p.orientation.z, p.orientation.w), 3),
         )
         if pose == self._last_pose:
             return
-        since_last = round(self.node.clock.monotonic() - self.origin, 3) - self._last_pose_t
+        since_last = self.now() - self._last_pose_t
         if since_last < POSE_INTERVAL:
             # Held back, not lost: the last pose of a trip (the arrival) comes out a moment later.
             self._pending_pose = pose
