@@ -5,13 +5,15 @@ from __future__ import annotations
 import logging
 import sqlite3
 import threading
+import time
+from contextlib import closing
 from pathlib import Path
 from typing import Any
 
 import pytest
 
 from cyborg.emotion.model import PAD
-from cyborg.errors import DatabaseError
+from cyborg.errors import DatabaseError, InvalidValueError
 from cyborg.motivator.logic import MotivationalEvent
 from cyborg.motivator.store import ControllerStore
 
@@ -192,6 +194,57 @@ def test_write_behind_close_writes_what_waits(tmp_path: Path) -> None:
     reopened = ControllerStore(path)
     assert reopened.get_saturations() == {"music_play": 0.25} and reopened.get_emotion().enabled is False
     reopened.close()
+
+
+class _CountingDisk(sqlite3.Connection):
+    commits = 0
+
+    def execute(self, sql: str, parameters: Any = (), /) -> sqlite3.Cursor:
+        if sql.strip().upper() == "COMMIT":
+            type(self).commits += 1
+        return super().execute(sql, parameters)
+
+
+def _stored_pleasure(path: Path) -> float:
+    """What a restart would read now (another connection, not the store's)."""
+    with closing(sqlite3.connect(path)) as conn:
+        return float(conn.execute("SELECT pleasure FROM emotion").fetchone()[0])
+
+
+def test_write_behind_saves_of_one_moment_share_a_commit_and_reads_do_not_wait_out_the_window(
+    tmp_path: Path,
+) -> None:
+    """Issue 18: a virtual clock saves the emotion thousands of times a real second; the store's
+    thread gathers them for its commit window, but a read or closing commits at once."""
+    path = tmp_path / "c.db"
+    store = ControllerStore(path, write_behind=True, commit_window=120.0)
+    assert store._write_conn is not None
+    store._write_conn.close()
+    store._write_conn = sqlite3.connect(
+        path, isolation_level=None, factory=_CountingDisk, check_same_thread=False
+    )
+    _CountingDisk.commits = 0
+    try:
+        for step in range(1, 21):
+            assert store.save_emotion(PAD(step / 100, 0.0, 0.0), float(step)) is True
+        assert _stored_pleasure(path) == 0.0 and _CountingDisk.commits == 0  # still gathering
+        started = time.monotonic()
+        assert store.get_emotion().pad.pleasure == pytest.approx(0.2)
+        assert time.monotonic() - started < 60, "the read waited out the 120 s window"
+        assert _CountingDisk.commits == 1 and _stored_pleasure(path) == pytest.approx(0.2)
+        store.save_emotion(PAD(0.3, 0.0, 0.0), 21.0)
+    finally:
+        started = time.monotonic()
+        store.close()
+    assert time.monotonic() - started < 60, "closing waited out the 120 s window"
+    assert _stored_pleasure(path) == pytest.approx(0.3)
+
+
+@pytest.mark.parametrize("window", [-0.1, float("nan")])
+def test_a_bad_commit_window_is_refused_with_the_fix(tmp_path: Path, window: float) -> None:
+    with pytest.raises(InvalidValueError, match=r"commit_window .* fix: pass e\.g\. 0\.02"):
+        ControllerStore(tmp_path / "c.db", write_behind=True, commit_window=window)
+    assert not (tmp_path / "c.db").exists()
 
 
 def test_events_another_program_adds_while_the_robot_runs_are_seen(tmp_path: Path) -> None:
