@@ -87,6 +87,21 @@ def test_route_goes_around_a_wall_in_between() -> None:
     assert len(route.waypoints) <= 10  # a few hug the rounded end of the wall
 
 
+def test_the_search_weights_say_their_true_minimum() -> None:
+    """pyastar2d refuses weights below 1; the planner's weights answer min() without reading the
+    grid, which holds only when every cell is 1 or inf and one is 1."""
+    hall = room()
+    add_wall(hall.grid, 4.9, 0.0, 5.1, 4.5)
+    planner = RoutePlanner(hall)
+    planner.plan((2.0, 1.0), (8.0, 1.0))
+    assert planner._weights is not None
+    weights = planner._weights[1]
+    plain = np.asarray(weights)
+    assert set(np.unique(plain).tolist()) == {1.0, math.inf}
+    assert weights.min() == plain.min() == 1.0
+    assert weights.min(axis=0).tolist() == plain.min(axis=0).tolist()  # other reductions are real
+
+
 def test_route_avoids_a_keep_out_zone_that_the_straight_line_crosses() -> None:
     pillar = KeepOutZone(((4.0, 1.5), (6.0, 1.5), (6.0, 4.5), (4.0, 4.5)), name="pillar")
     hall = room(keep_out=(pillar,))

@@ -168,7 +168,7 @@ class RoutePlanner:
         if self._weights is None or self._weights[0] != component:
             self._weights = None  # the old area's weights go before the new ones are made
             made = np.where(self.inflated[box], np.float32(np.inf), np.float32(1.0))
-            self._weights = (component, made.view(_FlattenInPlace))
+            self._weights = (component, made.view(_SearchWeights))
         weights = self._weights[1]
         top, left = box[0].start, box[1].start
         path: NDArray[np.int32] | None = pyastar2d.astar_path(
@@ -300,12 +300,22 @@ class RoutePlanner:
         return kept
 
 
-class _FlattenInPlace(np.ndarray):  # type: ignore[type-arg]
-    """A C-contiguous array whose ``flatten()`` is a view: ``pyastar2d.astar_path`` flattens the
-    weights before the search, and a copy would add 4 bytes a cell to the planning peak."""
+class _SearchWeights(np.ndarray):  # type: ignore[type-arg]
+    """The A* weights of a free area (1 on its free cells, inf elsewhere), as ``pyastar2d.astar_path``
+    uses them without the costs a search does not need.
+
+    ``flatten()`` is a view: the wrapper flattens the weights before the search, and a copy would
+    add 4 bytes a cell to the planning peak. ``min()`` is 1 (the area has a free cell) without
+    reading the grid: the wrapper checks it before every search (3 % of a simulated day).
+    """
 
     def flatten(self, order: Any = "C") -> Any:
         return self.ravel(order)
+
+    def min(self, axis: Any = None, *args: Any, **kwargs: Any) -> Any:
+        if axis is None and not args and not kwargs:
+            return np.float32(1.0)
+        return super().min(axis, *args, **kwargs)
 
 
 def inflate(blocked: NDArray[np.bool_], robot_radius: float, resolution: float) -> NDArray[np.bool_]:
