@@ -13,7 +13,7 @@ from numpy.typing import NDArray
 from scipy import ndimage
 
 from cyborg.errors import PlanningError
-from cyborg.maps import Cell, KeepOutZone, OccupancyMap, Point, default_map_path, load_map
+from cyborg.maps import Cell, KeepOutZone, OccupancyMap, Point, default_map_path, load_map, segment_cells
 from cyborg.sim.planner import Route, RoutePlanner, _close_diagonal_gaps, inflate
 
 MAPS = Path(__file__).resolve().parents[2].parent / "shared" / "maps"
@@ -229,6 +229,52 @@ def test_random_reachable_points_are_free_reachable_and_repeatable() -> None:
 @pytest.fixture(scope="module")
 def glassgarden_planner() -> RoutePlanner:
     return RoutePlanner(load_map(MAPS / "glassgarden.map"))
+
+
+def specks(seed: int = 7, size: int = 200, density: float = 0.01) -> OccupancyMap:
+    """A floor strewn with single blocked cells: sharp corners everywhere."""
+    grid = np.where(np.random.default_rng(seed).random((size, size)) < density, Cell.OCCUPIED, Cell.FREE)
+    return OccupancyMap(grid.astype(np.uint8), RESOLUTION, (0.0, 0.0), source="specks")
+
+
+@pytest.mark.parametrize("where", ["glassgarden", "specks"])
+def test_segment_checks_agree_with_the_cells_each_segment_touches(
+    where: str, glassgarden_planner: RoutePlanner
+) -> None:
+    """segment_is_free answers most segments from points along them (issue 18); its answer must
+    be the one the exact cells give: on segments in the open, across walls, and ending on or
+    passing the corners of blocked cells (as the taut routes' legs do)."""
+    planner = glassgarden_planner if where == "glassgarden" else RoutePlanner(specks(), robot_radius=0.0)
+    rng = random.Random(18)
+    height, width = planner.inflated.shape
+    next_to_free = ndimage.binary_dilation(~planner.inflated, structure=np.ones((3, 3), dtype=bool))
+    edge_rows, edge_cols = np.nonzero(planner.inflated & next_to_free)
+    resolution, (left, bottom) = planner.map.resolution, planner.map.origin
+    seen = {True: 0, False: 0}
+    for case in range(4000):
+        if case % 2:  # from nearby free space to a corner of a blocked cell next to it, or past it
+            pick = rng.randrange(len(edge_rows))
+            corner_col = int(edge_cols[pick]) + rng.choice([0, 1])
+            corner_row = int(edge_rows[pick]) + rng.choice([0, 1])
+            corner = (left + corner_col * resolution, bottom + corner_row * resolution)
+            angle, length = rng.uniform(0, 2 * math.pi), rng.uniform(0.05, 3.0)
+            start = (corner[0] + length * math.cos(angle), corner[1] + length * math.sin(angle))
+            if not planner.is_free(*start):
+                continue
+            beyond = rng.choice([1.0, 1.5, 2.0, 3.0])
+            end = (start[0] + beyond * (corner[0] - start[0]), start[1] + beyond * (corner[1] - start[1]))
+        else:
+            start = planner.random_reachable_point(rng)
+            angle, length = rng.uniform(0, 2 * math.pi), rng.choice([0.03, 0.3, 3.0, 9.0])
+            end = (start[0] + length * math.cos(angle), start[1] + length * math.sin(angle))
+        if not planner.map.contains(*end):
+            continue
+        rows, cols = segment_cells(planner.map.grid_coordinates(start), planner.map.grid_coordinates(end))
+        rows, cols = np.clip(rows, 0, height - 1), np.clip(cols, 0, width - 1)
+        exact = not planner.inflated[rows, cols].any()
+        assert planner.segment_is_free(start, end) is exact, (start, end)
+        seen[exact] += 1
+    assert min(seen.values()) > 300, seen
 
 
 def test_glassgarden_every_pair_of_places_plans_or_says_why(glassgarden_planner: RoutePlanner) -> None:
