@@ -42,6 +42,7 @@ from cyborg.errors import InvalidValueError, PlanningError
 from cyborg.maps import NamedPose, OccupancyMap, Point
 from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
 from cyborg.sim.planner import RoutePlanner
+from cyborg.sim.search_ahead import SearchAhead
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Node, ServerGoalHandle
 from cyborg.transport.messages import (
@@ -126,6 +127,7 @@ class SimulatedBase:
         planner: RoutePlanner | None = None,
         pose_rate: float = DEFAULT_POSE_RATE,
         virtual_pose_rate: float | None = None,
+        search_ahead: bool = True,
     ) -> None:
         if speed <= 0:
             raise InvalidValueError(f"speed must be positive (m/s), got {speed}")
@@ -144,6 +146,10 @@ class SimulatedBase:
         self.planner = planner or RoutePlanner(occupancy_map, robot_radius)
         self.rng = rng
         self.speed = speed
+        self._ahead = (
+            SearchAhead(self.planner, node.clock) if search_ahead and node.clock.as_fast_as_possible else None
+        )
+        """Wander trips searched ahead on a second process, at --speed max only (the same routes)."""
         start_pose = start if start is not None else _default_start(occupancy_map)
         if isinstance(start_pose, NamedPose):
             self.x, self.y, self.theta = start_pose.x, start_pose.y, start_pose.theta
@@ -173,8 +179,10 @@ class SimulatedBase:
         self._set_state(PathState.STOPPED)
 
     def close(self) -> None:
-        """Stop driving (a goal under way ends as preempted)."""
+        """Stop driving (a goal under way ends as preempted) and the process searching ahead."""
         self._halt()
+        if self._ahead is not None:
+            self._ahead.close()
 
     def status(self) -> BaseStatus:
         """Pose (the current step, also between published poses), route and path state, for the
@@ -219,7 +227,7 @@ class SimulatedBase:
         """Plan and drive to ``target``; False if there is no route."""
         self._set_state(PathState.PLANNING_PATH)
         try:
-            route = self.planner.plan((self.x, self.y), target)
+            route = self.planner.plan((self.x, self.y), target, self._ahead)
         except PlanningError as exc:
             self._set_state(PathState.FAILED_PLAN)
             self._failure = str(exc)
@@ -388,6 +396,8 @@ class SimulatedBase:
     async def _wander(self, on_pose: Any = None) -> bool:
         while self.wandering:
             target = self.planner.random_reachable_point(self.rng, near=(self.x, self.y))
+            if self._ahead is not None:
+                self._ahead.foresee_wander(self.rng, target)
             if not await self._drive(target, None, on_pose):
                 await self.node.clock.sleep(1.0)
         return True
@@ -447,6 +457,11 @@ class SimulatedBaseSettings(ModuleSettings):
         "same way, but the navigation module's calendar scheduler may see a pose up to 1 s old",
     )
     robot_radius: float = Field(0.35, ge=0, description="metres kept from walls when planning")
+    search_ahead: bool = Field(
+        True,
+        description="at --speed max, search the next wander trips' routes on a second process while "
+        "the base drives (the same routes, a simulated day ~15 % faster; about 70 MB more memory)",
+    )
     start: str | None = Field(
         None, description="named pose to start at (default: the information desk, else RobotHome or Dock)"
     )
@@ -464,6 +479,7 @@ def _build(node: Node, settings: SimulatedBaseSettings, context: BuildContext) -
         start=start,
         pose_rate=settings.pose_rate,
         virtual_pose_rate=settings.virtual_pose_rate,
+        search_ahead=settings.search_ahead,
     )
 
 

@@ -18,7 +18,7 @@ from __future__ import annotations
 import itertools
 import math
 import random
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -46,6 +46,38 @@ class Route:
     @staticmethod
     def through(waypoints: Sequence[Point]) -> Route:
         return Route(tuple(waypoints), sum(math.dist(a, b) for a, b in itertools.pairwise(waypoints)))
+
+
+@dataclass(frozen=True)
+class AreaSearch:
+    """One A* search of the planner: its free area (whose :meth:`RoutePlanner.area_weights` it
+    runs on) and its two cells in the area's box, whose corner is ``offset`` on the map's grid."""
+
+    area: int
+    start: tuple[int, int]
+    goal: tuple[int, int]
+    offset: tuple[int, int]
+
+
+SearchedPaths = Callable[[AreaSearch], "NDArray[np.int32] | None"]
+"""Where :meth:`RoutePlanner.plan` looks for a search made already (in box cells), before searching."""
+
+
+def search_weights(blocked: NDArray[np.bool_]) -> NDArray[np.float32]:
+    """A* weights for :func:`search_area`: inf on blocked cells, 1 on free ones."""
+    made = np.where(blocked, np.float32(np.inf), np.float32(1.0))
+    return made.view(_SearchWeights)
+
+
+def search_area(
+    weights: NDArray[np.float32], start: tuple[int, int], goal: tuple[int, int]
+) -> NDArray[np.int32] | None:
+    """pyastar2d's path (box cells, start and goal included) on a free area's weights, or None.
+
+    Pure and deterministic: the same weights and cells give the same path in any process.
+    """
+    path: NDArray[np.int32] | None = pyastar2d.astar_path(weights, start, goal, allow_diagonal=True)
+    return path
 
 
 class RoutePlanner:
@@ -137,15 +169,19 @@ class RoutePlanner:
         cols = np.minimum(np.maximum(cols, 0), self.inflated.shape[1] - 1)
         return not self.inflated[rows, cols].any()
 
-    def plan(self, start: Location, goal: Location) -> Route:
-        """A short collision-free route from ``start`` to ``goal``; PlanningError saying why if there is none."""
+    def plan(self, start: Location, goal: Location, searched: SearchedPaths | None = None) -> Route:
+        """A short collision-free route from ``start`` to ``goal``; PlanningError saying why if there is none.
+
+        ``searched`` gives the grid path of an :class:`AreaSearch` made already (by
+        :func:`search_area` on another process), or None to search here; the route is the same.
+        """
         start_point, goal_point = _point(start), _point(goal)
         start_cell = self._check_endpoint("start", start)
         goal_cell = self._check_endpoint("goal", goal)
         self._check_connected(start, start_cell, goal, goal_cell)
         if start_cell == goal_cell:
             return Route.through([start_point, goal_point])
-        path = self._search(start_cell, goal_cell)
+        path = self._search(start_cell, goal_cell, searched)
         if path is None:  # cannot happen after _check_connected, unless the library disagrees with it
             raise PlanningError(
                 f"no route from {_describe(start)} to {_describe(goal)}: the search found none"
@@ -170,29 +206,60 @@ class RoutePlanner:
         col = int(np.flatnonzero(self._components[row] == component)[index - before[row]])
         return self.map.cell_to_world(row, col)
 
-    def _search(self, start: tuple[int, int], goal: tuple[int, int]) -> NDArray[np.int32] | None:
+    def area_search(self, start: Location, goal: Location) -> AreaSearch | None:
+        """The A* search :meth:`plan` would make between two locations, as another process can run
+        it (:func:`search_area`), or None when there is none to make (an endpoint off the map or
+        blocked, the two in different areas or in one cell)."""
+        try:
+            start_cell = self._check_endpoint("start", start)
+            goal_cell = self._check_endpoint("goal", goal)
+        except PlanningError:
+            return None
+        area = int(self._components[start_cell])
+        if start_cell == goal_cell or area != int(self._components[goal_cell]):
+            return None
+        return self._area_search(start_cell, goal_cell)
+
+    def area_blocked(self, area: int) -> NDArray[np.bool_]:
+        """The inflated grid cut to a free area's box (a view): what its A* weights are made from."""
+        box = self._component_boxes[area]
+        assert box is not None  # an area of free cells has a box
+        return self.inflated[box]
+
+    def area_weights(self, area: int) -> NDArray[np.float32]:
+        """The A* weights of a free area's box (:func:`search_weights` of :meth:`area_blocked`)."""
+        if self._weights is None or self._weights[0] != area:
+            self._weights = None  # the old area's weights go before the new ones are made
+            self._weights = (area, search_weights(self.area_blocked(area)))
+        return self._weights[1]
+
+    def _area_search(self, start: tuple[int, int], goal: tuple[int, int]) -> AreaSearch:
+        area = int(self._components[start])
+        box = self._component_boxes[area]
+        assert box is not None  # start is a free cell, so its area has a box
+        top, left = box[0].start, box[1].start
+        return AreaSearch(
+            area, (start[0] - top, start[1] - left), (goal[0] - top, goal[1] - left), (top, left)
+        )
+
+    def _search(
+        self, start: tuple[int, int], goal: tuple[int, int], searched: SearchedPaths | None = None
+    ) -> NDArray[np.int32] | None:
         """pyastar2d's grid path between two cells of one free area, in the area's bounding box.
 
         The float32 weights (1 on free cells, inf elsewhere) cover the area's box: every cell next
         to the area is blocked or in it, so the box holds every cell the search can reach and the
         path is the same as on the whole grid. They are kept for the next search in the same area
-        (the peak is the same: a search needs them anyway).
+        (the peak is the same: a search needs them anyway). ``searched`` may hold the path already
+        (the same search, made ahead on another process).
         """
-        component = int(self._components[start])
-        box = self._component_boxes[component]
-        assert box is not None  # start is a free cell, so its area has a box
-        if self._weights is None or self._weights[0] != component:
-            self._weights = None  # the old area's weights go before the new ones are made
-            made = np.where(self.inflated[box], np.float32(np.inf), np.float32(1.0))
-            self._weights = (component, made.view(_SearchWeights))
-        weights = self._weights[1]
-        top, left = box[0].start, box[1].start
-        path: NDArray[np.int32] | None = pyastar2d.astar_path(
-            weights, (start[0] - top, start[1] - left), (goal[0] - top, goal[1] - left), allow_diagonal=True
-        )
+        search = self._area_search(start, goal)
+        path = searched(search) if searched is not None else None
+        if path is None:
+            path = search_area(self.area_weights(search.area), search.start, search.goal)
         if path is None:
             return None
-        return path + np.array([top, left], dtype=path.dtype)
+        return path + np.array(search.offset, dtype=path.dtype)
 
     def _largest_component(self) -> int:
         if not self._component_sizes.any():

@@ -37,6 +37,7 @@ class Clock(ABC):
 
     def __init__(self) -> None:
         self._loop: asyncio.AbstractEventLoop | None = None
+        self._on_close: list[Callable[[], object]] = []
 
     @property
     def loop(self) -> asyncio.AbstractEventLoop:
@@ -97,17 +98,27 @@ class Clock(ABC):
         """Run ``main`` to completion on this clock's loop."""
         return self.loop.run_until_complete(main)
 
+    def on_close(self, callback: Callable[[], object]) -> None:
+        """Run ``callback`` when the clock closes (after its tasks are cancelled): for what lives as
+        long as the loop, such as a helper process, when its owner may never be closed itself."""
+        self._on_close.append(callback)
+
     def close(self) -> None:
-        """Cancel whatever is still running on the loop, then close it."""
+        """Cancel whatever is still running on the loop, close it, then run the :meth:`on_close` callbacks."""
         loop = self._loop
-        if loop is None or loop.is_closed():
-            return
-        pending = [task for task in asyncio.all_tasks(loop) if not task.done()]
-        for task in pending:
-            task.cancel()
-        if pending:
-            loop.run_until_complete(asyncio.gather(*pending, return_exceptions=True))
-        loop.close()
+        if loop is not None and not loop.is_closed():
+            pending = [task for task in asyncio.all_tasks(loop) if not task.done()]
+            for task in pending:
+                task.cancel()
+            if pending:
+                loop.run_until_complete(asyncio.gather(*pending, return_exceptions=True))
+            loop.close()
+        callbacks, self._on_close = self._on_close, []
+        for callback in callbacks:
+            try:
+                callback()
+            except Exception:
+                log.exception("closing the clock: %s failed; the others still run", callback)
 
 
 class Periodic:
