@@ -17,6 +17,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -40,8 +41,10 @@ def whole_robot(hours: float, src: str | None, config: str | None) -> dict[str, 
         args += ["--transcript", str(transcript), *(["--config", config] if config else [])]
         began = time.perf_counter()
         process = subprocess.Popen(args, stdout=subprocess.DEVNULL, env=env)
+        helpers = _HelperPeaks(process.pid)
         _, status, usage = os.wait4(process.pid, 0)
         wall = time.perf_counter() - began
+        helpers.stop()
         if status != 0:
             raise SystemExit(f"cyborg sim --script failed (status {status})")
         with transcript.open(encoding="utf-8") as lines:
@@ -50,8 +53,41 @@ def whole_robot(hours: float, src: str | None, config: str | None) -> dict[str, 
         "wall": wall,
         "cpu": usage.ru_utime + usage.ru_stime,
         "rss": usage.ru_maxrss / 1024,
+        "helper_rss": helpers.peak_kb / 1024,
         "records": float(records),
     }
+
+
+class _HelperPeaks:
+    """The largest peak RSS (VmHWM) of the robot's own child processes (the base's route-search
+    worker, and multiprocessing's resource tracker), read from /proc every 0.1 s while it runs:
+    ``wait4`` reports the robot process's peak, or a child's if larger, not their sum."""
+
+    def __init__(self, pid: int) -> None:
+        self.pid = pid
+        self.peak_kb = 0
+        self._seen: dict[int, int] = {}
+        self._done = threading.Event()
+        self._thread = threading.Thread(target=self._watch, daemon=True)
+        self._thread.start()
+
+    def _watch(self) -> None:
+        while not self._done.wait(0.1):
+            for status in Path("/proc").glob("[0-9]*/status"):
+                try:
+                    fields = dict(
+                        line.split(":", 1) for line in status.read_text().splitlines() if ":" in line
+                    )
+                except OSError:
+                    continue
+                if fields.get("PPid", "").strip() == str(self.pid) and "VmHWM" in fields:
+                    child = int(status.parent.name)
+                    self._seen[child] = int(fields["VmHWM"].split()[0])
+            self.peak_kb = max(self._seen.values(), default=0)
+
+    def stop(self) -> None:
+        self._done.set()
+        self._thread.join()
 
 
 def reduced_robot(hours: float) -> float:
@@ -84,6 +120,9 @@ def main() -> None:
     print(f"| whole robot: wall per virtual hour | {wall / args.hours:.2f} s |")
     print(f"| whole robot: CPU (user + system) | {statistics.median(r['cpu'] for r in runs):.1f} s |")
     print(f"| whole robot: peak RSS | {max(r['rss'] for r in runs):.0f} MB |")
+    print(
+        f"| whole robot: largest child process (route-search worker), peak RSS | {max(r['helper_rss'] for r in runs):.0f} MB |"
+    )
     print(f"| whole robot: transcript records | {int(runs[0]['records']):,} |")
     if reduced:
         median = statistics.median(reduced)

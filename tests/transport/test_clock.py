@@ -1,4 +1,5 @@
-"""Periodic work on the clock (``clock.every``): it survives a failing tick and logs each episode once."""
+"""Periodic work on the clock (``clock.every``): it survives a failing tick and logs each episode once;
+closing the clock runs what was tied to it."""
 
 from __future__ import annotations
 
@@ -102,3 +103,32 @@ def test_cancel_stops_the_work_also_from_inside_its_tick(clock: VirtualClock) ->
 def test_a_period_that_is_not_a_positive_number_is_refused(clock: VirtualClock, period: float) -> None:
     with pytest.raises(ValueError, match="the period of work must be a positive number of seconds"):
         clock.every(period, lambda: None, name="work")
+
+
+def test_closing_the_clock_runs_its_close_callbacks_once_after_its_tasks_end(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """What lives as long as the loop (the base's search worker) is stopped with it, even when one
+    of those callbacks fails."""
+    clock = VirtualClock()
+    seen: list[str] = []
+
+    async def forever() -> None:
+        try:
+            await clock.sleep(1e9)
+        finally:
+            seen.append("task ended")
+
+    def broken() -> None:
+        raise RuntimeError("cannot stop")
+
+    clock.on_close(lambda: seen.append("first"))
+    clock.on_close(broken)
+    clock.on_close(lambda: seen.append("last"))
+    clock.loop.create_task(forever())
+    clock.run(clock.sleep(1.0))
+    with caplog.at_level(logging.ERROR):
+        clock.close()
+        clock.close()
+    assert seen == ["task ended", "first", "last"]
+    assert [r.getMessage() for r in caplog.records if "closing the clock" in r.getMessage()] != []

@@ -460,7 +460,7 @@ class SimulatedBaseSettings(ModuleSettings):
     search_ahead: bool = Field(
         True,
         description="at --speed max, search the next wander trips' routes on a second process while "
-        "the base drives (the same routes, a simulated day ~15 % faster; about 70 MB more memory)",
+        "the base drives (the same routes; a simulated day ~20 % faster; a process of about 80 MB)",
     )
     start: str | None = Field(
         None, description="named pose to start at (default: the information desk, else RobotHome or Dock)"

@@ -20,15 +20,14 @@ import math
 import random
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
-import pyastar2d
 from numpy.typing import NDArray
 from scipy import ndimage
 
 from cyborg.errors import InvalidValueError, PlanningError
 from cyborg.maps import Cell, KeepOutZone, NamedPose, OccupancyMap, Point, segment_cells
+from cyborg.sim.grid_search import search_area, search_weights
 
 Location = Point | NamedPose
 """Where a route starts or ends: a world point in metres, or a named pose from the map."""
@@ -61,23 +60,6 @@ class AreaSearch:
 
 SearchedPaths = Callable[[AreaSearch], "NDArray[np.int32] | None"]
 """Where :meth:`RoutePlanner.plan` looks for a search made already (in box cells), before searching."""
-
-
-def search_weights(blocked: NDArray[np.bool_]) -> NDArray[np.float32]:
-    """A* weights for :func:`search_area`: inf on blocked cells, 1 on free ones."""
-    made = np.where(blocked, np.float32(np.inf), np.float32(1.0))
-    return made.view(_SearchWeights)
-
-
-def search_area(
-    weights: NDArray[np.float32], start: tuple[int, int], goal: tuple[int, int]
-) -> NDArray[np.int32] | None:
-    """pyastar2d's path (box cells, start and goal included) on a free area's weights, or None.
-
-    Pure and deterministic: the same weights and cells give the same path in any process.
-    """
-    path: NDArray[np.int32] | None = pyastar2d.astar_path(weights, start, goal, allow_diagonal=True)
-    return path
 
 
 class RoutePlanner:
@@ -381,24 +363,6 @@ class RoutePlanner:
             )
             kept.append(waypoints[index])
         return kept
-
-
-class _SearchWeights(np.ndarray):  # type: ignore[type-arg]
-    """The A* weights of a free area (1 on its free cells, inf elsewhere), as ``pyastar2d.astar_path``
-    uses them without the costs a search does not need.
-
-    ``flatten()`` is a view: the wrapper flattens the weights before the search, and a copy would
-    add 4 bytes a cell to the planning peak. ``min()`` is 1 (the area has a free cell) without
-    reading the grid: the wrapper checks it before every search (3 % of a simulated day).
-    """
-
-    def flatten(self, order: Any = "C") -> Any:
-        return self.ravel(order)
-
-    def min(self, axis: Any = None, *args: Any, **kwargs: Any) -> Any:
-        if axis is None and not args and not kwargs:
-            return np.float32(1.0)
-        return super().min(axis, *args, **kwargs)
 
 
 def _well_inside(coordinate: float) -> bool:

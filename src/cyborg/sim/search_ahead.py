@@ -19,8 +19,6 @@ too, for a base that is never closed.
 
 from __future__ import annotations
 
-import contextlib
-import ctypes
 import logging
 import multiprocessing
 import random
@@ -31,7 +29,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from cyborg.sim.planner import AreaSearch, Location, RoutePlanner, search_area, search_weights
+from cyborg.sim._search_worker import prepare_worker, search_in_worker
+from cyborg.sim.planner import AreaSearch, Location, RoutePlanner
 from cyborg.transport.clock import Clock
 
 __all__ = ["SearchAhead"]
@@ -40,39 +39,6 @@ log = logging.getLogger(__name__)
 
 _KEPT = 8
 """Searches kept waiting for their trip; older ones were not needed (a wander that ended)."""
-
-_worker_weights: dict[int, NDArray[np.float32]] = {}
-"""In the worker process only: the weights of the free area it searches (one at a time)."""
-
-
-_M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3  # glibc's mallopt parameters
-
-
-def _prepare_worker() -> None:
-    """Runs in the worker first. glibc gives each block over its mmap threshold (128 KB at first)
-    back to the system when freed, so the two grid-sized arrays of every search (31 MB on the
-    campus) would be fresh pages each time: 6-8 ms of page faults a search, most of the search.
-    Blocks up to 64 MB stay in the heap instead. Elsewhere than glibc nothing changes."""
-    with contextlib.suppress(OSError, AttributeError):
-        libc = ctypes.CDLL(None)
-        libc.mallopt(_M_MMAP_THRESHOLD, 64 << 20)
-        libc.mallopt(_M_TRIM_THRESHOLD, 128 << 20)
-
-
-def _search_in_worker(
-    area: int,
-    blocked: tuple[NDArray[np.uint8], tuple[int, int]] | None,
-    start: tuple[int, int],
-    goal: tuple[int, int],
-) -> NDArray[np.int32] | None:
-    """Runs in the worker: the area's blocked cells (as bits) come with its first search; the
-    weights made from them are kept."""
-    if blocked is not None:
-        _worker_weights.clear()
-        bits, shape = blocked
-        cells = np.unpackbits(bits, count=shape[0] * shape[1]).reshape(shape).view(np.bool_)
-        _worker_weights[area] = search_weights(cells)
-    return search_area(_worker_weights[area], start, goal)
 
 
 class SearchAhead:
@@ -133,14 +99,14 @@ class SearchAhead:
             if self._pool is None:
                 self.clock.on_close(self.close)  # a base that is never closed still stops its worker
                 self._pool = ProcessPoolExecutor(
-                    1, mp_context=multiprocessing.get_context("spawn"), initializer=_prepare_worker
+                    1, mp_context=multiprocessing.get_context("spawn"), initializer=prepare_worker
                 )
             blocked = None
             if search.area != self._area_sent:  # 1 bit a cell: an eighth of a MB for the campus
                 cells = self.planner.area_blocked(search.area)
                 blocked = (np.packbits(cells, axis=None), (int(cells.shape[0]), int(cells.shape[1])))
                 self._area_sent = search.area
-            future = self._pool.submit(_search_in_worker, search.area, blocked, search.start, search.goal)
+            future = self._pool.submit(search_in_worker, search.area, blocked, search.start, search.goal)
         except Exception as exc:
             self._give_up(exc)
             return
