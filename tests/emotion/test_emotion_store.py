@@ -240,6 +240,21 @@ def test_write_behind_saves_of_one_moment_share_a_commit_and_reads_do_not_wait_o
     assert _stored_pleasure(path) == pytest.approx(0.3)
 
 
+def test_write_behind_without_a_window_commits_each_save_at_once(tmp_path: Path) -> None:
+    """A real robot's store (no commit window): a save is on disk without a read or closing, so
+    a crash right after it (kill -9) loses nothing but the write in flight."""
+    path = tmp_path / "c.db"
+    store = ControllerStore(path, write_behind=True)
+    try:
+        store.save_emotion(PAD(0.4, 0.0, 0.0), 1.0)
+        deadline = time.monotonic() + 10
+        while _stored_pleasure(path) != pytest.approx(0.4):
+            assert time.monotonic() < deadline, "the save waited for something"
+            time.sleep(0.005)
+    finally:
+        store.close()
+
+
 @pytest.mark.parametrize("window", [-0.1, float("nan")])
 def test_a_bad_commit_window_is_refused_with_the_fix(tmp_path: Path, window: float) -> None:
     with pytest.raises(InvalidValueError, match=r"commit_window .* fix: pass e\.g\. 0\.02"):

@@ -27,7 +27,7 @@ from cyborg.emotion.system import EmotionSystem
 from cyborg.modules.gatekeeper import Gatekeeper
 from cyborg.modules.kind import CalendarEntry, Component, Listening, ServesStates
 from cyborg.motivator.component import Motivator
-from cyborg.motivator.store import ControllerStore
+from cyborg.motivator.store import COMMIT_WINDOW, ControllerStore
 from cyborg.storage import SaveStatus
 from cyborg.transport.base import Transport
 
@@ -136,6 +136,8 @@ def build_controller(
         seed_events=settings.motivator.events,
         clock=transport.clock,
         write_behind=True,
+        # A simulated day saves the emotion thousands of times a real second: commit them together.
+        commit_window=COMMIT_WINDOW if transport.clock.as_fast_as_possible else 0.0,
     )
     for entry in settings.motivator.events:
         store.add_event(entry)  # the YAML is the source; entries added to the database stay too

@@ -8,13 +8,14 @@ so a crash loses at most the write in flight.
 With ``write_behind`` (the controller's store, as the composition root builds it) the
 emotion, the switch and the saturations are committed by a thread of the store's own, so the
 controller's loop never waits for the disk's flush (1-3 ms a commit on the lab machine, more
-on a busy disk); what waits is latest-value-wins, so a burst of saves is one commit. The
-thread starts a commit ``commit_window`` seconds of real time (``COMMIT_WINDOW``, 20 ms) after
-the first save that waits for it, so the saves of that moment share it: at most 50 commits a
-second however fast a virtual clock runs (issue 18: a simulated day made ~1,200 commits, each
-taking the interpreter's lock from the loop), and a crash loses at most the last 20 ms of saves.
-Reads of those values first wait for the writes queued before them (without waiting out the
-window), and closing writes everything.
+on a busy disk); what waits is latest-value-wins, so a burst of saves is one commit. With a
+``commit_window`` (the composition root gives ``COMMIT_WINDOW``, 20 ms of real time, only to a
+virtual clock that runs as fast as it can) the thread starts a commit that long after the first
+save that waits for it, so the saves of that moment share it: at most 50 commits a second however
+fast the clock runs (issue 18: a simulated day made ~1,200 commits, each taking the interpreter's
+lock from the loop). Without one (a real robot, ROS launches) each save is committed at once, so a
+crash loses at most the write in flight. Reads of those values first wait for the writes queued
+before them (without waiting out the window), and closing writes everything.
 
 A missing file is created with defaults (events seeded from the caller's list);
 a file that is not a database, fails ``PRAGMA integrity_check`` or has another
@@ -53,7 +54,8 @@ SCHEMA_VERSION = "1"
 SAVE_RETRY = 1.0
 """Clock seconds between tries to write what a failed write left unsaved."""
 COMMIT_WINDOW = 0.02
-"""Real seconds the write-behind thread gathers saves before it commits them together."""
+"""Real seconds the write-behind thread gathers saves before it commits them together, on a
+virtual clock that runs as fast as it can (``ControllerStore(commit_window=...)``; default 0)."""
 
 _TABLES: dict[str, str] = {
     "meta": "CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)",
@@ -104,7 +106,7 @@ class ControllerStore(SQLiteFile):
         *,
         clock: Clock | None = None,
         write_behind: bool = False,
-        commit_window: float = COMMIT_WINDOW,
+        commit_window: float = 0.0,
     ) -> None:
         if not (math.isfinite(commit_window) and commit_window >= 0):
             raise InvalidValueError(
