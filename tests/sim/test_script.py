@@ -3,6 +3,13 @@
 from __future__ import annotations
 
 import itertools
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -136,3 +143,36 @@ def test_transcript_ends_a_trip_with_the_arrival_pose(tmp_path: Path) -> None:
     assert all(b["t"] - a["t"] >= 0.999 for a, b in itertools.pairwise(poses)), "at most one a second"
     around = [(r["x"], r["y"]) for r in poses if arrived["t"] - 1.0 <= r["t"] <= arrived["t"] + 1.0]
     assert at_arrival[0] in around, "the arrival pose is recorded"
+
+
+def test_ctrl_c_stops_a_scripted_day_cleanly_with_its_transcript(tmp_path: Path) -> None:
+    """Ctrl-C in the terminal (SIGINT to the whole process group): the run stops where it is, says
+    how many records it wrote (all of them in the transcript), leaves no traceback and no process."""
+    script, transcript = tmp_path / "day.yaml", tmp_path / "day.jsonl"
+    script.write_text("until: 28800\n")
+    cyborg = Path(sys.executable).with_name("cyborg")
+    env = {**os.environ, "CYBORG_DATA_DIR": str(tmp_path / "data")}
+    args = [str(cyborg), "sim", "--script", str(script), "--speed", "max", "--transcript", str(transcript)]
+    errors = (tmp_path / "stderr.txt").open("w+")  # a file: the log must not fill a pipe nobody reads
+    process = subprocess.Popen(
+        args, stdout=subprocess.PIPE, stderr=errors, text=True, env=env, start_new_session=True
+    )
+    assert process.stdout is not None
+    lines = [process.stdout.readline() for _ in range(400)]  # several wander trips: the worker runs
+    assert any("navigation_start_wandering" in line for line in lines), lines
+    os.killpg(process.pid, signal.SIGINT)
+    out, _ = process.communicate(timeout=60)
+    errors.seek(0)
+    err = errors.read()
+    errors.close()
+    assert process.returncode == 0, err
+    assert "Traceback" not in err and "never retrieved" not in err and "destroyed" not in err, err
+    said = re.search(r"stopped \(Ctrl-C\); wrote (\d+) records to", out)
+    assert said is not None, out[-500:]
+    records = [json.loads(line) for line in transcript.read_text().splitlines()]
+    assert len(records) == int(said.group(1)) > 60
+    assert records[-1]["t"] < 28800
+    with pytest.raises(ProcessLookupError):  # nothing of the group is left
+        for _ in range(50):
+            os.killpg(process.pid, 0)
+            time.sleep(0.1)

@@ -275,15 +275,21 @@ def _run_script(
                     f"{transcript_path.parent} first, or give a writable path"
                 ) from exc
         # Each record is echoed and written as it happens; none is kept, so memory stays flat.
-        run_scenario(
-            config,
-            script,
-            transcript=out,
-            data_dir=data_dir,
-            speed=virtual_speed,
-            map_path=map_path,
-            keep_records=False,
-            on_record=echo,
-        )
+        try:
+            run_scenario(
+                config,
+                script,
+                transcript=out,
+                data_dir=data_dir,
+                speed=virtual_speed,
+                map_path=map_path,
+                keep_records=False,
+                on_record=echo,
+                stop_on_interrupt=True,
+            )
+        except KeyboardInterrupt:
+            written = f"; wrote {count} records to {transcript_path}" if transcript_path else ""
+            click.echo(f"stopped (Ctrl-C){written}")
+            return
     if transcript_path:
         click.secho(f"wrote {count} records to {transcript_path}", fg="green")

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import signal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -25,7 +26,9 @@ def prepare_worker() -> None:
     """Runs in the worker first. glibc gives each block over its mmap threshold (128 KB at first)
     back to the system when freed, so the two grid-sized arrays of every search (31 MB on the
     campus) would be fresh pages each time: 6-8 ms of page faults a search, most of the search.
-    Blocks up to 64 MB stay in the heap instead. Elsewhere than glibc nothing changes."""
+    Blocks up to 64 MB stay in the heap instead. Elsewhere than glibc nothing changes.
+    Ctrl-C is the robot's to handle: the worker ends when the robot closes it (or its pipe)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     with contextlib.suppress(OSError, AttributeError):
         libc = ctypes.CDLL(None)
         libc.mallopt(_M_MMAP_THRESHOLD, 64 << 20)

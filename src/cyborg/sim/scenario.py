@@ -13,6 +13,7 @@ import contextlib
 import json
 import logging
 import random
+import signal
 import tempfile
 from collections import deque
 from collections.abc import Callable
@@ -203,6 +204,9 @@ class ScenarioRun:
     ) -> None:
         check_script(script, config)
         self.script = script
+        self.interrupted = False
+        """True when Ctrl-C ended the run (see :meth:`run`)."""
+        self._driving: asyncio.Future[list[Record]] | None = None
         self.clock = VirtualClock(start=script_start(script), speed=speed)
         self.transport = EmbeddedTransport(self.clock)
         try:
@@ -236,18 +240,44 @@ class ScenarioRun:
 
     async def _main(self) -> None:
         self.robot.start()
-        await self.driver.run()
+        self._driving = asyncio.ensure_future(self.driver.run())
+        try:
+            await self._driving
+        except asyncio.CancelledError:
+            if not self.interrupted:
+                raise
         await self.robot.controller.stop()
 
-    def run(self) -> list[Record]:
+    def _interrupt(self) -> None:
+        self.interrupted = True
+        self.clock.loop.remove_signal_handler(signal.SIGINT)  # a second Ctrl-C stops at once
+        if self._driving is not None:
+            self._driving.cancel()
+
+    def run(self, *, stop_on_interrupt: bool = False) -> list[Record]:
         """Run the script to its end; :class:`ScenarioFailed` if an expectation failed or a ``when``
-        never fired (the transcript holds every record up to the end either way)."""
+        never fired (the transcript holds every record up to the end either way).
+
+        ``stop_on_interrupt`` (the command line): Ctrl-C ends the script where it is, the robot
+        stops and closes as at the end, then KeyboardInterrupt is raised (no half-run tasks left).
+        """
+        self.interrupted = False
+        loop = self.clock.loop
+        handled = False
+        if stop_on_interrupt:
+            with contextlib.suppress(NotImplementedError, RuntimeError, ValueError):  # not the main thread
+                loop.add_signal_handler(signal.SIGINT, self._interrupt)
+                handled = True
         try:
             self.clock.run(self._main())
         finally:
+            if handled and not loop.is_closed():
+                loop.remove_signal_handler(signal.SIGINT)
             self.robot.close()
             self.transport.shutdown()
             self.clock.close()
+        if self.interrupted:
+            raise KeyboardInterrupt
         if self.driver.failures:
             raise ScenarioFailed(self.driver.failures, source=self.script.source)
         return self.records
@@ -293,10 +323,11 @@ def run_scenario(
     keep_records: bool = True,
     on_record: Callable[[Record], None] | None = None,
     kinds: KindRegistry | None = None,
+    stop_on_interrupt: bool = False,
 ) -> list[Record]:
     """Run ``script``; write each record to ``transcript`` as a JSON line; return the records.
 
-    ``kinds`` defaults to every installed module kind. With ``keep_records=False`` the records go only to ``transcript`` and ``on_record`` as they
+    ``stop_on_interrupt``: see :meth:`ScenarioRun.run`. ``kinds`` defaults to every installed module kind. With ``keep_records=False`` the records go only to ``transcript`` and ``on_record`` as they
     happen and the returned list is empty, so a week-long script runs in flat memory.
     """
     with contextlib.ExitStack() as stack:
@@ -320,4 +351,4 @@ def run_scenario(
             run.listeners.append(write)
         if on_record is not None:
             run.listeners.append(on_record)
-        return run.run()
+        return run.run(stop_on_interrupt=stop_on_interrupt)
