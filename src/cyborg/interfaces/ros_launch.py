@@ -357,6 +357,9 @@ def launch(
         raise KeyboardInterrupt
 
     signal.signal(signal.SIGTERM, stop_on_term)  # `kill` and `timeout` stop the nodes too
+    # Ctrl-C stops the robot even when the launch inherited SIGINT ignored (a script's background
+    # job, nohup): Python then leaves it ignored, and the launch could only be killed.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     robot = Launch(
         config_path,
         config,
