@@ -261,7 +261,6 @@ class ScenarioRun:
         ``stop_on_interrupt`` (the command line): Ctrl-C ends the script where it is, the robot
         stops and closes as at the end, then KeyboardInterrupt is raised (no half-run tasks left).
         """
-        self.interrupted = False
         loop = self.clock.loop
         handled = False
         if stop_on_interrupt:
@@ -327,8 +326,9 @@ def run_scenario(
 ) -> list[Record]:
     """Run ``script``; write each record to ``transcript`` as a JSON line; return the records.
 
-    ``stop_on_interrupt``: see :meth:`ScenarioRun.run`. ``kinds`` defaults to every installed module kind. With ``keep_records=False`` the records go only to ``transcript`` and ``on_record`` as they
-    happen and the returned list is empty, so a week-long script runs in flat memory.
+    ``kinds`` defaults to every installed module kind. With ``keep_records=False`` the records go
+    only to ``transcript`` and ``on_record`` as they happen and the returned list is empty, so a
+    week-long script runs in flat memory. ``stop_on_interrupt``: see :meth:`ScenarioRun.run`.
     """
     with contextlib.ExitStack() as stack:
         scratch = stack.enter_context(tempfile.TemporaryDirectory(prefix="cyborg-scenario-"))
