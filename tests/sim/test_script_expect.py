@@ -55,6 +55,23 @@ steps:
         run(text)
 
 
+def test_a_state_that_never_came_is_told_with_the_motivators_last_decision() -> None:
+    text = """
+until: 60
+steps:
+  - when: {type: state, event: succeeded, from: music}
+    say: hello
+"""
+    with pytest.raises(ScenarioFailed) as caught:
+        run(text)
+    (problem,) = caught.value.problems
+    # It wandered the whole minute: the motivator says why it moved the robot on no further.
+    assert "navigation_moving" in problem
+    assert (
+        "(the motivator's last decision: t=60 no motivational events in state 'navigation_moving')" in problem
+    )
+
+
 def test_cyborg_sim_exits_1_on_a_failed_expectation(tmp_path: Path) -> None:
     script = tmp_path / "s.yaml"
     script.write_text(GREETING.replace("to: conversation}", "to: music}"))

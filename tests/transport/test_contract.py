@@ -27,7 +27,15 @@ from typing import Any, TypeVar
 import pytest
 
 from cyborg.errors import ServiceTimeoutError, ServiceUnavailableError, TransportError
-from cyborg.transport.base import ClientGoalHandle, GoalStatus, MessageInfo, Node, Publisher, ServerGoalHandle
+from cyborg.transport.base import (
+    ClientGoalHandle,
+    GoalStatus,
+    MessageInfo,
+    Node,
+    Publisher,
+    ServerGoalHandle,
+    Transport,
+)
 from cyborg.transport.clock import Clock, VirtualClock, wait_until
 from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import (
@@ -50,6 +58,7 @@ class Graph:
     def __init__(
         self,
         clock: Clock,
+        transport: Transport,
         make_node: Callable[[str], Node],
         *,
         prefix: str,
@@ -57,6 +66,7 @@ class Graph:
         ros: bool,
     ) -> None:
         self.clock = clock
+        self.transport = transport
         self.node = make_node
         self.prefix = prefix
         self._sender = sender
@@ -136,7 +146,9 @@ def graph(request: pytest.FixtureRequest) -> Iterator[Graph]:
             return node
 
         try:
-            yield Graph(session2.clock, make2, prefix=prefix, sender=lambda node: node, ros=True)
+            yield Graph(
+                session2.clock, session2.transport, make2, prefix=prefix, sender=lambda node: node, ros=True
+            )
         finally:
             for node in made2:
                 node.shutdown()
@@ -145,7 +157,7 @@ def graph(request: pytest.FixtureRequest) -> Iterator[Graph]:
         clock = VirtualClock()
         embedded = EmbeddedTransport(clock)
         try:
-            yield Graph(clock, embedded.node, prefix=prefix, sender=lambda node: node, ros=False)
+            yield Graph(clock, embedded, embedded.node, prefix=prefix, sender=lambda node: node, ros=False)
         finally:
             embedded.shutdown()
             clock.close()
@@ -160,7 +172,9 @@ def graph(request: pytest.FixtureRequest) -> Iterator[Graph]:
         return node
 
     try:
-        yield Graph(session.clock, make, prefix=prefix, sender=lambda node: transport.ros_name, ros=True)
+        yield Graph(
+            session.clock, transport, make, prefix=prefix, sender=lambda node: transport.ros_name, ros=True
+        )
     finally:
         for node in made:
             node.shutdown()
@@ -182,6 +196,22 @@ def test_topic_delivers_in_order_with_sender(graph: Graph) -> None:
     graph.run(main())
     sender = graph.sender("talker")
     assert got == [("a", sender), ("b", sender), ("c", sender)]
+
+
+def test_after_waiting_for_connections_the_first_message_reaches_every_subscriber(graph: Graph) -> None:
+    talker, listener = graph.node("talker"), graph.node("listener")
+    got: list[str] = []
+    listener.subscribe(graph.name("/first"), String, lambda m, i: got.append(m.data))
+    pub = talker.publisher(graph.name("/first"), String)
+
+    assert graph.transport.wait_for_connections(ROS_PATIENCE) == []
+    assert pub.subscriber_count() == 1  # connected now, not some time later
+    pub.publish(String("first"))
+
+    async def main() -> None:
+        await graph.until(lambda: got == ["first"], "the first message")
+
+    graph.run(main())
 
 
 def test_relative_names_resolve_to_absolute(graph: Graph) -> None:

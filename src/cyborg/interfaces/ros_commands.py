@@ -57,6 +57,8 @@ if TYPE_CHECKING:
     from cyborg.transport.ros import RosTransport
     from cyborg.transport.ros2 import Ros2Transport
 
+log = logging.getLogger(__name__)
+
 SCENARIO = "cyborg_scenario"
 CLOCK_TOPIC = "/clock"
 CLOCK_RATE = 10.0  # /clock messages per real second
@@ -65,6 +67,7 @@ SIM_PARAMS = "/cyborg_sim"  # a launch's shared-time parameters live under SIM_P
 EPOCH_PARAM_PREFIX = "param:"
 EPOCH_DIR_PREFIX = "dir:"
 EPOCH_MARGIN = 0.5  # real seconds between the last node being ready and virtual time starting
+CONNECT_TIMEOUT = 5.0  # real seconds a node waits for its topics' connections before it starts
 READY_TIMEOUT = 120.0  # real seconds a launch waits for its nodes to be ready
 
 
@@ -359,6 +362,14 @@ def run_node(
     if part.controller is not None:  # its counters, for the cyborg_api node's dashboard
         stats_publisher = part.controller.node.publisher(topics.CONTROLLER_STATS, String, latch=True)
 
+    missing = transport.wait_for_connections(CONNECT_TIMEOUT)
+    if missing:  # e.g. a node killed without leaving the graph: the node starts anyway
+        log.warning(
+            "%d connection(s) not made within %.0f s, whose first messages may be lost: %s",
+            len(missing),
+            CONNECT_TIMEOUT,
+            "; ".join(missing[:5]) + (" ..." if len(missing) > 5 else ""),
+        )
     try:
         rendezvous = sim_time.rendezvous
         if rendezvous is not None:

@@ -168,9 +168,15 @@ class ScenarioDriver:
     def _instead(self, match: Match) -> str:
         """What came instead of ``match``: the last records of its type since the step was armed."""
         same = [record for record in self._since if record.get("type") == match.type]
-        if not same:
-            return f"no {match.type} record at all"
-        return "; ".join(_brief(record) for record in same[-3:])
+        came = "; ".join(_brief(record) for record in same[-3:]) if same else f"no {match.type} record at all"
+        if match.type == "state":  # what moves the robot on its own: why it did not
+            decisions = [record for record in self._since if record.get("type") == "motivator"]
+            came += (
+                f" (the motivator's last decision: t={float(decisions[-1]['t']):g} {decisions[-1].get('reason')})"  # type: ignore[arg-type]
+                if decisions
+                else " (no decision of the motivator came)"
+            )
+        return came
 
     async def run(self) -> list[Record]:
         """Play the script until its ``until`` time, or until a step fails; return the records."""

@@ -296,3 +296,15 @@ class Transport(ABC):
 
     @abstractmethod
     def shutdown(self) -> None: ...
+
+    def wait_for_connections(self, timeout: float) -> list[str]:
+        """Wait up to ``timeout`` real seconds until this process's topics are connected to every
+        publisher and subscriber the graph lists on them; return the connections still missing
+        (``"talker -> listener on /topic"``), empty when all are made.
+
+        Over ROS a subscriber is connected to a publisher some time after both exist, and what is
+        published before is lost to it: a node calls this before it starts its work, so that its
+        first messages reach everyone. In-process every subscriber receives from the moment it
+        subscribes: nothing to wait for.
+        """
+        return []

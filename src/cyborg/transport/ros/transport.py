@@ -103,6 +103,14 @@ class RosTransport(Transport):
         self.shutdown()
         rospy.signal_shutdown(reason)
 
+    def wait_for_connections(self, timeout: float) -> list[str]:
+        """See :meth:`Transport.wait_for_connections` and :mod:`.connections`."""
+        if not rospy.core.is_initialized():
+            return []
+        from cyborg.transport.ros.connections import wait_for_connections
+
+        return [f"{missing} on {missing.topic}" for missing in wait_for_connections(timeout)]
+
     def subscribers_of(self, topic: str) -> list[str]:
         """The nodes the master lists as subscribers of ``topic`` (empty if it does not answer)."""
         return listed_subscribers(topic)

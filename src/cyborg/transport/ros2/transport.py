@@ -40,6 +40,7 @@ from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.context import Context
 from rclpy.node import Node as RclNode
 from rclpy.parameter import Parameter as RclParameter
+from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
 
 from cyborg.errors import TransportError
 from cyborg.transport._queue import CallbackRunner
@@ -79,6 +80,8 @@ PARAM_HOME = "cyborg_parameters"
 PARAM_TIMEOUT = 2.0  # seconds a parameter read or write waits for the home's answer
 EXECUTOR_THREADS = 32  # an action goal being executed holds one thread while it runs
 NODE_GONE_WAIT = 1.0  # seconds a node's shutdown waits until the graph has lost it
+CONNECT_POLL_PERIOD = 0.05  # seconds between two looks at the graph in wait_for_connections
+_RCL_OWN_TOPICS = frozenset({"/rosout", "/parameter_events"})
 
 
 PARTICIPANT_LEASE = 1.0  # seconds after a process's last sign of life until the others drop it
@@ -126,6 +129,23 @@ def _participant_profile() -> Iterator[None]:
 def parameter_name(key: str) -> str:
     """The home's ROS 2 parameter for our absolute ``key``: ``/a/b`` -> ``a.b``."""
     return key.strip("/").replace("/", ".")
+
+
+def _fits(publisher_qos: Any, subscription_qos: Any) -> bool:
+    """Whether DDS matches a publisher and a subscription of these QoS profiles, by the policies
+    our endpoints set: a volatile publisher never matches a transient-local subscription (each of
+    ours has such a half) nor a best-effort one a reliable subscription. (rclpy's
+    qos_check_compatible would also compare deadlines and leases, which the graph reports in
+    another form than the endpoint's own default.)"""
+    volatile_to_latched = (
+        publisher_qos.durability == DurabilityPolicy.VOLATILE
+        and subscription_qos.durability == DurabilityPolicy.TRANSIENT_LOCAL
+    )
+    best_effort_to_reliable = (
+        publisher_qos.reliability == ReliabilityPolicy.BEST_EFFORT
+        and subscription_qos.reliability == ReliabilityPolicy.RELIABLE
+    )
+    return not (volatile_to_latched or best_effort_to_reliable)
 
 
 class Ros2Transport(Transport):
@@ -346,6 +366,43 @@ class Ros2Transport(Transport):
                 "fix: start the controller's node (it hosts the parameters)"
             )
         return future.result()
+
+    def wait_for_connections(self, timeout: float) -> list[str]:
+        """See :meth:`Transport.wait_for_connections`: each publisher and subscription of this
+        process's nodes matched with every endpoint of a fitting QoS the graph lists on its topic
+        (DDS discovery runs on its own threads; one listed but never matched is one just gone)."""
+        deadline = time.monotonic() + timeout
+        while True:
+            missing = self._unmatched()
+            if not missing or time.monotonic() >= deadline:
+                return missing
+            time.sleep(CONNECT_POLL_PERIOD)
+
+    def _unmatched(self) -> list[str]:
+        missing: list[str] = []
+        for node in list(self._nodes.values()):
+            rcl = node.rcl
+            for pub in list(rcl.publishers):
+                if pub.topic_name in _RCL_OWN_TOPICS:
+                    continue
+                listed = sum(
+                    _fits(pub.qos_profile, info.qos_profile)
+                    for info in rcl.get_subscriptions_info_by_topic(pub.topic_name)
+                )
+                matched = pub.get_subscription_count()
+                if matched < listed:
+                    missing.append(f"{node.name} -> {listed - matched} subscriber(s) on {pub.topic_name}")
+            for sub in list(rcl.subscriptions):
+                if sub.topic_name in _RCL_OWN_TOPICS:
+                    continue
+                listed = sum(
+                    _fits(info.qos_profile, sub.qos_profile)
+                    for info in rcl.get_publishers_info_by_topic(sub.topic_name)
+                )
+                matched = sub.get_publisher_count()
+                if matched < listed:
+                    missing.append(f"{listed - matched} publisher(s) -> {node.name} on {sub.topic_name}")
+        return missing
 
     def shutdown(self) -> None:
         for node in list(self._nodes.values()):
