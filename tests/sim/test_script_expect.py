@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 
 import pytest
@@ -92,3 +93,13 @@ def test_cyborg_sim_exits_1_on_a_failed_expectation(tmp_path: Path) -> None:
 def test_bad_expect_steps_are_refused_with_the_fix(step: str, message: str) -> None:
     with pytest.raises(ConfigError, match=message):
         parse_script(f"until: 10\nsteps:\n  - {step}\n")
+
+
+def test_a_run_that_ends_while_the_robot_wanders_ends_without_a_warning(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    records = run("seed: 7\nuntil: 30\nsteps: []\n")
+    states = [r for r in records if r["type"] == "state"]
+    assert states[-1]["to"] == "navigation_moving", "it was wandering at the end"
+    problems = [r.getMessage() for r in caplog.records if r.levelno >= logging.WARNING]
+    assert problems == [], problems

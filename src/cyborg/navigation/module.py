@@ -101,6 +101,7 @@ class NavigationModule(BehaviourModule):
         self.system_state = ""
         self.sulking = False
         self.wandering_now = False
+        self._closing = False
         self.emotion_since = node.clock.monotonic()
         self._warned_off_map: set[str] = set()
         self._answer: asyncio.Future[Intent] | None = None
@@ -118,6 +119,7 @@ class NavigationModule(BehaviourModule):
 
     def close(self) -> None:
         """Stop looking at the calendar and end the goal that runs; close the database if it opened it."""
+        self._closing = True
         self._scheduler.cancel()
         super().close()
         if self.owns_db:
@@ -341,7 +343,10 @@ class NavigationModule(BehaviourModule):
         try:
             await self.base.stop()
         except CyborgError as exc:
-            log.warning("could not stop the base: %s", exc)
+            if self._closing:  # the robot stops: its base's node (or ours) may be gone already
+                log.debug("could not stop the base while closing: %s", exc)
+            else:
+                log.warning("could not stop the base: %s", exc)
 
     # --- talking -----------------------------------------------------------------------
 
