@@ -11,6 +11,7 @@ the controller's cancel is handed over after the preempt timeout and silenced, a
 
 from __future__ import annotations
 
+import asyncio
 import importlib.util
 import os
 import subprocess
@@ -139,6 +140,10 @@ class World:
         self.robot.start()
         await self.in_state("idle")
         await self.until(lambda: self.events.subscriber_count() > 0, "the controller hears events")
+        # As a node does before it starts: every topic connected to the foreign module's (DDS
+        # discovery is done by then), so what it says first reaches the gatekeeper and the observer.
+        missing = await asyncio.to_thread(self.robot.transport.wait_for_connections, PATIENCE)
+        assert missing == [], missing
 
     def count(self, heard: list[Heard], prefix: str, sender: str, since: float = 0.0) -> int:
         return sum(1 for h in heard if h.text.startswith(prefix) and h.sender == sender and h.at >= since)

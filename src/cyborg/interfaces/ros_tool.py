@@ -94,10 +94,13 @@ class RosLink:
             start = "`cyborg launch --ros2`" if self.ros2 else "`cyborg launch`"
             raise CyborgError(f"no node listens on {topic}; fix: start the robot ({start}) or {where}")
         # ROS 2: volatile, so each listening node matches once (a latched publisher matches both
-        # halves of our subscriptions); the tool waits for them anyway.
+        # halves of our subscriptions); the tool waits for them anyway, and for any listener the
+        # graph shows meanwhile (under load one node's endpoints may be discovered late).
         publisher = self._node.publisher(topic, type(message), latch=not self.ros2)
         while publisher.subscriber_count() < len(listeners) and loop.time() < deadline:
             await asyncio.sleep(0.01)
+            if self.ros2:
+                listeners = sorted(set(listeners) | set(self._transport.subscribers_of(topic)))
         publisher.publish(message)
         await asyncio.sleep(DELIVERY_GRACE)
 
