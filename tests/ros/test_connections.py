@@ -35,7 +35,7 @@ def test_a_dropped_subscription_is_connected_again_and_then_hears_the_first_mess
         impl = get_topic_manager().get_subscriber_impl(topic)
         for connection in list(impl.connections):
             connection.close()
-        assert wait_until_sync(lambda: pub.subscriber_count() == 0, 5.0)
+        assert ros.clock.run(wait_until(lambda: pub.subscriber_count() == 0, ros.clock, timeout=5.0))
         missing = ros.transport.wait_for_connections(0.0)
         assert any(topic in m for m in missing), missing
 
@@ -71,13 +71,3 @@ def test_a_listed_publisher_that_is_gone_is_named_and_the_wait_ends(ros: RosSess
     finally:
         master.unregisterPublisher(ghost, topic, ghost_uri)
         listener.shutdown()
-
-
-def wait_until_sync(predicate: object, timeout: float) -> bool:
-    assert callable(predicate)
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.02)
-    return True

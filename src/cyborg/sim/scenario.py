@@ -171,11 +171,11 @@ class ScenarioDriver:
         came = "; ".join(_brief(record) for record in same[-3:]) if same else f"no {match.type} record at all"
         if match.type == "state":  # what moves the robot on its own: why it did not
             decisions = [record for record in self._since if record.get("type") == "motivator"]
-            came += (
-                f" (the motivator's last decision: t={float(decisions[-1]['t']):g} {decisions[-1].get('reason')})"  # type: ignore[arg-type]
-                if decisions
-                else " (no decision of the motivator came)"
-            )
+            if decisions:
+                last = decisions[-1]
+                came += f" (the motivator's last decision: t={float(last['t']):g} {last.get('reason')})"  # type: ignore[arg-type]
+            else:
+                came += " (no decision of the motivator came)"
         return came
 
     async def run(self) -> list[Record]:

@@ -26,7 +26,7 @@ import rosgraph  # type: ignore[import-not-found]
 import rospy  # type: ignore[import-not-found]
 
 from cyborg.transport.base import normalize_node_name
-from cyborg.transport.ros.master import UNREACHABLE, answer, master_proxy
+from cyborg.transport.ros.master import UNREACHABLE, master_proxy, register_subscriber
 
 __all__ = ["RECONNECT_AFTER", "Unconnected", "unconnected", "wait_for_connections"]
 
@@ -35,7 +35,7 @@ log = logging.getLogger(__name__)
 RECONNECT_AFTER = 1.0  # seconds a subscription may miss a listed publisher before it registers again
 POLL_PERIOD = 0.1  # seconds between two looks at the master's lists and rospy's connections
 
-# rospy's own: /rosout goes to the rosout node, /clock comes from whoever publishes time.
+# rospy's own: its log topic, connected by rospy itself to the rosout node.
 _RUNTIME_TOPICS = frozenset({"/rosout"})
 
 
@@ -67,45 +67,32 @@ def unconnected(system_state: Any) -> list[Unconnected]:
     listed_sub = {topic: {normalize_node_name(n) for n in nodes} for topic, nodes in subscribers_listed}
     manager = get_topic_manager()
     missing: list[Unconnected] = []
-    for topic, _type in manager.get_subscriptions():
-        impl = manager.get_subscriber_impl(topic)
-        if impl is None or topic in _RUNTIME_TOPICS:
-            continue
-        have = _peers(impl.connections, "callerid_pub")
-        missing += [
-            Unconnected(topic, n, subscriber=False) for n in sorted(listed_pub.get(topic, set()) - have)
-        ]
-    for topic, _type in manager.get_publications():
-        impl = manager.get_publisher_impl(topic)
-        if impl is None or topic in _RUNTIME_TOPICS:
-            continue
-        have = _peers(impl.connections, "endpoint_id")
-        missing += [
-            Unconnected(topic, n, subscriber=True) for n in sorted(listed_sub.get(topic, set()) - have)
-        ]
+    # (the peers listed subscribe?, this process's topics, rospy's impl of one, the peers listed per
+    # topic, the attribute naming a connection's peer)
+    sides = (
+        (False, manager.get_subscriptions(), manager.get_subscriber_impl, listed_pub, "callerid_pub"),
+        (True, manager.get_publications(), manager.get_publisher_impl, listed_sub, "endpoint_id"),
+    )
+    for peer_subscribes, registered, impl_of, listed, peer_name in sides:
+        for topic, _type in registered:
+            impl = impl_of(topic)
+            if impl is None or topic in _RUNTIME_TOPICS:
+                continue
+            have = _peers(impl.connections, peer_name)
+            missing += [
+                Unconnected(topic, n, peer_subscribes) for n in sorted(listed.get(topic, set()) - have)
+            ]
     return missing
 
 
 def _register_again(topics: set[str]) -> None:
     """Register these subscriptions again: rospy then connects to the listed publishers it lacks."""
-    from rospy.impl.registration import (  # type: ignore[import-not-found]
-        RegManager,
-        get_registration_listeners,
-        get_topic_manager,
-    )
+    from rospy.impl.registration import get_topic_manager  # type: ignore[import-not-found]
 
-    manager = next((x for x in get_registration_listeners().listeners if isinstance(x, RegManager)), None)
-    if manager is None:
-        return
     types = dict(get_topic_manager().get_subscriptions())
     proxy = master_proxy()
-    caller, node_uri = rospy.get_name(), rospy.core.get_node_uri()
     for topic in sorted(topics):
-        publishers = answer(
-            proxy.registerSubscriber(caller, topic, types[topic], node_uri), f"register {topic}"
-        )
-        if publishers:
-            manager.publisher_update(topic, publishers)
+        register_subscriber(proxy, topic, types[topic])
 
 
 def wait_for_connections(timeout: float) -> list[Unconnected]:

@@ -33,6 +33,7 @@ __all__ = [
     "answer",
     "listed_subscribers",
     "master_proxy",
+    "register_subscriber",
 ]
 
 log = logging.getLogger(__name__)
@@ -67,6 +68,18 @@ def answer(reply: Any, what: str) -> Any:
     if code != 1:
         log.error("the ROS master refused to %s: %s", what, message)
     return value
+
+
+def register_subscriber(proxy: xmlrpc.client.ServerProxy, topic: str, data_type: str) -> None:
+    """Register this process's subscription of ``topic`` with the master (again: that changes
+    nothing there) and hand rospy the publishers it lists: rospy connects to those it lacks."""
+    from rospy.impl.registration import RegManager, get_registration_listeners  # type: ignore[import-not-found]
+
+    caller, node_uri = rospy.get_name(), rospy.core.get_node_uri()
+    publishers = answer(proxy.registerSubscriber(caller, topic, data_type, node_uri), f"register {topic}")
+    manager = next((x for x in get_registration_listeners().listeners if isinstance(x, RegManager)), None)
+    if manager is not None and publishers:
+        manager.publisher_update(topic, publishers)
 
 
 def listed_subscribers(topic: str) -> list[str]:
@@ -219,27 +232,17 @@ class MasterWatch:
         )
 
     def _register_all(self, proxy: xmlrpc.client.ServerProxy) -> tuple[int, int, int, int]:
-        from rospy.impl.registration import (  # type: ignore[import-not-found]
-            RegManager,
-            get_registration_listeners,
-            get_service_manager,
-            get_topic_manager,
-        )
+        from rospy.impl.registration import get_service_manager, get_topic_manager  # type: ignore[import-not-found]
 
         caller, node_uri = rospy.get_name(), rospy.core.get_node_uri()
         topics, services = get_topic_manager(), get_service_manager()
-        manager = next((x for x in get_registration_listeners().listeners if isinstance(x, RegManager)), None)
         with topics.lock, services.lock:  # as rospy's first registration: nothing added meanwhile
             publications, subscriptions = topics.get_publications(), topics.get_subscriptions()
             offered = services.get_services()
             for name, data_type in publications:
                 answer(proxy.registerPublisher(caller, name, data_type, node_uri), f"register {name}")
             for name, data_type in subscriptions:
-                publishers = answer(
-                    proxy.registerSubscriber(caller, name, data_type, node_uri), f"register {name}"
-                )
-                if manager is not None and publishers:
-                    manager.publisher_update(name, publishers)  # connects to any not connected yet
+                register_subscriber(proxy, name, data_type)  # connects to any not connected yet
             for name, service_uri in offered:
                 answer(proxy.registerService(caller, name, service_uri, node_uri), f"register {name}")
         for transport in list(self._transports):

@@ -382,26 +382,18 @@ class Ros2Transport(Transport):
         missing: list[str] = []
         for node in list(self._nodes.values()):
             rcl = node.rcl
-            for pub in list(rcl.publishers):
-                if pub.topic_name in _RCL_OWN_TOPICS:
-                    continue
-                listed = sum(
-                    _fits(pub.qos_profile, info.qos_profile)
-                    for info in rcl.get_subscriptions_info_by_topic(pub.topic_name)
+            for pub in [p for p in rcl.publishers if p.topic_name not in _RCL_OWN_TOPICS]:
+                infos = rcl.get_subscriptions_info_by_topic(pub.topic_name)
+                short = (
+                    sum(_fits(pub.qos_profile, i.qos_profile) for i in infos) - pub.get_subscription_count()
                 )
-                matched = pub.get_subscription_count()
-                if matched < listed:
-                    missing.append(f"{node.name} -> {listed - matched} subscriber(s) on {pub.topic_name}")
-            for sub in list(rcl.subscriptions):
-                if sub.topic_name in _RCL_OWN_TOPICS:
-                    continue
-                listed = sum(
-                    _fits(info.qos_profile, sub.qos_profile)
-                    for info in rcl.get_publishers_info_by_topic(sub.topic_name)
-                )
-                matched = sub.get_publisher_count()
-                if matched < listed:
-                    missing.append(f"{listed - matched} publisher(s) -> {node.name} on {sub.topic_name}")
+                if short > 0:
+                    missing.append(f"{node.name} -> {short} subscriber(s) on {pub.topic_name}")
+            for sub in [s for s in rcl.subscriptions if s.topic_name not in _RCL_OWN_TOPICS]:
+                infos = rcl.get_publishers_info_by_topic(sub.topic_name)
+                short = sum(_fits(i.qos_profile, sub.qos_profile) for i in infos) - sub.get_publisher_count()
+                if short > 0:
+                    missing.append(f"{short} publisher(s) -> {node.name} on {sub.topic_name}")
         return missing
 
     def shutdown(self) -> None:
