@@ -40,6 +40,8 @@ def test_plain_rclpy_client_reads_state_asks_emotion_and_sends_an_event(
         )
         client = Process([sys.executable, str(HERE / "foreign_client.py"), "work"])
         assert await wait_until(lambda: client.process.poll() is not None, clock, timeout=PATIENCE + 10)
+        # The client saw the change and left; this process's observer hears it on its own loop turn.
+        await wait_until(lambda: bool(changes) and changes[-1].event == "work", clock, timeout=PATIENCE)
         p, a, d = robot.emotion.pad.as_tuple()  # neutral, unchanged since the client asked
         expected.append(f"emotion {robot.emotion.emotion} {p:.3f} {a:.3f} {d:.3f}")
 
