@@ -1,7 +1,7 @@
 """The controller's loop with a machine of 5,000 states (issue 18): handovers, garbage collection and
 what the dashboard polls.
 
-Builds the whole in-process robot of a generated machine (cyborg.sim.machines.structured: a hub,
+Builds the whole in-process robot of a generated machine (cyborg.testing.machines.structured: a hub,
 superstates of 5-20 states, one placeholder module serving every leaf) on the embedded transport in
 real time, then:
 
@@ -29,11 +29,11 @@ import yaml
 from _machine import machine_line, percentile
 
 from cyborg.app.config import parse_config
-from cyborg.app.memory import freeze_built, thaw
+from cyborg.app.tuning import freeze_built, thaw
 from cyborg.app.robot import build_robot
-from cyborg.interfaces.api import RobotAPI
-from cyborg.interfaces.dashboard import Dashboard
-from cyborg.sim.machines import structured
+from cyborg.web.api import RobotAPI
+from cyborg.web.dashboard import Dashboard
+from cyborg.testing.machines import structured
 from cyborg.transport import topics
 from cyborg.transport.base import GoalStatus
 from cyborg.transport.clock import RealClock
@@ -98,7 +98,7 @@ def main() -> None:
             return times
 
         async def run() -> dict[str, object]:
-            robot.start()  # freezes what the build made (cyborg.app.memory)
+            robot.start()  # freezes what the build made (cyborg.app.tuning)
             await clock.sleep(0.2)
             await handovers(args.handovers // 4)  # warm up
             gc.callbacks.append(on_gc)

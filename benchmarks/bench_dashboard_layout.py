@@ -33,21 +33,21 @@ CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networki
 
 LAYOUT = """
 import sys
-from cyborg.sim.machines import machine_spec, random_machine, structured
-from cyborg.controller.layout import draw, lay_out
+from cyborg.testing.machines import machine_spec, random_machine, structured
+from cyborg.drawing.layout import draw, lay_out
 make = structured if sys.argv[1] == "structured" else random_machine
 machine = machine_spec(make(int(sys.argv[2])))
 if sys.argv[3] == "new":
     draw(lay_out(machine))
 else:
     import subprocess
-    from cyborg.controller.graph import to_graph
+    from cyborg.drawing.graph import to_graph
     subprocess.run(["dot", "-Tsvg"], input=to_graph(machine).source.encode(), capture_output=True)
 """
 
 BASELINE = """
 import sys
-from cyborg.sim.machines import machine_spec, random_machine, structured
+from cyborg.testing.machines import machine_spec, random_machine, structured
 make = structured if sys.argv[1] == "structured" else random_machine
 machine_spec(make(int(sys.argv[2])))
 """
@@ -76,7 +76,7 @@ def first_paint(kind: str, size: int) -> float:
     """Seconds from opening the dashboard of a robot running the machine until its graph is drawn."""
     from playwright.sync_api import sync_playwright
 
-    from cyborg.sim.machines import random_machine, structured
+    from cyborg.testing.machines import random_machine, structured
 
     make = structured if kind == "structured" else random_machine
     with tempfile.TemporaryDirectory() as folder:
@@ -88,7 +88,7 @@ def first_paint(kind: str, size: int) -> float:
                 [
                     sys.executable,
                     "-m",
-                    "cyborg.interfaces.cli",
+                    "cyborg.cli",
                     "sim",
                     "--port",
                     "0",

@@ -236,11 +236,11 @@ def ros_graph(env: dict[str, str]) -> Iterator[dict[str, str]]:
 
 
 def cyborg(*args: str) -> list[str]:
-    """The ``cyborg`` console script's import path (``from cyborg.interfaces.cli import main``)."""
+    """The ``cyborg`` console script's import path (``from cyborg.cli import main``)."""
     return [
         sys.executable,
         "-c",
-        "import sys; from cyborg.interfaces.cli import main; sys.exit(main())",
+        "import sys; from cyborg.cli import main; sys.exit(main())",
         *args,
     ]
 

@@ -1,6 +1,6 @@
 """Eight virtual hours of an otherwise idle robot with two motivational events.
 
-Runs the same day as tests/motivator/test_motivator_component.py (cyborg.sim.idle_day)
+Runs the same day as tests/motivator/test_motivator_component.py (cyborg.testing.idle_day)
 and reports the wall time it took, how the motivator split its choices and the longest
 stretch in idle (a stretch still running at the end counts).
 Run: .venv/bin/python benchmarks/bench_idle_day.py
@@ -13,7 +13,7 @@ from pathlib import Path
 
 from _machine import machine_line
 
-from cyborg.sim.idle_day import IdleDay, run_idle_day
+from cyborg.testing.idle_day import IdleDay, run_idle_day
 
 
 def main() -> None:

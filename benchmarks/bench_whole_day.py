@@ -92,7 +92,7 @@ class _HelperPeaks:
 
 def reduced_robot(hours: float) -> float:
     """Wall seconds of bench_idle_day.py's robot for ``hours`` virtual hours."""
-    from cyborg.sim.idle_day import IdleDay, run_idle_day
+    from cyborg.testing.idle_day import IdleDay, run_idle_day
 
     with tempfile.TemporaryDirectory() as scratch:
         return run_idle_day(Path(scratch), IdleDay(hours=hours)).wall_seconds

@@ -125,9 +125,9 @@ def test_framework_errors_keep_their_framework_base() -> None:
     import click
     from aiohttp import web
 
-    from cyborg.interfaces.api import CommandError
-    from cyborg.interfaces.command_tool import ToolError
-    from cyborg.interfaces.db_cli import InputError
+    from cyborg.web.api import CommandError
+    from cyborg.cli.tool import ToolError
+    from cyborg.cli.db import InputError
     from cyborg.storage import Unusable
 
     assert issubclass(InputError, click.ClickException) and InputError("x").exit_code == 2

@@ -9,7 +9,7 @@ from click.testing import CliRunner
 
 from cyborg.app.kinds_doc import kinds_markdown, settings_rows
 from cyborg.app.registry import module_kinds
-from cyborg.interfaces.cli import cli
+from cyborg.cli import cli
 from cyborg.modules.placeholder import PlaceholderSettings
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "configuration.md"

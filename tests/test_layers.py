@@ -22,13 +22,18 @@ LAYERS: list[set[str]] = [
     {"transport"},
     {"configfile", "storage", "maps"},
     {"controller"},
+    {"drawing"},
     {"emotion"},
     {"motivator"},
     {"modules"},
     {"navigation", "hearing"},
     {"app"},
+    {"observe"},
     {"sim", "testing"},
-    {"interfaces"},
+    {"web"},
+    {"run"},
+    {"client"},
+    {"cli"},
 ]
 """Lowest first. A package may import its own layer's packages and those below; never above."""
 

@@ -1,5 +1,5 @@
 """A running robot keeps what it built out of the garbage collector's way, and reuses big freed
-blocks instead of page-faulting them in afresh (cyborg.app.memory)."""
+blocks instead of page-faulting them in afresh (cyborg.app.tuning)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import resource
 
 import numpy as np
 
-from cyborg.app.memory import freeze_built, thaw
+from cyborg.app.tuning import freeze_built, thaw
 
 
 def test_what_exists_when_the_robot_starts_is_left_out_of_collections_until_it_closes() -> None:

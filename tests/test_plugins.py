@@ -26,7 +26,7 @@ GREETER = '''
 
 from pydantic import Field
 
-from cyborg.modules.helper import BehaviourModule, GoalContext
+from cyborg.modules.behaviour import BehaviourModule, GoalContext
 from cyborg.modules.kind import ModuleKind, ModuleSettings
 
 

@@ -430,7 +430,7 @@ def test_missing_file(tmp_path: Path) -> None:
 
 
 def test_packaged_configs_are_valid() -> None:
-    from cyborg.interfaces.cli import packaged_config
+    from cyborg.app.config import packaged_config
 
     for name in ("demo.yaml",):
         assert load_config(packaged_config(name)).machine.states

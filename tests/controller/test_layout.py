@@ -8,7 +8,7 @@ import re
 import pytest
 
 from cyborg.app.config import load_config
-from cyborg.controller.layout import (
+from cyborg.drawing.layout import (
     ROOT,
     START,
     Block,
@@ -20,8 +20,8 @@ from cyborg.controller.layout import (
     placing_arrows,
 )
 from cyborg.controller.machine import MachineSpec
-from cyborg.interfaces.cli import packaged_config
-from cyborg.sim.machines import machine_spec, random_machine, structured
+from cyborg.app.config import packaged_config
+from cyborg.testing.machines import machine_spec, random_machine, structured
 
 
 @pytest.fixture(scope="module")

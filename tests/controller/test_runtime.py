@@ -10,7 +10,7 @@ import pytest
 
 from cyborg.app.config import parse_config
 from cyborg.controller.runtime import Controller
-from cyborg.modules.helper import Abort, BehaviourModule, GoalContext
+from cyborg.modules.behaviour import Abort, BehaviourModule, GoalContext
 from cyborg.transport import topics
 from cyborg.transport.base import GoalStatus, MessageInfo, ServerGoalHandle
 from cyborg.transport.clock import VirtualClock

@@ -17,8 +17,8 @@ from cyborg.app.robot import Robot, build_robot
 from cyborg.app.view import BaseStatus
 from cyborg.emotion.model import EmotionSettings
 from cyborg.emotion.system import EmotionSystem
-from cyborg.interfaces.api import RobotAPI
-from cyborg.interfaces.dashboard import (
+from cyborg.web.api import RobotAPI
+from cyborg.web.dashboard import (
     MAP_COLOURS,
     NO_BASE,
     png_bytes,
@@ -27,9 +27,9 @@ from cyborg.interfaces.dashboard import (
     remaining_route,
     route_points,
 )
-from cyborg.interfaces.remote import remote_robot
+from cyborg.web.ros_view import remote_robot
 from cyborg.maps import Cell, KeepOutZone, NamedPose, OccupancyMap
-from cyborg.modules.helper import HEARTBEAT_SECONDS
+from cyborg.modules.behaviour import HEARTBEAT_SECONDS
 from cyborg.transport import topics
 from cyborg.transport.clock import RealClock
 from cyborg.transport.embedded import EmbeddedTransport

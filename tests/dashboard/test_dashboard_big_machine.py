@@ -24,7 +24,7 @@ from test_dashboard_browser import (  # the dashboard tests' robot, browser and 
     sim,  # noqa: F401  (a fixture)
 )
 
-from cyborg.sim.machines import structured
+from cyborg.testing.machines import structured
 
 THOUSAND = 1000
 
@@ -221,7 +221,7 @@ def test_a_thousand_states_open_collapsed_around_the_active_state(browser: Brows
 def test_the_big_machine_file_is_valid(tmp_path: Path) -> None:
     from click.testing import CliRunner
 
-    from cyborg.interfaces.cli import cli
+    from cyborg.cli import cli
 
     path = tmp_path / "m.yaml"
     path.write_text(yaml.safe_dump(structured(THOUSAND, seed=7), sort_keys=False))

@@ -23,7 +23,7 @@ from typing import Any
 import pytest
 from playwright.sync_api import Browser, ConsoleMessage, Page, Route, WebSocketRoute, expect, sync_playwright
 
-from cyborg.interfaces.cli import packaged_config
+from cyborg.app.config import packaged_config
 
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = [
@@ -37,7 +37,7 @@ CHROMIUM_ARGS = [
 ]
 SPEED = "2"  # virtual seconds per real second: the robot acts sooner and the base drives faster
 SHOTS = Path("/tmp")
-CYBORG = [sys.executable, "-m", "cyborg.interfaces.cli"]
+CYBORG = [sys.executable, "-m", "cyborg.cli"]
 NOTHING = "\u2013"  # what the page shows before it knows a value
 
 

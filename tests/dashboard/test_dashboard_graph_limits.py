@@ -19,9 +19,9 @@ import aiohttp
 import pytest
 
 from cyborg.app.config import load_config
-from cyborg.controller.layout import DIRECTIONS
-from cyborg.interfaces import api as api_module
-from cyborg.interfaces.api import RobotAPI
+from cyborg.drawing.layout import DIRECTIONS
+from cyborg.web import api as api_module
+from cyborg.web.api import RobotAPI
 from cyborg.transport.clock import RealClock
 from cyborg.transport.embedded import EmbeddedTransport
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 import pytest
 
 from cyborg.app.config import load_config
-from cyborg.app.place import heard_by
+from cyborg.app.context import heard_by
 from cyborg.app.registry import module_kinds
-from cyborg.interfaces.cli import packaged_config
+from cyborg.app.config import packaged_config
 from cyborg.modules.kind import Listening
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 from click.testing import CliRunner
 
 from cyborg.hearing.synth import VOICES, synthesise
-from cyborg.interfaces.cli import cli
+from cyborg.cli import cli
 
 
 def test_listen_to_a_wav_prints_the_sentence_and_that_no_robot_took_it(tmp_path: Path) -> None:
@@ -46,7 +46,7 @@ def test_listen_without_a_microphone_names_the_fix(tmp_path: Path) -> None:
 
 
 def test_sim_with_a_microphone_that_is_not_there_stops_with_the_fix(tmp_path: Path) -> None:
-    from cyborg.interfaces.cli import packaged_config
+    from cyborg.app.config import packaged_config
 
     config = tmp_path / "robot.yaml"
     config.write_text(

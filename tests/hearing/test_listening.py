@@ -8,7 +8,8 @@ from typing import Any
 from pydantic import Field
 
 from cyborg.app.config import parse_config
-from cyborg.app.parts import NodeContext, build_part
+from cyborg.app.context import BuildContext
+from cyborg.app.parts import build_part
 from cyborg.app.registry import module_kinds
 from cyborg.app.robot import build_robot
 from cyborg.hearing.module import SpeechInput
@@ -80,7 +81,7 @@ def test_a_speech_input_node_of_its_own_hears_the_other_modules_too(tmp_path: Pa
     clock = VirtualClock()
     transport = EmbeddedTransport(clock)
     part = build_part(
-        "ears", config, transport, NodeContext(data_dir=tmp_path), kinds=module_kinds({"porter": PORTER})
+        "ears", config, transport, BuildContext(data_dir=tmp_path), kinds=module_kinds({"porter": PORTER})
     )
     try:
         [ears] = part.components

@@ -9,7 +9,7 @@ from cyborg.hearing.recogniser import Recogniser
 from cyborg.hearing.synth import VOICES, synthesise
 from cyborg.modules.kind import Listening
 from cyborg.navigation.database import NavigationDatabase
-from cyborg.sim.records import Record, RecordStream
+from cyborg.observe.records import Record, RecordStream
 from cyborg.transport.clock import RealClock
 from cyborg.transport.embedded import EmbeddedTransport
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from cyborg.hearing.module import SpeechInput
 from cyborg.navigation.database import NavigationDatabase
-from cyborg.navigation.records import Location
+from cyborg.navigation.models import Location
 from cyborg.transport.clock import VirtualClock
 from cyborg.transport.embedded import EmbeddedTransport
 

@@ -8,7 +8,7 @@ from typing import Any
 from aiohttp import ClientSession
 
 from cyborg.emotion.model import EmotionSettings
-from cyborg.interfaces.api import RobotAPI
+from cyborg.web.api import RobotAPI
 from cyborg.limits import MAX_TEXT_LENGTH
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo

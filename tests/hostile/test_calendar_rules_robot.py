@@ -20,7 +20,7 @@ import pytest
 
 from cyborg.navigation.calendar import import_ics
 from cyborg.navigation.database import NavigationDatabase
-from cyborg.navigation.records import CalendarEvent
+from cyborg.navigation.models import CalendarEvent
 
 SCRIPT = """\
 start: 2026-11-23T12:00:00

@@ -14,8 +14,8 @@ import pytest
 from aiohttp import ClientSession, WSServerHandshakeError
 
 from cyborg.app.config import load_config
-from cyborg.interfaces.api import RobotAPI
-from cyborg.interfaces.security import Access, Limits
+from cyborg.web.api import RobotAPI
+from cyborg.web.security import Access, Limits
 from cyborg.transport import topics
 from cyborg.transport.clock import RealClock
 from cyborg.transport.embedded import EmbeddedTransport

@@ -6,7 +6,8 @@ from pathlib import Path
 
 from click.testing import CliRunner
 
-from cyborg.interfaces.cli import cli, packaged_config
+from cyborg.cli import cli
+from cyborg.app.config import packaged_config
 
 GOOD = """
 states:
@@ -110,7 +111,7 @@ def test_the_lazy_commands_help_line_is_their_own() -> None:
     """`cyborg --help` lists the lazy commands without importing them, with their own first line."""
     import click
 
-    from cyborg.interfaces.cli import LazyGroup
+    from cyborg.cli import LazyGroup
 
     assert isinstance(cli, LazyGroup)
     for name, (_, short) in cli.lazy.items():

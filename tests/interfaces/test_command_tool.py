@@ -15,9 +15,9 @@ from pathlib import Path
 
 import pytest
 
-from cyborg.interfaces.cli import packaged_config
+from cyborg.app.config import packaged_config
 
-CYBORG = [sys.executable, "-m", "cyborg.interfaces.cli"]
+CYBORG = [sys.executable, "-m", "cyborg.cli"]
 
 
 @pytest.fixture

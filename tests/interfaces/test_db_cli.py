@@ -11,10 +11,10 @@ from zoneinfo import ZoneInfo
 import pytest
 from click.testing import CliRunner, Result
 
-from cyborg.interfaces import db_cli
-from cyborg.interfaces.db_cli import db_group
+from cyborg.cli import db as db_cli
+from cyborg.cli.db import db_group
 from cyborg.navigation.database import NavigationDatabase
-from cyborg.navigation.records import ResponseType
+from cyborg.navigation.models import ResponseType
 
 
 @pytest.fixture

@@ -19,14 +19,15 @@ from aiohttp import ClientSession
 
 from cyborg.app.config import load_config
 from cyborg.app.robot import build_robot
-from cyborg.interfaces.cli import packaged_config
-from cyborg.interfaces.serve import serve_api
+from cyborg.app.config import packaged_config
+from cyborg.web.build import serve_api
 from cyborg.motivator.store import ControllerStore
-from cyborg.transport.clock import RealClock, wait_until
+from cyborg.transport.clock import RealClock
+from cyborg.testing.wait import wait_until
 from cyborg.transport.embedded import EmbeddedTransport
 from full_disk import Disk
 
-CYBORG = [sys.executable, "-m", "cyborg.interfaces.cli"]
+CYBORG = [sys.executable, "-m", "cyborg.cli"]
 FULL = "database or disk is full"
 FIX = "free some space on that disk (or give another folder with --data-dir)"
 

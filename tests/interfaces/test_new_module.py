@@ -12,8 +12,8 @@ import pytest
 from click.testing import CliRunner
 
 from cyborg.errors import InvalidValueError
-from cyborg.interfaces.cli import cli
-from cyborg.interfaces.cli_new import module_files
+from cyborg.cli import cli
+from cyborg.cli.new import module_files
 
 CYBORG = Path(sys.executable).with_name("cyborg")
 

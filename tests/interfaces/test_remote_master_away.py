@@ -6,7 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 from cyborg.errors import TransportError
-from cyborg.interfaces.remote import EmotionSwitchMirror
+from cyborg.web.ros_view import EmotionSwitchMirror
 from cyborg.transport import topics
 from cyborg.transport.clock import VirtualClock
 from cyborg.transport.embedded import EmbeddedTransport

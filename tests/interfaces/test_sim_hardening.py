@@ -19,9 +19,9 @@ from pathlib import Path
 import aiohttp
 import pytest
 
-from cyborg.interfaces.cli import packaged_config
+from cyborg.app.config import packaged_config
 
-CYBORG = [sys.executable, "-m", "cyborg.interfaces.cli"]
+CYBORG = [sys.executable, "-m", "cyborg.cli"]
 ADDRESS = re.compile(r"dashboard and API: (http://127\.0\.0\.1:(\d+))/(#token=(\S+))?")
 
 

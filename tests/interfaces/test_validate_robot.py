@@ -11,7 +11,7 @@ from pydantic import Field
 from cyborg.app.checks import robot_warnings
 from cyborg.app.config import parse_config
 from cyborg.app.registry import module_kinds
-from cyborg.interfaces.cli import cli
+from cyborg.cli import cli
 from cyborg.modules import ModuleKind, ModuleSettings
 
 MACHINE = """

@@ -5,7 +5,8 @@ from __future__ import annotations
 import wave
 from pathlib import Path
 
-from cyborg.modules.speech import SPEECH_INPUT_TOPIC, TextToSpeech
+from cyborg.transport.topics import SPEECH_INPUT_TOPIC
+from cyborg.modules.speech import TextToSpeech
 from cyborg.transport.clock import RealClock
 from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import String

@@ -11,7 +11,7 @@ import pytest
 from cyborg.app.config import parse_config
 from cyborg.app.robot import Robot, build_robot, controller_busy
 from cyborg.motivator.store import ControllerStore
-from cyborg.sim.idle_day import IdleDay, IdleDayReport, idle_spells, run_idle_day
+from cyborg.testing.idle_day import IdleDay, IdleDayReport, idle_spells, run_idle_day
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo
 from cyborg.transport.clock import VirtualClock

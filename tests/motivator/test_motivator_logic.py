@@ -10,7 +10,7 @@ from pydantic import ValidationError
 
 from cyborg.app.config import load_config
 from cyborg.emotion.model import PAD
-from cyborg.interfaces.cli import packaged_config
+from cyborg.app.config import packaged_config
 from cyborg.motivator.logic import (
     DecisionStatus,
     MotivationalEvent,

@@ -26,7 +26,7 @@ from cyborg.navigation.behaviour import (
     trip_goes_on,
 )
 from cyborg.navigation.content import DEFAULT_LOCATIONS
-from cyborg.navigation.records import Location
+from cyborg.navigation.models import Location
 
 EMOTIONS = sorted([NEUTRAL, *TABLE_2_2])
 PLACES = {place.name: place for place in DEFAULT_LOCATIONS}

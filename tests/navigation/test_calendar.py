@@ -20,7 +20,7 @@ from cyborg.navigation.calendar import (
     ongoing_occurrence,
 )
 from cyborg.navigation.database import NavigationDatabase
-from cyborg.navigation.records import CalendarEvent
+from cyborg.navigation.models import CalendarEvent
 
 OSLO = ZoneInfo("Europe/Oslo")
 

@@ -9,7 +9,7 @@ import pytest
 from cyborg.errors import ConfigError
 from cyborg.navigation import content
 from cyborg.navigation.content import load_places, load_sentences
-from cyborg.navigation.records import ResponseType
+from cyborg.navigation.models import ResponseType
 
 
 def write(tmp_path: Path, name: str, text: str) -> Path:

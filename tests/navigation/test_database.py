@@ -16,7 +16,7 @@ from cyborg.errors import DatabaseError
 from cyborg.navigation import content, schema
 from cyborg.navigation.database import NavigationDatabase
 from cyborg.navigation.keywords import Intent, detect
-from cyborg.navigation.records import CalendarEvent, Location, Response, ResponseType
+from cyborg.navigation.models import CalendarEvent, Location, Response, ResponseType
 from cyborg.navigation.schema import SCHEMA_VERSION
 
 OSLO = ZoneInfo("Europe/Oslo")

@@ -28,15 +28,16 @@ from cyborg.app.config import LoadedConfig, parse_config
 from cyborg.app.registry import module_kinds
 from cyborg.app.robot import build_robot
 from cyborg.emotion.model import NEUTRAL, TABLE_2_2
-from cyborg.interfaces.cli import packaged_config
+from cyborg.app.config import packaged_config
 from cyborg.maps import Cell, OccupancyMap, Point, default_map_path, load_map
 from cyborg.modules.kind import BuildContext, ModuleKind
-from cyborg.modules.speech import SPOKEN_TOPIC, estimated_duration
+from cyborg.transport.topics import SPOKEN_TOPIC
+from cyborg.modules.speech import estimated_duration
 from cyborg.navigation.content import DEFAULT_RESPONSES
 from cyborg.navigation.database import NavigationDatabase
 from cyborg.navigation.kind import NavigationSettings
 from cyborg.navigation.module import WANDER_CHECK, WANDER_DEBOUNCE, NavigationModule
-from cyborg.navigation.records import CalendarEvent, Location, ResponseType
+from cyborg.navigation.models import CalendarEvent, Location, ResponseType
 from cyborg.sim.base import PathState, SimulatedBase, SimulatedBaseSettings
 from cyborg.sim.planner import RoutePlanner
 from cyborg.transport import topics

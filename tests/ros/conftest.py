@@ -265,7 +265,7 @@ class Processes:
     ) -> NodeProcess:
         """``cyborg node NAME --config FILE --db DIR``; ready once it logs ``node NAME running``.
         ``prefix``: a command to run it under (``ip netns exec NS``)."""
-        command = [sys.executable, "-m", "cyborg.interfaces.cli", "node", name, "--config", str(config)]
+        command = [sys.executable, "-m", "cyborg.cli", "node", name, "--config", str(config)]
         return self.start(name, [*prefix, *command, "--db", str(db), *extra], f"node {name} running", env=env)
 
     def wait_ready(self, *nodes: NodeProcess, timeout: float = 30.0) -> None:

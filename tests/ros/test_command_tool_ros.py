@@ -24,7 +24,7 @@ FAULTS = Path(__file__).resolve().parent / "faults.yaml"
 
 def tool(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-m", "cyborg.interfaces.cli", *args, "--ros"],
+        [sys.executable, "-m", "cyborg.cli", *args, "--ros"],
         capture_output=True,
         text=True,
         timeout=60,

@@ -12,7 +12,7 @@ import time
 import xmlrpc.client
 from typing import TYPE_CHECKING
 
-from cyborg.transport.clock import wait_until
+from cyborg.testing.wait import wait_until
 from cyborg.transport.messages import String
 
 if TYPE_CHECKING:

@@ -15,7 +15,7 @@ from click.testing import CliRunner
 from std_msgs.msg import String  # type: ignore[import-not-found]
 
 from conftest import Observers, Processes
-from cyborg.interfaces.cli import cli
+from cyborg.cli import cli
 
 
 def test_the_rospy_variant_is_driven_by_our_controller_and_is_heard(

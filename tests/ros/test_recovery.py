@@ -282,7 +282,7 @@ def test_launch_restarts_a_killed_node_and_the_robot_keeps_running(
     worker_status = observe.topic("/cyborg_test_worker/work/status", GoalStatusArray)
     parts = ("cyborg_controller", "cyborg_test_idle", "cyborg_test_worker")
     only = [arg for part in parts for arg in ("--only", part)]
-    command = [sys.executable, "-m", "cyborg.interfaces.cli", "launch", "--config", str(FAULTS)]
+    command = [sys.executable, "-m", "cyborg.cli", "launch", "--config", str(FAULTS)]
     ros_home = tmp_path / "ros_home"  # the nodes' ROS logs (rospy's log file takes our log lines)
     launch = processes.start(
         "cyborg_launch",
@@ -349,7 +349,7 @@ def test_launch_starts_its_roscore_again_and_the_robot_works_through_the_new_one
     env = {**os.environ, "ROS_MASTER_URI": uri, "ROS_HOME": str(tmp_path / "ros_home")}
     parts = ("cyborg_controller", "cyborg_test_idle", "cyborg_test_worker")
     only = [arg for part in parts for arg in ("--only", part)]
-    command = [sys.executable, "-m", "cyborg.interfaces.cli", "launch", "--config", str(FAULTS)]
+    command = [sys.executable, "-m", "cyborg.cli", "launch", "--config", str(FAULTS)]
     launch = processes.start(
         "cyborg_launch",
         [*command, "--db", str(tmp_path), *only],
@@ -403,7 +403,7 @@ def test_launch_shows_each_nodes_warnings_in_its_terminal_and_says_where_the_log
         [
             sys.executable,
             "-m",
-            "cyborg.interfaces.cli",
+            "cyborg.cli",
             "launch",
             "--config",
             str(FAULTS),

@@ -45,7 +45,7 @@ def test_scenario_over_ros(name: str, ros: RosSession, observe: Observers, tmp_p
     script = load_script(script_path)
     clock = observe.topic("/clock", Clock)
     transcript = tmp_path / "transcript.jsonl"
-    command = [sys.executable, "-m", "cyborg.interfaces.cli", "sim", "--ros", "--script", str(script_path)]
+    command = [sys.executable, "-m", "cyborg.cli", "sim", "--ros", "--script", str(script_path)]
     command += ["--speed", str(SPEED), "--transcript", str(transcript), "--db", str(tmp_path / "data")]
     result = subprocess.run(command, capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]

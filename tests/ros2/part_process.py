@@ -12,7 +12,8 @@ import sys
 from pathlib import Path
 
 from cyborg.app.config import load_config
-from cyborg.app.parts import NodeContext, build_part
+from cyborg.app.context import BuildContext
+from cyborg.app.parts import build_part
 from cyborg.transport.clock import RealClock
 from cyborg.transport.ros2 import Ros2Transport
 
@@ -21,7 +22,7 @@ def main() -> None:
     config_path, name, data_dir = sys.argv[1:4]
     clock = RealClock()
     transport = Ros2Transport(clock)
-    part = build_part(name, load_config(config_path), transport, NodeContext(data_dir=Path(data_dir)))
+    part = build_part(name, load_config(config_path), transport, BuildContext(data_dir=Path(data_dir)))
 
     async def run() -> None:
         stop = asyncio.Event()

@@ -21,9 +21,10 @@ from rclpy.action.server import qos_profile_action_status_default
 from test_ros2_foreign_module import PATIENCE, Process, support
 
 from cyborg.app.config import load_config
-from cyborg.app.parts import NodeContext, build_part
+from cyborg.app.context import BuildContext
+from cyborg.app.parts import build_part
 from cyborg.transport import topics
-from cyborg.transport.clock import wait_until
+from cyborg.testing.wait import wait_until
 from cyborg.transport.messages import String, SystemState
 
 HERE = Path(__file__).resolve().parent
@@ -48,7 +49,7 @@ def test_module_killed_mid_goal_makes_the_controller_take_aborted_within_2_s(
     session = support().ros2_session(request.config)
     transport, clock = session.transport, session.clock
     config = load_config(FAULTS)
-    context = NodeContext(data_dir=tmp_path / "here", resume=False)
+    context = BuildContext(data_dir=tmp_path / "here", resume=False)
     idle = build_part("cyborg_test_idle", config, transport, context)
     controller = build_part("cyborg_controller", config, transport, context)
     observer = transport.node("cyborg_test_fault_observer")

@@ -66,7 +66,7 @@ def test_ros2_scenario(name: str, own_session: Ros2Session, tmp_path: Path) -> N
     script_path = SCENARIOS / f"{name}.yaml"
     script = load_script(script_path)
     transcript = tmp_path / "transcript.jsonl"
-    command = [sys.executable, "-m", "cyborg.interfaces.cli", "sim", "--ros2", "--script", str(script_path)]
+    command = [sys.executable, "-m", "cyborg.cli", "sim", "--ros2", "--script", str(script_path)]
     command += ["--speed", str(SPEED), "--transcript", str(transcript), "--db", str(tmp_path / "data")]
     env = {**os.environ, "ROS_LOG_DIR": str(tmp_path / "log")}
     try:  # the session's loop runs meanwhile: it is where /clock's callbacks run
@@ -153,7 +153,7 @@ def launched(tmp_path: Path, own_domain: None) -> Iterator[tuple[subprocess.Pope
     """`cyborg launch --ros2` of TOOLS (real time, its API on a free port), until the API shows idle."""
     port = _free_port()
     env = {**os.environ, "ROS_LOG_DIR": str(tmp_path / "log")}
-    command = [sys.executable, "-m", "cyborg.interfaces.cli", "launch", "--ros2", "--config", str(TOOLS)]
+    command = [sys.executable, "-m", "cyborg.cli", "launch", "--ros2", "--config", str(TOOLS)]
     command += ["--port", str(port), "--db", str(tmp_path / "data")]
     process = subprocess.Popen(
         command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, start_new_session=True
@@ -179,7 +179,7 @@ def launched(tmp_path: Path, own_domain: None) -> Iterator[tuple[subprocess.Pope
 
 
 def _tool(*args: str, python: str = sys.executable) -> subprocess.CompletedProcess[str]:
-    command = [python, "-m", "cyborg.interfaces.cli", *args, "--ros2"]
+    command = [python, "-m", "cyborg.cli", *args, "--ros2"]
     return subprocess.run(command, capture_output=True, text=True, timeout=60)
 
 

@@ -11,7 +11,7 @@ import itertools
 from typing import Any
 
 from cyborg.navigation.content import DEFAULT_RESPONSES
-from cyborg.navigation.records import ResponseType
+from cyborg.navigation.models import ResponseType
 
 Record = dict[str, Any]
 

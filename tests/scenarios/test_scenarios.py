@@ -12,7 +12,7 @@ import pytest
 from expectations import CHECKS, Record
 
 from cyborg.app.config import load_config
-from cyborg.interfaces.cli import packaged_config
+from cyborg.app.config import packaged_config
 from cyborg.sim.scenario import run_scenario
 from cyborg.sim.script import load_script
 

@@ -1,5 +1,5 @@
-"""The simulated base's ROS 2 interface, nav2's ``navigate_to_pose``, on the embedded transport
-told to follow ROS 2's conventions (``ros_version=2``), in virtual time.
+"""The simulated base's ROS 2 interface, nav2's ``navigate_to_pose`` (``base_api: nav2``), on the
+embedded transport in virtual time.
 
 A client drives it as the navigation module does on ROS 2: a goal with a pose drives there
 (feedback: the pose and the distance left), a goal with ``behavior_tree: wander`` wanders until
@@ -9,7 +9,6 @@ the embedded run; over real ROS 2 processes, see tests/ros2/test_ros2_robot.py.
 
 from __future__ import annotations
 
-import functools
 import importlib.util
 import itertools
 import math
@@ -20,13 +19,14 @@ from pathlib import Path
 import pytest
 
 from cyborg.app.config import load_config
-from cyborg.interfaces.cli import packaged_config
+from cyborg.app.config import packaged_config
 from cyborg.maps import OccupancyMap, default_map_path, load_map
 from cyborg.sim import scenario
 from cyborg.sim.base import SimulatedBase, pose_stamped
 from cyborg.sim.planner import RoutePlanner
 from cyborg.sim.script import load_script
 from cyborg.transport import topics
+from cyborg.transport.topics import BaseApi
 from cyborg.transport.base import GoalStatus
 from cyborg.transport.clock import VirtualClock
 from cyborg.transport.embedded import EmbeddedTransport
@@ -37,7 +37,7 @@ SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
 
 @pytest.fixture
 def ros2_transport(clock: VirtualClock) -> Iterator[EmbeddedTransport]:
-    transport = EmbeddedTransport(clock, ros_version=2)
+    transport = EmbeddedTransport(clock)
     yield transport
     transport.shutdown()
 
@@ -54,6 +54,7 @@ def test_navigate_to_pose_arrives_reporting_the_distance_left(
     base = SimulatedBase(
         ros2_transport.node("rosarnl_node"),
         campus,
+        base_api=BaseApi.NAV2,
         rng=random.Random(1),
         planner=planner,
         start=campus.pose("information desk"),
@@ -82,7 +83,9 @@ def test_navigate_to_pose_arrives_reporting_the_distance_left(
 def test_a_wander_goal_wanders_until_cancelled_then_stops(
     clock: VirtualClock, ros2_transport: EmbeddedTransport, campus: OccupancyMap
 ) -> None:
-    base = SimulatedBase(ros2_transport.node("rosarnl_node"), campus, rng=random.Random(2))
+    base = SimulatedBase(
+        ros2_transport.node("rosarnl_node"), campus, rng=random.Random(2), base_api=BaseApi.NAV2
+    )
     client = ros2_transport.node("client").action_client(topics.NAVIGATE_TO_POSE, NavigateToPoseAction)
 
     async def main() -> tuple[GoalStatus, float, tuple[float, float]]:
@@ -106,7 +109,7 @@ def test_a_wander_goal_wanders_until_cancelled_then_stops(
 def test_an_unreachable_pose_aborts_saying_why(
     clock: VirtualClock, ros2_transport: EmbeddedTransport, campus: OccupancyMap
 ) -> None:
-    SimulatedBase(ros2_transport.node("rosarnl_node"), campus, rng=random.Random(3))
+    SimulatedBase(ros2_transport.node("rosarnl_node"), campus, rng=random.Random(3), base_api=BaseApi.NAV2)
     client = ros2_transport.node("client").action_client(topics.NAVIGATE_TO_POSE, NavigateToPoseAction)
 
     async def main() -> tuple[GoalStatus, str, str]:
@@ -121,7 +124,7 @@ def test_an_unreachable_pose_aborts_saying_why(
 
 
 def test_scenario_a_with_the_ros2_navigation_interface(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    tmp_path: Path,
 ) -> None:
     """The navigation module drives and wanders through navigate_to_pose (no move_base, no
     wander service on the graph) and scenario A passes the embedded run's checks."""
@@ -129,9 +132,12 @@ def test_scenario_a_with_the_ros2_navigation_interface(
     assert spec is not None and spec.loader is not None
     expectations = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(expectations)
-    monkeypatch.setattr(scenario, "EmbeddedTransport", functools.partial(EmbeddedTransport, ros_version=2))
+    config = load_config(packaged_config("cyborg.yaml"))
+    for raw in config.model.modules.values():
+        if isinstance(raw, dict) and raw.get("kind") in ("navigation", "simulated_base"):
+            raw["base_api"] = "nav2"
     records = scenario.run_scenario(
-        load_config(packaged_config("cyborg.yaml")),
+        config,
         load_script(SCENARIOS / "scenario_a.yaml"),
         data_dir=tmp_path,
     )

@@ -368,7 +368,7 @@ def test_a_map_without_goals_leaves_the_last_maps_places_behind(tmp_path: Path) 
 
     from cyborg.app.config import load_config
     from cyborg.app.robot import build_robot
-    from cyborg.interfaces.cli import packaged_config
+    from cyborg.app.config import packaged_config
     from cyborg.navigation.database import NavigationDatabase
     from cyborg.transport.clock import VirtualClock
     from cyborg.transport.embedded import EmbeddedTransport

@@ -14,7 +14,7 @@ from typing import Any
 import pytest
 from click.testing import CliRunner
 
-from cyborg.interfaces.cli import cli
+from cyborg.cli import cli
 from cyborg.sim import scenario
 
 SCRIPT = """\

@@ -10,7 +10,8 @@ from click.testing import CliRunner
 
 from cyborg.app.config import load_config
 from cyborg.errors import ConfigError, ScenarioFailed
-from cyborg.interfaces.cli import cli, packaged_config
+from cyborg.cli import cli
+from cyborg.app.config import packaged_config
 from cyborg.sim.scenario import run_scenario
 from cyborg.sim.script import parse_script
 

@@ -36,7 +36,8 @@ from cyborg.transport.base import (
     ServerGoalHandle,
     Transport,
 )
-from cyborg.transport.clock import Clock, VirtualClock, wait_until
+from cyborg.transport.clock import Clock, VirtualClock
+from cyborg.testing.wait import wait_until
 from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import (
     EmotionalStateService,

@@ -10,6 +10,7 @@ in it, what is wrong and the fix. docs/configuration.md describes every key.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -34,6 +35,7 @@ __all__ = [
     "LoadedConfig",
     "check_motivational_events",
     "load_config",
+    "packaged_config",
     "parse_config",
 ]
 
@@ -163,3 +165,8 @@ def check_motivational_events(machine: MachineSpec, settings: MotivatorSettings)
                 f"fix: add '{entry.event}: <target>' to its transitions or use one of: {valid}"
             )
     return problems
+
+
+def packaged_config(name: str) -> Path:
+    """Path of a configuration file shipped with the package (``src/cyborg/data``)."""
+    return Path(str(resources.files("cyborg") / "data" / name))

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from cyborg.app.config import LoadedConfig
-from cyborg.app.place import BuildPlace, calendar_of, heard_by
+from cyborg.app.context import BuildContext, calendar_of, heard_by
 from cyborg.app.registry import KindRegistry, module_kinds
 from cyborg.errors import ConfigError
 from cyborg.modules.kind import CalendarEntry, Component
@@ -24,18 +24,10 @@ from cyborg.transport.base import Transport
 if TYPE_CHECKING:
     from cyborg.controller.runtime import Controller
 
-__all__ = ["API", "CONTROLLER", "NodeContext", "Part", "build_part", "part_names"]
+__all__ = ["API", "CONTROLLER", "Part", "build_part", "part_names"]
 
 CONTROLLER = "cyborg_controller"
 API = "cyborg_api"
-
-
-@dataclass
-class NodeContext(BuildPlace):
-    """The build context of one process."""
-
-    resume: bool = True
-    """The controller takes over an emotion stored recently (``cyborg node`` without ``--fresh``)."""
 
 
 def part_names(config: LoadedConfig) -> list[str]:
@@ -68,7 +60,7 @@ def build_part(
     name: str,
     config: LoadedConfig,
     transport: Transport,
-    context: NodeContext,
+    context: BuildContext,
     *,
     kinds: KindRegistry | None = None,
 ) -> Part:

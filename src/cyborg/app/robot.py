@@ -18,9 +18,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from cyborg.app.config import LoadedConfig
-from cyborg.app.memory import freeze_built, thaw
-from cyborg.app.place import BuildPlace, calendar_of, heard_by
+from cyborg.app.context import BuildContext, calendar_of, heard_by
 from cyborg.app.registry import KindRegistry, module_kinds
+from cyborg.app.tuning import freeze_built, thaw
 from cyborg.app.view import BaseView
 from cyborg.controller.runtime import Controller, Phase
 from cyborg.emotion.system import EmotionSystem
@@ -36,7 +36,7 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-__all__ = ["BuildPlace", "Robot", "build_controller", "build_gatekeeper", "build_robot", "controller_busy"]
+__all__ = ["BuildContext", "Robot", "build_controller", "build_gatekeeper", "build_robot", "controller_busy"]
 
 
 @dataclass
@@ -49,7 +49,7 @@ class Robot:
     emotion: EmotionSystem
     motivator: Motivator
     store: ControllerStore
-    place: BuildPlace
+    place: BuildContext
     components: dict[str, Component] = field(default_factory=dict)
     """Modules and gatekeepers by node name."""
 
@@ -74,7 +74,7 @@ class Robot:
 
     def start(self) -> None:
         """Start the controller; what the build made is frozen out of garbage collections from now
-        on (:mod:`cyborg.app.memory`), so none walks the whole machine on the controller's loop."""
+        on (:mod:`cyborg.app.tuning`), so none walks the whole machine on the controller's loop."""
         freeze_built()
         self.controller.start()
 
@@ -181,7 +181,7 @@ def build_robot(
     """
     registry = kinds or module_kinds()
     store, controller, emotion, motivator = build_controller(config, transport, data_dir)
-    place = BuildPlace(
+    place = BuildContext(
         data_dir=data_dir, rng=rng or random.Random(0), map_path=map_path, heard=heard_by(config, registry)
     )
     robot = Robot(transport, config, controller, emotion, motivator, store, place)

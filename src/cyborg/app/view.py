@@ -1,7 +1,7 @@
 """What the dashboard and the API read from a robot, whether it runs in this process or over ROS.
 
 The in-process :class:`~cyborg.app.robot.Robot` satisfies :class:`RobotView` directly; under
-ROS the ``cyborg_api`` node builds a mirror of the other nodes (``cyborg.interfaces.remote``)
+ROS the ``cyborg_api`` node builds a mirror of the other nodes (``cyborg.web.ros_view``)
 that satisfies it too, so the dashboard has one typed way to read either.
 """
 

@@ -31,7 +31,14 @@ A module is a class on :class:`BehaviourModule` that serves one or more states; 
 
 from pydantic import Field
 
-from cyborg.modules.helper import HEARTBEAT_SECONDS, Abort, BehaviourModule, GoalContext, Outcome, StateServer
+from cyborg.modules.behaviour import (
+    HEARTBEAT_SECONDS,
+    Abort,
+    BehaviourModule,
+    GoalContext,
+    Outcome,
+    StateServer,
+)
 from cyborg.modules.kind import BuildContext, Component, ModuleKind, ModuleSettings
 from cyborg.transport.base import MessageInfo, Node
 

@@ -16,7 +16,7 @@ import re
 
 from pydantic import Field
 
-from cyborg.modules.helper import BehaviourModule, GoalContext
+from cyborg.modules.behaviour import BehaviourModule, GoalContext
 from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
 from cyborg.transport.base import MessageInfo, Node
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pydantic import Field
 
-from cyborg.modules.helper import BehaviourModule, GoalContext
+from cyborg.modules.behaviour import BehaviourModule, GoalContext
 from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
 from cyborg.transport.base import Node
 

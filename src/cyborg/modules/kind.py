@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any, Generic, Protocol, TypeVar, runtime_check
 from pydantic import BaseModel, ConfigDict
 
 from cyborg.transport.base import Node
+from cyborg.transport.topics import BaseApi
 
 if TYPE_CHECKING:
     from cyborg.maps import OccupancyMap
@@ -149,6 +150,12 @@ class BuildContext(Protocol):
 
     def listening(self) -> Listening:
         """What every module of the robot's configuration listens for in speech (its ears' grammar)."""
+        ...
+
+    @property
+    def base_api(self) -> BaseApi:
+        """The robot base's interface on this graph (ROSARNL's, or nav2's on ROS 2), unless a
+        module's settings name one."""
         ...
 
 

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 from pydantic import Field
 
-from cyborg.modules.helper import BehaviourModule, GoalContext
+from cyborg.modules.behaviour import BehaviourModule, GoalContext
 from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
 from cyborg.modules.speech import audio_device_present
 from cyborg.transport.base import Node

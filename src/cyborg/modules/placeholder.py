@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 from pydantic import Field
 
-from cyborg.modules.helper import BehaviourModule, GoalContext
+from cyborg.modules.behaviour import BehaviourModule, GoalContext
 from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
 from cyborg.transport.base import Node
 

@@ -23,11 +23,10 @@ from pydantic import Field
 from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
 from cyborg.transport.base import MessageInfo, Node
 from cyborg.transport.messages import String
+from cyborg.transport.topics import SPEECH_INPUT_TOPIC, SPOKEN_TOPIC
 
 log = logging.getLogger(__name__)
 
-SPEECH_INPUT_TOPIC = "/cyborg_tts/say"
-SPOKEN_TOPIC = "/cyborg_tts/spoken"
 SPOKEN_KEPT = 1000  # sentences remembered in memory (every one is logged and published)
 WORDS_PER_SECOND = 2.6
 

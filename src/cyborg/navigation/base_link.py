@@ -1,11 +1,10 @@
-"""How the navigation module drives the robot base: ROSARNL's interface on ROS 1, nav2's on ROS 2.
+"""How the navigation module drives the robot base: ROSARNL's interface, or nav2's.
 
-On ROS 1 (and the embedded transport) the base is ROSARNL: the action ``move_base`` takes a
-pose, the services ``wander`` and ``stop`` start and end wandering (thesis 2.7). On ROS 2
-(:attr:`Node.ros_version` 2) it is nav2's ``navigate_to_pose`` action (our NavigateToPose
-interface): a goal with a pose drives there; a goal whose ``behavior_tree`` is ``wander`` wanders
-until it is cancelled, so ending the wander cancels that goal. :func:`base_link` picks the one
-that fits the node's graph.
+ROSARNL (the Pioneer LX's, on ROS 1 and in process): the action ``move_base`` takes a pose, the
+services ``wander`` and ``stop`` start and end wandering (thesis 2.7). nav2 (the default on
+ROS 2): the ``navigate_to_pose`` action (our NavigateToPose interface); a goal with a pose drives
+there, a goal whose ``behavior_tree`` is ``wander`` wanders until it is cancelled, so ending the
+wander cancels that goal. :func:`base_link` makes the one the module's ``base_api`` names.
 """
 
 from __future__ import annotations
@@ -29,6 +28,7 @@ from cyborg.transport.messages import (
     PoseStamped,
     Quaternion,
 )
+from cyborg.transport.topics import BaseApi
 
 __all__ = ["BaseLink", "Nav2Link", "RosarnlLink", "base_link"]
 
@@ -125,6 +125,6 @@ class Nav2Link:
             raise CyborgError(f"the base's wander ended with an error: {goal.text}")
 
 
-def base_link(node: Node) -> BaseLink:
-    """The base's interface on ``node``'s graph: nav2's on ROS 2, ROSARNL's otherwise."""
-    return Nav2Link(node) if node.ros_version == 2 else RosarnlLink(node)
+def base_link(node: Node, api: BaseApi = BaseApi.ROSARNL) -> BaseLink:
+    """The base's interface ``api`` on ``node``'s graph."""
+    return Nav2Link(node) if api is BaseApi.NAV2 else RosarnlLink(node)

@@ -11,7 +11,7 @@ import random
 from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 
-from cyborg.navigation.records import Location, Response, ResponseType
+from cyborg.navigation.models import Location, Response, ResponseType
 
 HAPPY = frozenset({"elated", "loved", "dignified"})
 WANDERING_MOODS = frozenset({"bored", "curious", "unconcerned"})

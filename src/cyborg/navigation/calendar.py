@@ -40,7 +40,7 @@ from dateutil.rrule import rrule, rruleset, rrulestr
 from cyborg.errors import CalendarError, DatabaseError, RuleTooCostly
 from cyborg.limits import MAX_EVENT_DAYS, MAX_ICS_BYTES, MAX_OCCURRENCES_PER_QUERY, MAX_RULE_COUNT
 from cyborg.navigation.keywords import LocationMatcher
-from cyborg.navigation.records import CalendarEvent, Location
+from cyborg.navigation.models import CalendarEvent, Location
 
 DEFAULT_TIMEZONE = "Europe/Oslo"
 """Zone of the Cyborg (Trondheim): used for floating times and all-day events in .ics files."""

@@ -1,6 +1,6 @@
 """The content a new navigation database starts with, read from the YAML files shipped in the package.
 
-Sits between the value types (:mod:`~cyborg.navigation.records`) and the schema
+Sits between the value types (:mod:`~cyborg.navigation.models`) and the schema
 (:mod:`~cyborg.navigation.schema`), which seeds a new file from here. The default places
 and their aliases are in ``navigation/data/places.yaml``, the sentences in
 ``navigation/data/sentences.yaml``: content is edited there, not in Python. Both are read
@@ -19,7 +19,13 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from cyborg.configfile import describe_errors, load_yaml, read_text_file
 from cyborg.errors import ConfigError, DatabaseError
 from cyborg.navigation.keywords import normalise
-from cyborg.navigation.records import Location, Response, ResponseType, checked_sentence, valid_location
+from cyborg.navigation.models import (
+    Location,
+    Response,
+    ResponseType,
+    checked_sentence,
+    valid_location,
+)
 
 PLACES_FILE = Path(str(resources.files("cyborg") / "navigation" / "data" / "places.yaml"))
 """The default places (Glassgården, NTNU), with their aliases; they have no pose."""

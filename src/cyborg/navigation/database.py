@@ -13,7 +13,7 @@ hold. It combines the record stores, each of one table group, on one SQLite file
   response type and emotion (no emotion = fits any emotion);
 
 and :mod:`~cyborg.navigation.map_import` turns a map's goal poses into places. The value
-types are in :mod:`~cyborg.navigation.records`.
+types are in :mod:`~cyborg.navigation.models`.
 
 A missing file is created by :mod:`~cyborg.navigation.schema` and seeded with the places
 and sentences of ``navigation/data/*.yaml`` (:mod:`~cyborg.navigation.content`). A file
@@ -30,7 +30,7 @@ from typing import Any
 
 from cyborg.navigation import map_import, schema
 from cyborg.navigation.events import EventStore
-from cyborg.navigation.records import CalendarEvent
+from cyborg.navigation.models import CalendarEvent
 from cyborg.navigation.responses import ResponseStore
 
 __all__ = ["CalendarEvent", "NavigationDatabase"]

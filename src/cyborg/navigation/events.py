@@ -20,7 +20,7 @@ from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 from cyborg.errors import CalendarError, DatabaseError
 from cyborg.navigation.calendar import normalise_recurrence, occurrences_between
 from cyborg.navigation.locations import LocationStore
-from cyborg.navigation.records import CalendarEvent, Occurrence
+from cyborg.navigation.models import CalendarEvent, Occurrence
 
 log = logging.getLogger(__name__)
 

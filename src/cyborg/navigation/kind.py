@@ -15,6 +15,7 @@ from cyborg.navigation.database import NavigationDatabase
 from cyborg.navigation.keywords import NO_PHRASES, TRIGGERS, YES_PHRASES
 from cyborg.navigation.module import MOVING_ACTION, PLANNING_ACTION, TALKING_ACTION, NavigationModule
 from cyborg.transport.base import Node
+from cyborg.transport.topics import BaseApi
 
 
 class NavigationSettings(ModuleSettings):
@@ -28,6 +29,11 @@ class NavigationSettings(ModuleSettings):
     answer_timeout: float = Field(20.0, gt=0, description="seconds it waits for a yes or no")
     feedback_interval: float = Field(15.0, gt=0, description="seconds between emotion feedbacks on a trip")
     wander_limit: float = Field(600.0, gt=0, description="seconds a wander lasts at most")
+    base_api: BaseApi | None = Field(
+        None,
+        description="the robot base's interface: rosarnl (move_base, wander, stop) or nav2 "
+        "(navigate_to_pose); default: the graph's (nav2 on ROS 2, rosarnl otherwise)",
+    )
 
     def serves(self) -> tuple[str, ...]:
         return (PLANNING_ACTION, MOVING_ACTION, TALKING_ACTION)
@@ -58,6 +64,7 @@ def _build(node: Node, settings: NavigationSettings, context: BuildContext) -> N
         answer_timeout=settings.answer_timeout,
         feedback_interval=settings.feedback_interval,
         wander_limit=settings.wander_limit,
+        base_api=settings.base_api or context.base_api,
     )
     module.owns_db = True
     return module

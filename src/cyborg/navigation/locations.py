@@ -17,7 +17,7 @@ from dataclasses import replace
 
 from cyborg.errors import DatabaseError
 from cyborg.navigation.keywords import LocationMatcher, normalise
-from cyborg.navigation.records import Location, valid_location
+from cyborg.navigation.models import Location, valid_location
 from cyborg.storage import SQLiteFile
 
 log = logging.getLogger(__name__)

@@ -19,7 +19,7 @@ from cyborg.errors import CyborgError
 from cyborg.navigation.content import DEFAULT_LOCATIONS
 from cyborg.navigation.keywords import normalise
 from cyborg.navigation.locations import LocationStore
-from cyborg.navigation.records import Location
+from cyborg.navigation.models import Location
 
 
 def import_pose(db: LocationStore, pose: Any, map_name: str) -> str:

@@ -16,7 +16,7 @@ import random
 from datetime import UTC
 
 from cyborg.errors import CyborgError
-from cyborg.modules.helper import Abort, BehaviourModule, GoalContext
+from cyborg.modules.behaviour import Abort, BehaviourModule, GoalContext
 from cyborg.modules.kind import CalendarEntry
 from cyborg.modules.speech import estimated_duration
 from cyborg.navigation.base_link import base_link
@@ -37,10 +37,11 @@ from cyborg.navigation.behaviour import (
 )
 from cyborg.navigation.database import NavigationDatabase
 from cyborg.navigation.keywords import Intent, detect_answer, detect_navigation
-from cyborg.navigation.records import CalendarEvent, Location, ResponseType
+from cyborg.navigation.models import CalendarEvent, Location, ResponseType
 from cyborg.transport import topics
 from cyborg.transport.base import GoalStatus, MessageInfo, Node
 from cyborg.transport.messages import PoseWithCovarianceStamped, SystemState
+from cyborg.transport.topics import BaseApi
 
 log = logging.getLogger(__name__)
 
@@ -74,6 +75,7 @@ class NavigationModule(BehaviourModule):
         answer_timeout: float = 20.0,
         feedback_interval: float = 15.0,
         wander_limit: float = 600.0,
+        base_api: BaseApi = BaseApi.ROSARNL,
     ) -> None:
         super().__init__(node)
         self.db = db
@@ -105,7 +107,7 @@ class NavigationModule(BehaviourModule):
         self.emotion_since = node.clock.monotonic()
         self._warned_off_map: set[str] = set()
         self._answer: asyncio.Future[Intent] | None = None
-        self.base = base_link(node)
+        self.base = base_link(node, base_api)
         node.subscribe(topics.AMCL_POSE, PoseWithCovarianceStamped, self._on_pose, queue_size=10)
         node.subscribe(topics.STATE_CHANGE, SystemState, self._on_state_change)
         self.on_speech_text(self._on_text)

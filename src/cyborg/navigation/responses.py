@@ -12,7 +12,7 @@ import logging
 from dataclasses import replace
 
 from cyborg.errors import DatabaseError
-from cyborg.navigation.records import Response, ResponseType, checked_sentence, emotion_key
+from cyborg.navigation.models import Response, ResponseType, checked_sentence, emotion_key
 from cyborg.storage import SQLiteFile
 
 log = logging.getLogger(__name__)

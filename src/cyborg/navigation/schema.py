@@ -18,7 +18,7 @@ from pathlib import Path
 from cyborg.errors import DatabaseError
 from cyborg.navigation.content import DEFAULT_LOCATIONS, DEFAULT_RESPONSES
 from cyborg.navigation.locations import insert_location
-from cyborg.navigation.records import ResponseType
+from cyborg.navigation.models import ResponseType
 from cyborg.storage import Unusable, transaction
 
 log = logging.getLogger(__name__)

@@ -7,7 +7,7 @@ current pose), the services ``/rosarnl_node/wander`` and ``/rosarnl_node/stop``
 ``/rosarnl_node/arnl_path_state``. Routes come from :class:`RoutePlanner`; the robot drives
 them at a set speed on the injected clock. Registered as the module kind ``simulated_base``.
 
-On a ROS 2 graph (:attr:`Node.ros_version` 2) it offers nav2's action ``/navigate_to_pose``
+With ``base_api: nav2`` (the default on a ROS 2 graph) it offers nav2's action ``/navigate_to_pose``
 (our NavigateToPose interface) instead of ``move_base`` and the two services: goal a pose,
 feedback the current pose and the distance left along the route, an abort's reason in the
 result's ``error_msg``. A goal whose ``behavior_tree`` is ``wander`` wanders until it is
@@ -68,6 +68,7 @@ from cyborg.transport.messages import (
 from cyborg.transport.messages import (
     Point as PointMsg,
 )
+from cyborg.transport.topics import BaseApi
 
 log = logging.getLogger(__name__)
 
@@ -128,6 +129,7 @@ class SimulatedBase:
         pose_rate: float = DEFAULT_POSE_RATE,
         virtual_pose_rate: float | None = None,
         search_ahead: bool = True,
+        base_api: BaseApi = BaseApi.ROSARNL,
     ) -> None:
         if speed <= 0:
             raise InvalidValueError(f"speed must be positive (m/s), got {speed}")
@@ -167,7 +169,9 @@ class SimulatedBase:
         self._heading = (math.nan, Quaternion())  # the last heading published, and its quaternion
         self._pose_pub = node.publisher(topics.AMCL_POSE, PoseWithCovarianceStamped, latch=True)
         self._state_pub = node.publisher(topics.ARNL_PATH_STATE, String, latch=True)
-        if node.ros_version == 2:
+        self.base_api = base_api
+        """The interface it offers: ROSARNL's services and ``move_base``, or nav2's action."""
+        if base_api is BaseApi.NAV2:
             node.action_server(
                 topics.NAVIGATE_TO_POSE, NavigateToPoseAction, self._on_navigate, self._on_cancel
             )
@@ -367,13 +371,13 @@ class SimulatedBase:
             self._set_state(PathState.ABORTED_PATHPLAN)
         elif task.result():
             self._set_state(PathState.REACHED_GOAL)
-            handle.succeed(NavigateToPoseResult() if self.node.ros_version == 2 else MoveBaseResult())
+            handle.succeed(NavigateToPoseResult() if self.base_api is BaseApi.NAV2 else MoveBaseResult())
         else:
             log.info("navigation goal aborted: %s", self._failure)
             handle.abort(self._failed_result(), text=self._failure)
 
     def _failed_result(self) -> NavigateToPoseResult | None:
-        return NavigateToPoseResult(error_msg=self._failure) if self.node.ros_version == 2 else None
+        return NavigateToPoseResult(error_msg=self._failure) if self.base_api is BaseApi.NAV2 else None
 
     def _on_cancel(self, handle: _AnyHandle) -> None:
         if handle.status.is_terminal:
@@ -465,6 +469,11 @@ class SimulatedBaseSettings(ModuleSettings):
     start: str | None = Field(
         None, description="named pose to start at (default: the information desk, else RobotHome or Dock)"
     )
+    base_api: BaseApi | None = Field(
+        None,
+        description="the interface it offers: rosarnl (move_base, wander, stop) or nav2 "
+        "(navigate_to_pose); default: the graph's (nav2 on ROS 2, rosarnl otherwise)",
+    )
 
 
 def _build(node: Node, settings: SimulatedBaseSettings, context: BuildContext) -> SimulatedBase:
@@ -480,6 +489,7 @@ def _build(node: Node, settings: SimulatedBaseSettings, context: BuildContext) -
         pose_rate=settings.pose_rate,
         virtual_pose_rate=settings.virtual_pose_rate,
         search_ahead=settings.search_ahead,
+        base_api=settings.base_api or context.base_api,
     )
 
 

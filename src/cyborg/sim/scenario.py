@@ -25,7 +25,7 @@ from cyborg.app.config import LoadedConfig
 from cyborg.app.registry import KindRegistry
 from cyborg.app.robot import Robot, build_robot
 from cyborg.errors import ConfigError, CyborgError, ScenarioFailed
-from cyborg.sim.records import Record, RecordStream
+from cyborg.observe.records import Record, RecordStream
 from cyborg.sim.script import CalendarEntry, Match, Script, Step, check_against
 from cyborg.storage import lock_data_dir
 from cyborg.transport import topics

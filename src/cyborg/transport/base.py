@@ -224,10 +224,6 @@ class Node(ABC):
 
     name: str
     clock: Clock
-    ros_version: int = 1
-    """Whose conventions the graph follows where ROS 1 and ROS 2 differ: 1 (ROS 1; the embedded
-    transport mirrors it unless told otherwise) or 2 (e.g. the base drives through nav2's
-    ``navigate_to_pose`` action instead of ROSARNL's ``move_base``)."""
 
     @abstractmethod
     def publisher(
@@ -296,6 +292,10 @@ class Transport(ABC):
 
     @abstractmethod
     def shutdown(self) -> None: ...
+
+    def close(self) -> None:
+        """Shut every node down and leave the graph (over ROS: the process's own node too)."""
+        self.shutdown()
 
     def wait_for_connections(self, timeout: float) -> list[str]:
         """Wait up to ``timeout`` real seconds until this process's topics are connected to every

@@ -363,18 +363,6 @@ class VirtualClock(Clock):
         return self._start_epoch
 
 
-async def wait_until(
-    predicate: Callable[[], bool], clock: Clock, *, timeout: float, interval: float = 0.01
-) -> bool:
-    """Wait (on ``clock``) until ``predicate()`` is true; False on timeout. For tests and tools."""
-    deadline = clock.monotonic() + timeout
-    while not predicate():
-        if clock.monotonic() >= deadline:
-            return False
-        await clock.sleep(interval)
-    return True
-
-
 def run_with(clock: Clock, main: Callable[[], Awaitable[T]]) -> T:
     """Run an async function on ``clock``'s loop and return its result."""
 

@@ -82,11 +82,8 @@ class _Topic:
 class EmbeddedTransport(Transport):
     """In-process graph of topics, services, actions and parameters."""
 
-    def __init__(self, clock: Clock | None = None, *, ros_version: int = 1) -> None:
-        """``ros_version`` 2: the nodes follow ROS 2's conventions (:attr:`Node.ros_version`), so a
-        test runs the ROS 2 robot's navigation in one process."""
+    def __init__(self, clock: Clock | None = None) -> None:
         self.clock = clock or RealClock()
-        self.ros_version = ros_version
         self.stats = TransportStats()
         self._topics: dict[str, _Topic] = {}
         self._services: dict[str, _EmbeddedServiceServer[Any, Any]] = {}
@@ -191,7 +188,6 @@ class EmbeddedNode(Node):
         self.transport = transport
         self.name = name
         self.clock = transport.clock
-        self.ros_version = transport.ros_version
         self._subscriptions: list[_EmbeddedSubscription[Any]] = []
         self._services: list[_EmbeddedServiceServer[Any, Any]] = []
         self._action_servers: list[_EmbeddedActionServer[Any, Any, Any]] = []

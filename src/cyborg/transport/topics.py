@@ -4,6 +4,8 @@ Every component uses these constants, so the embedded and ROS transports carry
 exactly the names existing Cyborg modules use.
 """
 
+import enum
+
 REGISTER_EVENT = "/cyborg_controller/register_event"
 STATE_CHANGE = "/cyborg_controller/state_change"
 STATE_RESOURCES_PARAM = "/state_resources"
@@ -24,6 +26,9 @@ EMOTION_ENABLED_PARAM = "/cyborg_controller/emotion_enabled"
 
 TEXT_TO_SPEECH = "/text_to_speech"
 TEXT_FROM_SPEECH = "/text_from_speech"
+# Ours: what the text-to-speech module is asked to say, and what it has said (std_msgs/String).
+SPEECH_INPUT_TOPIC = "/cyborg_tts/say"
+SPOKEN_TOPIC = "/cyborg_tts/spoken"
 # Ours: every utterance the speech input decoded, as JSON {text, confidence, accepted, raw} (std_msgs/String).
 SPEECH_HEARD = "/cyborg_speech/heard"
 
@@ -36,3 +41,12 @@ ARNL_PATH_STATE = "/rosarnl_node/arnl_path_state"
 # services: a goal whose behavior_tree is WANDER_BEHAVIOR wanders until it is cancelled).
 NAVIGATE_TO_POSE = "/navigate_to_pose"
 WANDER_BEHAVIOR = "wander"
+
+
+class BaseApi(enum.StrEnum):
+    """The robot base's navigation interface: the Pioneer LX's ROSARNL, or nav2's on ROS 2."""
+
+    ROSARNL = "rosarnl"
+    """``move_base`` action plus the ``wander`` and ``stop`` services (thesis ch. 9)."""
+    NAV2 = "nav2"
+    """nav2's ``navigate_to_pose`` action; a goal whose ``behavior_tree`` is WANDER_BEHAVIOR wanders."""

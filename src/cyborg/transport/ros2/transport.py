@@ -420,8 +420,6 @@ class Ros2Transport(Transport):
 class Ros2Node(Node):
     """One logical node: one rclpy node."""
 
-    ros_version = 2
-
     def __init__(self, transport: Ros2Transport, name: str) -> None:
         self.transport = transport
         self.name = name

@@ -33,19 +33,18 @@ from aiohttp import hdrs, web
 from aiohttp.web_protocol import RequestHandler
 from yarl import URL
 
-from cyborg.interfaces.access import LOOPBACK_NAMES as LOOPBACK_NAMES
-from cyborg.interfaces.access import TOKEN_ENV as TOKEN_ENV
-from cyborg.interfaces.access import WILDCARDS as WILDCARDS
-from cyborg.interfaces.access import Access as Access
-from cyborg.interfaces.access import Limits as Limits
-from cyborg.interfaces.access import access_options as access_options
-from cyborg.interfaces.access import allowed_origins as allowed_origins
-from cyborg.interfaces.access import announcement as announcement
-from cyborg.interfaces.access import client_headers as client_headers
-from cyborg.interfaces.access import is_loopback as is_loopback
-from cyborg.interfaces.access import needs_token as needs_token
-from cyborg.interfaces.access import new_token as new_token
-from cyborg.interfaces.access import parse_origin as parse_origin
+from cyborg.web.access import LOOPBACK_NAMES as LOOPBACK_NAMES
+from cyborg.web.access import TOKEN_ENV as TOKEN_ENV
+from cyborg.web.access import WILDCARDS as WILDCARDS
+from cyborg.web.access import Access as Access
+from cyborg.web.access import Limits as Limits
+from cyborg.web.access import allowed_origins as allowed_origins
+from cyborg.web.access import announcement as announcement
+from cyborg.web.access import client_headers as client_headers
+from cyborg.web.access import is_loopback as is_loopback
+from cyborg.web.access import needs_token as needs_token
+from cyborg.web.access import new_token as new_token
+from cyborg.web.access import parse_origin as parse_origin
 
 FD_RESERVE = 128  # files kept free for the robot itself (databases, Graphviz, logs)
 WANTED_FILES = 65536  # the open-file limit we raise to, if the hard limit allows

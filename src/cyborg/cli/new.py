@@ -16,8 +16,8 @@ from pathlib import Path
 
 import click
 
+from cyborg.cli.common import fail
 from cyborg.errors import CyborgError, InvalidValueError
-from cyborg.interfaces.cli_common import fail
 
 _NAME = re.compile(r"^[a-z][a-z0-9_]{0,40}$")
 

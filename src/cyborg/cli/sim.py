@@ -7,9 +7,8 @@ from typing import TYPE_CHECKING
 
 import click
 
-from cyborg.errors import CyborgError
-from cyborg.interfaces.access import Access, access_options
-from cyborg.interfaces.cli_common import (
+from cyborg.cli.common import (
+    access_options,
     check_modules,
     check_port,
     duration_option,
@@ -18,9 +17,12 @@ from cyborg.interfaces.cli_common import (
     os_problem,
     parse_speed,
 )
+from cyborg.errors import CyborgError
+from cyborg.web.access import Access
 
 if TYPE_CHECKING:
     from cyborg.app.config import LoadedConfig
+    from cyborg.run.middleware import Middleware
 
 
 @click.command()
@@ -130,7 +132,7 @@ def sim(
                 script_path,
                 transcript_path,
                 map_path,
-                ros2=over_ros2,
+                middleware=_middleware(over_ros2),
             )
             return
         if script_path is not None:
@@ -140,8 +142,8 @@ def sim(
             raise click.UsageError("--transcript goes with --script")
         import asyncio
 
-        from cyborg.interfaces.serve import serve_api
-        from cyborg.sim.runner import run_sim
+        from cyborg.run.local import run_sim
+        from cyborg.web.build import serve_api
 
         asyncio.set_event_loop(None)
         run_sim(
@@ -163,6 +165,12 @@ def sim(
 
 MIC_MODULE = "cyborg_speech_input"
 """The module ``cyborg sim --mic`` adds (unless the configuration has one of that name)."""
+
+
+def _middleware(over_ros2: bool) -> Middleware:
+    from cyborg.run.middleware import ROS1, ROS2
+
+    return ROS2 if over_ros2 else ROS1
 
 
 def _ros_speed(speed: str | None) -> float | None:
@@ -187,10 +195,12 @@ def _sim_over_ros(
     transcript_path: Path | None,
     map_path: Path | None,
     *,
-    ros2: bool = False,
+    middleware: Middleware,
 ) -> None:
-    from cyborg.interfaces.ros_launch import all_parts, launch, run_scenario_ros
-    from cyborg.sim.runner import default_data_dir
+    from cyborg.run.local import default_data_dir
+    from cyborg.run.roslaunch import all_parts
+    from cyborg.run.scenario import run_scenario_ros
+    from cyborg.run.supervisor import Launch, launch
 
     factor = _ros_speed(speed)
     config_path = Path(config.source).resolve()
@@ -198,18 +208,17 @@ def _sim_over_ros(
         if transcript_path is not None:
             raise click.UsageError("--transcript goes with --script")
         folder = (data_dir or default_data_dir()).resolve()
-        launch(
+        robot = Launch(
             config_path,
             config,
             all_parts(config),
             folder,
             map_path,
             port,
-            echo=True,
             speed=factor,
-            duration=duration,
-            ros2=ros2,
+            middleware=middleware,
         )
+        launch(robot, duration=duration)
         return
     records = run_scenario_ros(
         config_path,
@@ -220,7 +229,7 @@ def _sim_over_ros(
         data_dir=data_dir.resolve() if data_dir else None,
         map_path=map_path.resolve() if map_path else None,
         echo=True,
-        ros2=ros2,
+        middleware=middleware,
     )
     _echo_records(records)
     if transcript_path:

@@ -30,7 +30,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-from cyborg.app.place import BuildPlace
+from cyborg.app.context import BuildContext
 from cyborg.app.registry import module_kinds
 from cyborg.errors import ConfigError
 from cyborg.modules.kind import Component, ModuleKind, ModuleSettings, ServesStates
@@ -114,7 +114,7 @@ class ModuleHarness:
         self.transport = EmbeddedTransport(self.clock)
         self._tmp = tempfile.TemporaryDirectory(prefix="cyborg-test-") if data_dir is None else None
         folder = data_dir if data_dir is not None else Path(self._tmp.name) if self._tmp else Path()
-        self.place = BuildPlace(data_dir=folder, rng=random.Random(seed), map_path=map_path)
+        self.place = BuildContext(data_dir=folder, rng=random.Random(seed), map_path=map_path)
         self.said: list[str] = []
         self.events: list[str] = []
         self.feedback: list[Feedback] = []

@@ -2,7 +2,7 @@
 
 :func:`to_graph` describes the machine for Graphviz to lay out in one go (the .dot that
 `cyborg graph` writes); :func:`render` draws it laid out one superstate at a time, which stays
-fast as the machine grows (:mod:`cyborg.controller.layout`). Superstates become clusters; the
+fast as the machine grows (:mod:`cyborg.drawing.layout`). Superstates become clusters; the
 active state can be highlighted. :func:`list_svg` lists the states where no graph can be drawn.
 """
 
@@ -13,8 +13,8 @@ from xml.sax.saxutils import escape, quoteattr
 
 import graphviz
 
-from cyborg.controller.layout import draw, lay_out
 from cyborg.controller.machine import MachineSpec, StateSpec
+from cyborg.drawing.layout import draw, lay_out
 from cyborg.errors import InvalidValueError
 
 __all__ = ["ACTIVE_FILL", "list_svg", "render", "to_graph"]
@@ -84,7 +84,7 @@ def _leaves_under(machine: MachineSpec, state: StateSpec) -> set[str]:
 
 def render(machine: MachineSpec, output: Path, *, active: str | None = None) -> Path:
     """Write ``output`` as .dot (the machine for Graphviz to lay out; no Graphviz needed) or, laid
-    out one superstate at a time (:mod:`cyborg.controller.layout`), as .svg, .png or .pdf."""
+    out one superstate at a time (:mod:`cyborg.drawing.layout`), as .svg, .png or .pdf."""
     suffix = output.suffix.lstrip(".").lower()
     if suffix in ("dot", "gv"):
         output.write_text(to_graph(machine, active=active).source, encoding="utf-8")

@@ -6,7 +6,7 @@ map with the robot's pose and route, the event log and controls. The page is
 plain HTML/JS/CSS from :file:`static/` (no build step, nothing fetched from the
 internet; pan and zoom come from the vendored svg-pan-zoom, BSD-2-Clause); it reads the API's websocket and the JSON endpoints added here:
 ``/api/health``, ``/api/map`` (+ ``/api/map.png``) and ``/api/route``.
-Register it with :func:`register` (``cyborg.interfaces.serve.EXTENSIONS`` does).
+Register it with :func:`register` (``cyborg.web.build.EXTENSIONS`` does).
 """
 
 from __future__ import annotations
@@ -28,9 +28,9 @@ from numpy.typing import NDArray
 
 from cyborg.app.view import BaseStatus, RobotView
 from cyborg.errors import InvalidValueError
-from cyborg.interfaces.api import RobotAPI
 from cyborg.maps import Cell, OccupancyMap
 from cyborg.transport.messages import SystemState
+from cyborg.web.api import RobotAPI
 
 STATIC_DIR = Path(__file__).resolve().parent / "static"
 BASE_NODE = "rosarnl_node"

@@ -7,8 +7,9 @@ from pathlib import Path
 
 import click
 
+from cyborg.cli.tool import link_options
+from cyborg.client.http import RobotLink
 from cyborg.errors import CyborgError
-from cyborg.interfaces.command_tool import RobotLink, ToolError, link_options
 
 __all__ = ["listen"]
 
@@ -55,15 +56,15 @@ def listen(
     sentence is sent to it as if its own speech-to-text had heard it. Without --wav it listens
     to the microphone until Ctrl-C.
     """
-    from cyborg.app.place import heard_by
+    from cyborg.app.context import heard_by
     from cyborg.app.registry import module_kinds
+    from cyborg.cli.common import load_or_default
     from cyborg.hearing.audio import read_wav
     from cyborg.hearing.module import HEARD_TOPIC, SpeechInput
     from cyborg.hearing.recogniser import DEFAULT_MIN_CONFIDENCE, Recogniser
     from cyborg.hearing.synth import as_heard
-    from cyborg.interfaces.cli_common import load_or_default
     from cyborg.navigation.database import NavigationDatabase
-    from cyborg.sim.runner import default_data_dir
+    from cyborg.run.local import default_data_dir
     from cyborg.transport.clock import RealClock
     from cyborg.transport.embedded import EmbeddedTransport
     from cyborg.transport.messages import String
@@ -79,9 +80,9 @@ def listen(
         if heard["accepted"] and sending[0]:
             try:
                 link.say(heard["text"])
-            except ToolError as exc:
+            except CyborgError as exc:
                 sending[0] = False
-                click.echo(f"not sent: {exc.message}", err=True)
+                click.echo(f"not sent: {exc}", err=True)
 
     # quiet noise around a recording, as a microphone hears it: digital silence is no speech the model knows
     audio = as_heard(read_wav(wav), noise=10.0, pad=0.5) if wav is not None else None

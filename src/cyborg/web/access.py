@@ -1,7 +1,7 @@
 """Who may use the robot's HTTP API, as the command line and its clients see it: the access
 policy (token, allowed origins, limits), the client's headers and what a server announces.
 
-Kept apart from :mod:`cyborg.interfaces.security` (the server's checks, on aiohttp) so that the
+Kept apart from :mod:`cyborg.web.security` (the server's checks, on aiohttp) so that the
 command line and the command tool import neither aiohttp nor yarl: ``cyborg --help`` and
 ``cyborg say`` stay quick (issue 13).
 """
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import ipaddress
 import secrets
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -122,46 +122,3 @@ def announcement(url: str, host: str, port: int, token: str | None, generated: b
     if token and generated:
         lines.append((f"token generated for this run; give your own with --token or ${TOKEN_ENV}", "green"))
     return lines
-
-
-def access_options(command: Callable[..., None]) -> Callable[..., None]:
-    """``--token`` and ``--allow-origin`` for a command that serves the API; the command receives
-    ``access``, an :class:`Access`, instead."""
-    import functools
-
-    import click
-
-    def origins(ctx: click.Context, param: click.Parameter, values: tuple[str, ...]) -> tuple[str, ...]:
-        try:
-            return allowed_origins(values)
-        except ValueError as exc:
-            raise click.BadParameter(str(exc)) from None
-
-    def token_value(ctx: click.Context, param: click.Parameter, value: str | None) -> str | None:
-        if value is not None and len(value.strip()) < 16:
-            raise click.BadParameter(
-                "a token shorter than 16 characters is easy to guess; fix: leave it out to get a "
-                'generated one, or make one with: python3 -c "import secrets; print(secrets.token_urlsafe(24))"'
-            )
-        return value.strip() if value else None
-
-    @click.option(
-        "--token",
-        envvar=TOKEN_ENV,
-        callback=token_value,
-        help=f"require this bearer token on the API (${TOKEN_ENV}); with a --host beyond loopback one is "
-        "generated and printed if not given",
-    )
-    @click.option(
-        "--allow-origin",
-        "allow_origin",
-        multiple=True,
-        callback=origins,
-        metavar="URL",
-        help="also accept pages and Host names of this origin, e.g. https://cyborg.example:443 (repeatable)",
-    )
-    @functools.wraps(command)
-    def wrapper(*args: Any, token: str | None, allow_origin: tuple[str, ...], **kwargs: Any) -> None:
-        command(*args, access=Access(token=token, allowed_origins=allow_origin), **kwargs)
-
-    return wrapper

@@ -1,4 +1,4 @@
-"""The command tool over ROS (``cyborg event NAME --ros`` / ``--ros2`` ...): the thesis's topics, no HTTP API.
+"""A client of a robot running as ROS nodes (``cyborg event NAME --ros`` / ``--ros2``): the thesis's topics.
 
 Each command joins the graph (ROS 1: at ``ROS_MASTER_URI``; ROS 2: its ``ROS_DOMAIN_ID``) as a
 short-lived node ``cyborg_tool`` (ROS 1: in the process ``cyborg_tool_<pid>``), publishes on the
@@ -12,10 +12,9 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import os
 import signal
 from collections.abc import Callable, Coroutine
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any, Protocol, TypeVar, cast
 
 from cyborg.errors import CyborgError, ServiceTimeoutError, ServiceUnavailableError, TransportError
 from cyborg.transport import topics
@@ -31,8 +30,7 @@ from cyborg.transport.messages import (
 )
 
 if TYPE_CHECKING:
-    from cyborg.transport.ros import RosTransport
-    from cyborg.transport.ros2 import Ros2Transport
+    from cyborg.run.middleware import Middleware
 
 T = TypeVar("T")
 CONNECT_TIMEOUT = 3.0  # seconds to wait for the listening nodes to connect, or for a latched message
@@ -40,32 +38,20 @@ DELIVERY_GRACE = 0.3  # seconds rospy's writer threads get before the node leave
 DISCOVERY_SETTLE = 0.3  # ROS 2: seconds a topic's listeners stay the same before the tool publishes
 
 
+class _GraphTransport(Protocol):
+    """What the tool needs of a ROS transport beyond :class:`Transport`: who listens on a topic."""
+
+    def subscribers_of(self, topic: str) -> list[str]: ...
+
+
 class RosLink:
-    """One command's connection to a robot running as ROS nodes (``ros2``: ROS 2 nodes)."""
+    """One command's connection to a robot running as nodes of ``middleware`` (ROS 1 or ROS 2)."""
 
-    def __init__(self, *, ros2: bool = False) -> None:
+    def __init__(self, middleware: Middleware) -> None:
         self._clock = RealClock()
-        self.ros2 = ros2
-        self._transport: RosTransport | Ros2Transport
-        if ros2:
-            from cyborg.interfaces.ros_commands import require_ros2
-
-            require_ros2()
-            from cyborg.transport.ros2 import Ros2Transport
-
-            self._transport = Ros2Transport(self._clock)
-        else:
-            from cyborg.interfaces.ros_commands import master_running, master_uri, require_ros
-
-            require_ros()
-            if not master_running():
-                raise CyborgError(
-                    f"no ROS master answers at {master_uri()}; fix: start the robot with `cyborg launch` "
-                    "(or `cyborg sim --ros`), or set ROS_MASTER_URI"
-                )
-            from cyborg.transport.ros import RosTransport
-
-            self._transport = RosTransport(self._clock, process_name=f"cyborg_tool_{os.getpid()}")
+        self.middleware = middleware
+        self._transport = middleware.tool_transport(self._clock)
+        self._graph = cast(_GraphTransport, self._transport)
         self._node: Node = self._transport.node("cyborg_tool")
 
     def close(self) -> None:
@@ -78,44 +64,40 @@ class RosLink:
     async def _publish(self, topic: str, message: Message) -> None:
         loop = asyncio.get_running_loop()
         deadline = loop.time() + CONNECT_TIMEOUT
-        listeners = self._transport.subscribers_of(topic)
-        while self.ros2 and not listeners and loop.time() < deadline:  # discovery takes a moment
+        late = self.middleware.discovers_late
+        listeners = self._graph.subscribers_of(topic)
+        while late and not listeners and loop.time() < deadline:  # discovery takes a moment
             await asyncio.sleep(0.02)
-            listeners = self._transport.subscribers_of(topic)
-        if self.ros2:  # the first listeners seen may be a few of them: wait until no more appear
+            listeners = self._graph.subscribers_of(topic)
+        if late:  # the first listeners seen may be a few of them: wait until no more appear
             settled = loop.time() + DISCOVERY_SETTLE
             while listeners and loop.time() < min(settled, deadline):
                 await asyncio.sleep(0.02)
-                seen = self._transport.subscribers_of(topic)
+                seen = self._graph.subscribers_of(topic)
                 if set(seen) != set(listeners):
                     listeners, settled = seen, loop.time() + DISCOVERY_SETTLE
         if not listeners:
-            where = "check ROS_DOMAIN_ID" if self.ros2 else "check ROS_MASTER_URI"
-            start = "`cyborg launch --ros2`" if self.ros2 else "`cyborg launch`"
-            raise CyborgError(f"no node listens on {topic}; fix: start the robot ({start}) or {where}")
-        # ROS 2: volatile, so each listening node matches once (a latched publisher matches both
-        # halves of our subscriptions); the tool waits for them anyway, and for any listener the
-        # graph shows meanwhile (under load one node's endpoints may be discovered late).
-        publisher = self._node.publisher(topic, type(message), latch=not self.ros2)
+            launch = " ".join(["cyborg launch", *self.middleware.node_arguments])
+            raise CyborgError(
+                f"no node listens on {topic}; fix: start the robot (`{launch}`) or check "
+                f"{self.middleware.graph_setting}"
+            )
+        # Discovered late (ROS 2): volatile, so each listening node matches once (a latched
+        # publisher matches both halves of our subscriptions); the tool waits for them anyway, and
+        # for any listener the graph shows meanwhile (under load one node's endpoints may be
+        # discovered late).
+        publisher = self._node.publisher(topic, type(message), latch=not late)
         while publisher.subscriber_count() < len(listeners) and loop.time() < deadline:
             await asyncio.sleep(0.01)
-            if self.ros2:
-                listeners = sorted(set(listeners) | set(self._transport.subscribers_of(topic)))
+            if late:
+                listeners = sorted(set(listeners) | set(self._graph.subscribers_of(topic)))
         publisher.publish(message)
         await asyncio.sleep(DELIVERY_GRACE)
 
     async def _see_parameters(self) -> None:
-        """ROS 2: wait (up to CONNECT_TIMEOUT) until discovery shows the controller's parameter home,
-        which a fresh node may not see yet; a parameter read before that finds nothing."""
-        if not self.ros2:
-            return
-        from cyborg.transport.ros2 import Ros2Transport
-
-        assert isinstance(self._transport, Ros2Transport)
-        loop = asyncio.get_running_loop()
-        deadline = loop.time() + CONNECT_TIMEOUT
-        while not self._transport.parameter_home_visible() and loop.time() < deadline:
-            await asyncio.sleep(0.02)
+        """Wait (up to CONNECT_TIMEOUT) until the controller's parameters can be read: on ROS 2 a
+        fresh node may not see their home yet, and a read before that finds nothing."""
+        await self.middleware.see_parameters(self._transport, CONNECT_TIMEOUT)
 
     # --- the commands -------------------------------------------------------------------------
 
@@ -183,8 +165,7 @@ class RosLink:
             except (ServiceUnavailableError, ServiceTimeoutError):
                 raise CyborgError(
                     f"no emotion system answers on {topics.GET_EMOTIONAL_STATE}; fix: start the node "
-                    "cyborg_controller (`cyborg launch`), or check "
-                    + ("ROS_DOMAIN_ID" if self.ros2 else "ROS_MASTER_URI")
+                    f"cyborg_controller (`cyborg launch`), or check {self.middleware.graph_setting}"
                 ) from None
             status.update(
                 emotion=answer.emotional_state,

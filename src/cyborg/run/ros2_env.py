@@ -59,4 +59,4 @@ def run_in_ros2_venv() -> None:
     python = ros2_python()
     sys.stdout.flush()
     sys.stderr.flush()
-    os.execve(python, [python, "-m", "cyborg.interfaces.cli", *sys.argv[1:]], ros2_environment())
+    os.execve(python, [python, "-m", "cyborg.cli", *sys.argv[1:]], ros2_environment())

@@ -23,7 +23,7 @@ import click
 from cyborg.errors import CyborgError
 from cyborg.navigation.calendar import DEFAULT_TIMEZONE, import_ics
 from cyborg.navigation.database import NavigationDatabase
-from cyborg.navigation.records import CalendarEvent, Location, Response, ResponseType
+from cyborg.navigation.models import CalendarEvent, Location, Response, ResponseType
 
 DB_FILE = "navigation.db"
 

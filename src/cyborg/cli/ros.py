@@ -1,14 +1,22 @@
-"""``cyborg node`` and ``cyborg launch``: the robot over ROS 1 (ROS 2 with ``--ros2``), a process a part."""
+"""``cyborg node`` and ``cyborg launch``: the robot over ROS 1 (ROS 2 with ``--ros2``), a process a part.
+
+The options become one :class:`~cyborg.run.node.NodeOptions` (or a
+:class:`~cyborg.run.supervisor.Launch`) and a :class:`~cyborg.run.middleware.Middleware`;
+how the nodes run is :mod:`cyborg.run`'s.
+"""
 
 from __future__ import annotations
 
+import sys
+import time
+from datetime import UTC, datetime
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
-from cyborg.errors import CyborgError
-from cyborg.interfaces.access import Access, access_options
-from cyborg.interfaces.cli_common import (
+from cyborg.cli.common import (
+    access_options,
     check_data_folder,
     check_factor,
     check_modules,
@@ -17,6 +25,11 @@ from cyborg.interfaces.cli_common import (
     fail,
     load_or_default,
 )
+from cyborg.errors import CyborgError
+from cyborg.web.access import Access
+
+if TYPE_CHECKING:
+    from cyborg.run.middleware import Middleware
 
 _speed_help = "virtual time at this factor of real time (all nodes share one clock); default real time"
 
@@ -80,7 +93,9 @@ _speed_help = "virtual time at this factor of real time (all nodes share one clo
 )
 @click.option(
     "--ros2",
+    "middleware",
     is_flag=True,
+    callback=lambda ctx, param, value: _middleware(value),
     help="a ROS 2 node (rclpy, .venv-ros2; no master), with use_sim_time under --speed",
 )
 @access_options
@@ -99,46 +114,42 @@ def node(
     script_path: Path | None,
     transcript_path: Path | None,
     fresh: bool,
-    ros2: bool,
+    middleware: Middleware,
     access: Access,
 ) -> None:
     """Run one part of the robot as the ROS 1 node NAME (cyborg_controller, a module, a gatekeeper,
     cyborg_api, or cyborg_scenario with --script); with --ros2 as a ROS 2 node."""
-    if ros2:
-        from cyborg.interfaces.ros2_env import run_in_ros2_venv
-
-        try:
-            run_in_ros2_venv()  # returns only in a Python that has rclpy
-        except CyborgError as exc:
-            fail(exc)
-    from cyborg.interfaces.ros_commands import ScenarioFiles, SimTime, parse_epoch, parse_start, run_node
-    from cyborg.sim.runner import default_data_dir
+    try:
+        middleware.enter()  # ROS 2 from the main venv: returns only in a Python that has rclpy
+    except CyborgError as exc:
+        fail(exc)
+    from cyborg.run.local import default_data_dir
+    from cyborg.run.node import ApiOptions, NodeOptions, run_node
+    from cyborg.run.scenario import ScenarioFiles
+    from cyborg.run.simtime import SimTime
 
     if speed is not None and speed <= 0:
         raise click.BadParameter(f"{speed!r} must be positive", param_hint="--speed")
     sim_time = SimTime(speed=speed, epoch=parse_epoch(epoch), start=parse_start(start_at))
-    scenario = ScenarioFiles(script_path, transcript_path) if script_path is not None else None
     try:
-        config = load_or_default(
-            config_path
-        )  # the part checks its own module's settings, loading only its kind
-        run_node(
-            name,
-            config,
-            data_dir or default_data_dir(),
-            map_path,
-            host,
-            port,
-            seed,
-            sim_time=sim_time,
-            publish_clock_too=publish_clock,
-            scenario=scenario,
+        options = NodeOptions(
+            # the part checks its own module's settings, loading only its kind
+            config=load_or_default(config_path),
+            data_dir=data_dir or default_data_dir(),
+            map_path=map_path,
+            seed=seed,
             resume=not fresh,
-            access=access,
-            ros2=ros2,
+            time=sim_time,
+            publish_clock=publish_clock,
+            api=ApiOptions(host=host, port=port, access=access),
+            scenario=ScenarioFiles(script_path, transcript_path) if script_path is not None else None,
         )
+        code = run_node(name, options, middleware)
     except CyborgError as exc:
         fail(exc)
+        return
+    if code:
+        sys.exit(code)
 
 
 @click.command("launch")
@@ -174,7 +185,9 @@ def node(
 @click.option("--start", "start_at", default=None, help="with --speed: virtual start, ISO date-time (UTC)")
 @click.option(
     "--ros2",
+    "middleware",
     is_flag=True,
+    callback=lambda ctx, param, value: _middleware(value),
     help="ROS 2 nodes (rclpy, .venv-ros2): no master is started; with --speed each node sets use_sim_time",
 )
 @duration_option
@@ -187,7 +200,7 @@ def launch_command(
     write_path: Path | None,
     speed: float | None,
     start_at: str | None,
-    ros2: bool,
+    middleware: Middleware,
     duration: float | None,
 ) -> None:
     """Start the whole robot over ROS 1 (a master if none runs) or ROS 2 (--ros2), a process a part.
@@ -196,9 +209,10 @@ def launch_command(
     /use_sim_time is set and the simulated base publishes /clock. With --ros2 the parts are ROS 2
     nodes (no master; each node's use_sim_time parameter is set instead).
     """
-    from cyborg.interfaces.ros_commands import parse_start
-    from cyborg.interfaces.ros_launch import all_parts, launch, roslaunch_xml
-    from cyborg.sim.runner import default_data_dir
+    from cyborg.run.local import default_data_dir
+    from cyborg.run.middleware import ROS1
+    from cyborg.run.roslaunch import all_parts, roslaunch_xml
+    from cyborg.run.supervisor import Launch, launch
 
     if speed is not None and speed <= 0:
         raise click.BadParameter(f"{speed!r} must be positive", param_hint="--speed")
@@ -216,7 +230,7 @@ def launch_command(
             )
         folder = (data_dir or default_data_dir()).resolve()
         if write_path is not None:
-            if ros2:
+            if middleware is not ROS1:
                 raise click.UsageError("--write writes a ROS 1 roslaunch file; drop --ros2 or --write")
             if speed is not None:
                 raise click.UsageError(
@@ -225,18 +239,44 @@ def launch_command(
             write_path.write_text(roslaunch_xml(path, parts, folder), encoding="utf-8")
             click.echo(f"wrote {write_path}")
             return
-        launch(
-            path,
-            config,
-            parts,
-            folder,
-            map_path,
-            port,
-            echo=True,
-            speed=speed,
-            start=start,
-            duration=duration,
-            ros2=ros2,
+        robot = Launch(
+            path, config, parts, folder, map_path, port, speed=speed, start=start, middleware=middleware
         )
+        launch(robot, duration=duration)
     except CyborgError as exc:
         fail(exc)
+
+
+def _middleware(ros2: bool) -> Middleware:
+    """``--ros2`` picks ROS 2; without it, ROS 1."""
+    from cyborg.run.middleware import ROS1, ROS2
+
+    return ROS2 if ros2 else ROS1
+
+
+def parse_epoch(value: str | None) -> float | str | None:
+    """``--epoch``: Unix seconds (``1795424400.5``), ``param:/cyborg_sim/RUN`` or ``dir:FOLDER``."""
+    from cyborg.run.simtime import EPOCH_DIR_PREFIX, EPOCH_PARAM_PREFIX
+
+    if value is None or value.startswith((EPOCH_PARAM_PREFIX, EPOCH_DIR_PREFIX)):
+        return value
+    try:
+        return float(value)
+    except ValueError:
+        raise click.BadParameter(
+            f"{value!r} is neither a time in Unix seconds (e.g. {time.time():.1f}) nor param:NAMESPACE "
+            "nor dir:FOLDER"
+        ) from None
+
+
+def parse_start(value: str | None) -> datetime:
+    """``--start``: an ISO date-time (UTC unless it says otherwise); default the simulator's usual start."""
+    from cyborg.transport.clock import DEFAULT_VIRTUAL_START
+
+    if value is None:
+        return DEFAULT_VIRTUAL_START
+    try:
+        moment = datetime.fromisoformat(value)
+    except ValueError:
+        raise click.BadParameter(f"{value!r} is not an ISO date-time, e.g. 2026-11-23T15:29:00") from None
+    return moment if moment.tzinfo is not None else moment.replace(tzinfo=UTC)

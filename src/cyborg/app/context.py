@@ -1,7 +1,9 @@
-"""Where module factories build: the data folder, the seeded randomness and the map.
+"""What module factories build with: the data folder, the seeded randomness, the map, the base's API.
 
-Kept apart from :mod:`cyborg.app.robot` so that the ROS node of one module imports neither
-the controller nor the emotion system nor the motivator.
+One :class:`BuildContext` serves the in-process robot (:mod:`cyborg.app.robot`) and each ROS
+node's part (:mod:`cyborg.app.parts`); it is what :class:`cyborg.modules.BuildContext` promises
+a module's factory. Kept apart from :mod:`cyborg.app.robot` so that the ROS node of one module
+imports neither the controller nor the emotion system nor the motivator.
 """
 
 from __future__ import annotations
@@ -13,24 +15,29 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from cyborg.modules.kind import CalendarEntry, KeepsCalendar, Listening, listening_of
+from cyborg.transport.topics import BaseApi
 
 if TYPE_CHECKING:
     from cyborg.app.config import LoadedConfig
     from cyborg.app.registry import KindRegistry
     from cyborg.maps import OccupancyMap
 
-__all__ = ["BuildPlace", "calendar_of", "heard_by"]
+__all__ = ["BuildContext", "calendar_of", "heard_by"]
 
 
 @dataclass
-class BuildPlace:
-    """What module factories may use besides their node (a :class:`~cyborg.modules.kind.BuildContext`)."""
+class BuildContext:
+    """What module factories may use besides their node (a :class:`cyborg.modules.BuildContext`)."""
 
     data_dir: Path
     rng: random.Random = field(default_factory=lambda: random.Random(0))
     map_path: Path | None = None
     heard: Callable[[], Listening] | None = field(default=None, repr=False)
     """Gathers what the configured modules listen for (called on the first :meth:`listening`)."""
+    resume: bool = True
+    """The controller takes over an emotion stored recently (``cyborg node`` without ``--fresh``)."""
+    base_api: BaseApi = BaseApi.ROSARNL
+    """The robot base's interface, unless a module's settings name one (nav2's on ROS 2)."""
     _map: OccupancyMap | None = field(default=None, repr=False)
     _listening: Listening | None = field(default=None, repr=False)
 

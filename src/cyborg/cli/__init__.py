@@ -1,8 +1,9 @@
-"""The ``cyborg`` command line: validate and draw machines, run the simulated robot, tools.
+"""The ``cyborg`` command line: one file per command group, each imported when it runs.
 
-Top of the import chain: it may use every layer below it, but imports each part only in the
-command that needs it, so that ``cyborg --help`` and the command tool (``cyborg say``) load
-click and an HTTP client only, and ``cyborg node`` only its own part (issue 13).
+``machine`` (validate, kinds, graph), ``sim``, ``ros`` (node, launch), ``tool`` (event, say,
+emotion, status), ``listen``, ``new`` and ``db``. Top of the import chain: it may use every layer
+below it, but a command imports only what it needs, so that ``cyborg --help`` loads click
+alone, the command tool (``cyborg say``) click and urllib, and ``cyborg node`` only its own part.
 """
 
 from __future__ import annotations
@@ -10,14 +11,10 @@ from __future__ import annotations
 import importlib
 import logging
 import sys
-from pathlib import Path
 
 import click
 
-from cyborg.errors import CyborgError
-from cyborg.interfaces.cli_common import check_modules, fail, load_config, packaged_config
-
-__all__ = ["cli", "main", "packaged_config"]
+__all__ = ["cli", "main"]
 
 
 class LazyGroup(click.Group):
@@ -59,29 +56,48 @@ class LazyGroup(click.Group):
     cls=LazyGroup,
     context_settings={"help_option_names": ["-h", "--help"]},
     lazy={
+        "validate": (
+            "cyborg.cli.machine:validate",
+            "Check a state machine YAML FILE; exit 0 if valid, 1 with the problems otherwise.",
+        ),
+        "kinds": (
+            "cyborg.cli.machine:kinds",
+            "List the module kinds this installation knows (built in or from installed packages).",
+        ),
+        "graph": ("cyborg.cli.machine:graph", "Draw the states and transitions of FILE with Graphviz."),
+        "event": ("cyborg.cli.tool:event_command", "Send event NAME to the controller."),
+        "say": ("cyborg.cli.tool:say_command", "Send TEXT as if speech-to-text heard it."),
+        "emotion": (
+            "cyborg.cli.tool:emotion_group",
+            "Set the robot's emotion, its PAD values, or switch the emotion system on/off.",
+        ),
+        "status": (
+            "cyborg.cli.tool:status_command",
+            "Show the previous state, event, current state, emotion and PAD values.",
+        ),
         "db": (
-            "cyborg.interfaces.db_cli:db_group",
+            "cyborg.cli.db:db_group",
             "Locations, calendar events and responses of the navigation module.",
         ),
         "listen": (
-            "cyborg.interfaces.cli_listen:listen",
+            "cyborg.cli.listen:listen",
             "Hear speech (offline) and print each sentence with its confidence; rejected ones are marked.",
         ),
         "new": (
-            "cyborg.interfaces.cli_new:new_group",
+            "cyborg.cli.new:new_group",
             "Start something new from a template: a behaviour module.",
         ),
         "sim": (
-            "cyborg.interfaces.cli_sim:sim",
+            "cyborg.cli.sim:sim",
             "Run the whole simulated robot in this process, with its API and dashboard.",
         ),
         "node": (
-            "cyborg.interfaces.cli_ros:node",
+            "cyborg.cli.ros:node",
             "Run one part of the robot as the ROS 1 node NAME (cyborg_controller, a module, a "
             "gatekeeper, cyborg_api, or cyborg_scenario with --script); with --ros2 as a ROS 2 node.",
         ),
         "launch": (
-            "cyborg.interfaces.cli_ros:launch_command",
+            "cyborg.cli.ros:launch_command",
             "Start the whole robot over ROS 1 (a master if none runs) or ROS 2 (--ros2), a process a part.",
         ),
     },
@@ -99,79 +115,6 @@ def cli(log_level: str) -> None:
         format="%(asctime)s %(levelname)-7s %(name)s: %(message)s",
         datefmt="%H:%M:%S",
     )
-
-
-@cli.command()
-@click.argument("file", type=click.Path(path_type=Path))
-def validate(file: Path) -> None:
-    """Check a state machine YAML FILE; exit 0 if valid, 1 with the problems otherwise.
-
-    With a modules: section it also warns about the robot as a whole: states no module serves,
-    resources granted to no module's node, and modules listening for the same phrase."""
-    from cyborg.app.checks import robot_warnings
-    from cyborg.app.registry import module_kinds
-
-    try:
-        loaded = load_config(file)
-        check_modules(loaded)
-        warnings = [*loaded.warnings, *robot_warnings(loaded, module_kinds())]
-    except CyborgError as exc:
-        fail(exc)
-        return
-    for warning in warnings:
-        click.secho(f"warning: {warning}", fg="yellow", err=True)
-    leaves = len(loaded.machine.leaves())
-    click.echo(f"{file}: valid ({leaves} states, initial {loaded.machine.initial!r})")
-
-
-@cli.command()
-@click.option("--markdown", is_flag=True, help="print each kind's settings as Markdown tables")
-def kinds(markdown: bool) -> None:
-    """List the module kinds this installation knows (built in or from installed packages)."""
-    from cyborg.app.kinds_doc import kinds_markdown
-    from cyborg.app.registry import module_kinds
-
-    registry = module_kinds()
-    try:
-        if markdown:
-            click.echo(kinds_markdown(registry), nl=False)
-            return
-        width = max(map(len, registry.names()), default=0)
-        for name in registry.names():
-            summary = registry.get(name).summary
-            click.echo(f"{name:<{width}}  {summary}  [{registry.origin(name)}]")
-    except CyborgError as exc:
-        fail(exc)
-
-
-@cli.command()
-@click.argument("file", type=click.Path(path_type=Path))
-@click.option(
-    "-o",
-    "--output",
-    type=click.Path(path_type=Path),
-    required=True,
-    help="out.svg, out.png, out.pdf or out.dot",
-)
-def graph(file: Path, output: Path) -> None:
-    """Draw the states and transitions of FILE with Graphviz."""
-    from cyborg.controller.graph import render
-
-    try:
-        render(load_config(file).machine, output)
-    except CyborgError as exc:
-        fail(exc)
-    click.echo(f"wrote {output}")
-
-
-def _add_tool_commands() -> None:
-    from cyborg.interfaces.command_tool import COMMANDS  # light: click and urllib
-
-    for command in COMMANDS:
-        cli.add_command(command)  # `db`, `sim`, `node` and `launch` are lazy: see the group's ``lazy``
-
-
-_add_tool_commands()
 
 
 def main() -> None:

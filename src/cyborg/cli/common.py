@@ -7,27 +7,23 @@ Light on purpose (click only): ``cyborg --help`` and the command tool import it.
 from __future__ import annotations
 
 import errno
+import functools
 import math
 import sys
+from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import click
 
 from cyborg.errors import CyborgError
 from cyborg.limits import MAX_SCRIPT_SECONDS, MAX_SPEED
+from cyborg.web.access import TOKEN_ENV, Access, allowed_origins
 
 if TYPE_CHECKING:
     from cyborg.app.config import LoadedConfig
 
 DEFAULT_CONFIG = "cyborg.yaml"
-
-
-def packaged_config(name: str) -> Path:
-    """Path of a configuration file shipped with the package (``src/cyborg/data``)."""
-    from importlib import resources
-
-    return Path(str(resources.files("cyborg") / "data" / name))
 
 
 def load_config(path: Path) -> LoadedConfig:
@@ -38,6 +34,9 @@ def load_config(path: Path) -> LoadedConfig:
 
 
 def load_or_default(path: Path | None) -> LoadedConfig:
+    """The configuration at ``path``, else the packaged Cyborg's (the demo when that is missing)."""
+    from cyborg.app.config import packaged_config
+
     if path is None:
         path = packaged_config(DEFAULT_CONFIG)
         if not path.exists():
@@ -130,3 +129,43 @@ def os_problem(exc: OSError) -> CyborgError:
     }
     fix = fixes.get(exc.errno or 0, "check the path")
     return CyborgError(f"{where}{exc.strerror or exc}; fix: {fix}")
+
+
+def access_options(command: Callable[..., None]) -> Callable[..., None]:
+    """``--token`` and ``--allow-origin`` for a command that serves the API; the command receives
+    ``access``, an :class:`Access`, instead."""
+
+    def origins(ctx: click.Context, param: click.Parameter, values: tuple[str, ...]) -> tuple[str, ...]:
+        try:
+            return allowed_origins(values)
+        except ValueError as exc:
+            raise click.BadParameter(str(exc)) from None
+
+    def token_value(ctx: click.Context, param: click.Parameter, value: str | None) -> str | None:
+        if value is not None and len(value.strip()) < 16:
+            raise click.BadParameter(
+                "a token shorter than 16 characters is easy to guess; fix: leave it out to get a "
+                'generated one, or make one with: python3 -c "import secrets; print(secrets.token_urlsafe(24))"'
+            )
+        return value.strip() if value else None
+
+    @click.option(
+        "--token",
+        envvar=TOKEN_ENV,
+        callback=token_value,
+        help=f"require this bearer token on the API (${TOKEN_ENV}); with a --host beyond loopback one is "
+        "generated and printed if not given",
+    )
+    @click.option(
+        "--allow-origin",
+        "allow_origin",
+        multiple=True,
+        callback=origins,
+        metavar="URL",
+        help="also accept pages and Host names of this origin, e.g. https://cyborg.example:443 (repeatable)",
+    )
+    @functools.wraps(command)
+    def wrapper(*args: Any, token: str | None, allow_origin: tuple[str, ...], **kwargs: Any) -> None:
+        command(*args, access=Access(token=token, allowed_origins=allow_origin), **kwargs)
+
+    return wrapper

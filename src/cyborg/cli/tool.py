@@ -1,125 +1,32 @@
-"""The command tool: talk to a running ``cyborg sim`` through its local HTTP API.
+"""The command tool: ``cyborg event``, ``say``, ``emotion`` and ``status`` for a running robot.
 
 ``cyborg event NAME``, ``cyborg say TEXT``, ``cyborg emotion set NAME``,
-``cyborg emotion values P A D``, ``cyborg emotion on|off`` and
-``cyborg status [--follow]`` (thesis 1.4 and 10.1). With ``--ros`` (``--ros2``) the same commands
-go over the ROS 1 (ROS 2) graph instead (:mod:`cyborg.interfaces.ros_tool`); ``--ros2`` typed in
-the main venv runs the command again in ``.venv-ros2``.
+``cyborg emotion values P A D``, ``cyborg emotion on|off`` and ``cyborg status [--follow]``
+(thesis 1.4 and 10.1) talk to the robot's local HTTP API (:mod:`cyborg.client.http`); with
+``--ros`` (``--ros2``) the same commands go over the ROS 1 (ROS 2) graph instead
+(:mod:`cyborg.client.ros`), and ``--ros2`` typed in the main venv runs the command again in
+``.venv-ros2``. Light: click and urllib only until a command runs over ROS.
 """
 
 from __future__ import annotations
 
-import contextlib
 import functools
-import json
 import math
 import sys
-import urllib.error
-import urllib.request
 from collections.abc import Callable
-from typing import Any, Protocol
+from typing import Any
 
 import click
 
+from cyborg.client.http import DEFAULT_URL, HttpLink, RobotLink
 from cyborg.errors import CyborgError
-from cyborg.interfaces.access import DEFAULT_PORT, TOKEN_ENV, client_headers
+from cyborg.web.access import TOKEN_ENV
 
-DEFAULT_URL = f"http://127.0.0.1:{DEFAULT_PORT}"
-
-
-class ToolError(CyborgError, click.ClickException):
-    """A request to the robot's API failed: printed as 'Error: ...', exit code 1."""
+__all__ = ["COMMANDS", "ToolError", "link_options"]
 
 
-def _request(base: str, path: str, body: dict[str, Any] | None = None, token: str | None = None) -> Any:
-    url = base.rstrip("/") + path
-    data = None if body is None else json.dumps(body).encode()
-    headers = {"Content-Type": "application/json", **client_headers(token)}
-    request = urllib.request.Request(url, data=data, headers=headers)
-    try:
-        with urllib.request.urlopen(request, timeout=5) as response:
-            return json.loads(response.read())
-    except urllib.error.HTTPError as exc:
-        try:
-            problem = json.loads(exc.read()).get("error", exc.reason)
-        except (json.JSONDecodeError, AttributeError):
-            problem = exc.reason
-        raise ToolError(f"the robot refused: {problem}") from None
-    except (urllib.error.URLError, ConnectionError, TimeoutError) as exc:
-        raise ToolError(
-            f"no robot answers at {base} ({getattr(exc, 'reason', exc)}); "
-            "fix: start one with `cyborg sim`, or pass --url"
-        ) from None
-
-
-def _warning(answer: Any) -> str | None:
-    """The robot's warning in a command's answer (e.g. that it cannot save its data), if any."""
-    warning = answer.get("warning") if isinstance(answer, dict) else None
-    return warning if isinstance(warning, str) else None
-
-
-class HttpLink:
-    """The robot's local HTTP API (``cyborg sim``, or the ``cyborg_api`` ROS node)."""
-
-    def __init__(self, url: str, token: str | None = None) -> None:
-        self.url = url
-        self.token = token
-
-    def close(self) -> None:
-        pass
-
-    def _call(self, path: str, body: dict[str, Any] | None = None) -> Any:
-        return _request(self.url, path, body, self.token)
-
-    def send_event(self, name: str) -> bool | None:
-        answer = self._call("/api/event", {"name": name})
-        return answer.get("is_transition") if isinstance(answer, dict) else None
-
-    def say(self, text: str) -> None:
-        self._call("/api/say", {"text": text})
-
-    def set_emotion(self, name: str) -> tuple[str, str | None]:
-        answer = self._call("/api/emotion/set", {"name": name})
-        emotion = answer.get("emotion") if isinstance(answer, dict) else None
-        return (emotion if isinstance(emotion, str) else name), _warning(answer)
-
-    def set_values(self, pleasure: float, arousal: float, dominance: float) -> str | None:
-        body = {"pleasure": pleasure, "arousal": arousal, "dominance": dominance}
-        return _warning(self._call("/api/emotion/values", body))
-
-    def switch(self, on: bool) -> str | None:
-        return _warning(self._call("/api/emotion/switch", {"on": on}))
-
-    def status(self) -> dict[str, Any]:
-        answer: dict[str, Any] = self._call("/api/status")
-        return answer
-
-    def follow(self, status: dict[str, Any], show: Callable[[dict[str, Any]], None]) -> None:
-        import asyncio
-
-        import aiohttp
-
-        try:
-            with contextlib.suppress(KeyboardInterrupt):
-                asyncio.run(_follow(self.url, status, show, self.token))
-        except aiohttp.WSServerHandshakeError as exc:
-            fix = f"pass --token or set ${TOKEN_ENV}" if exc.status == 401 else "check --url"
-            raise ToolError(f"the robot refused its live stream (HTTP {exc.status}); fix: {fix}") from None
-
-
-class RobotLink(Protocol):
-    """What the commands need of a robot: the HTTP API by default, the ROS graph with --ros/--ros2."""
-
-    def close(self) -> None: ...
-    def send_event(self, name: str) -> bool | None: ...
-    def say(self, text: str) -> None: ...
-    def set_emotion(self, name: str) -> tuple[str, str | None]:
-        """The emotion the robot calls ``name`` (an alias names its emotion), and any warning."""
-
-    def set_values(self, pleasure: float, arousal: float, dominance: float) -> str | None: ...
-    def switch(self, on: bool) -> str | None: ...
-    def status(self) -> dict[str, Any]: ...
-    def follow(self, status: dict[str, Any], show: Callable[[dict[str, Any]], None]) -> None: ...
+class ToolError(click.ClickException):
+    """A command to the robot failed: printed as 'Error: ...', exit code 1."""
 
 
 def link_options(command: Callable[..., None]) -> Callable[..., None]:
@@ -156,14 +63,13 @@ def link_options(command: Callable[..., None]) -> Callable[..., None]:
         if over_ros and over_ros2:
             raise click.UsageError("--ros and --ros2 exclude each other: the robot runs on one of them")
         if over_ros or over_ros2:
-            from cyborg.interfaces.ros_tool import RosLink
+            from cyborg.client.ros import RosLink
+            from cyborg.run.middleware import ROS1, ROS2
 
+            middleware = ROS2 if over_ros2 else ROS1
             try:
-                if over_ros2:
-                    from cyborg.interfaces.ros2_env import run_in_ros2_venv
-
-                    run_in_ros2_venv()  # returns only in a Python that has rclpy
-                link = RosLink(ros2=over_ros2)
+                middleware.enter()  # ROS 2 in the main venv: returns only in a Python that has rclpy
+                link = RosLink(middleware)
             except CyborgError as exc:
                 raise ToolError(str(exc)) from None
         else:
@@ -299,26 +205,6 @@ def status_command(follow: bool, link: RobotLink) -> None:
             sys.stdout.flush()
 
         link.follow(status, show)
-
-
-async def _follow(
-    url: str, status: dict[str, Any], show: Callable[[dict[str, Any]], None], token: str | None = None
-) -> None:
-    import aiohttp
-
-    ws_url = url.rstrip("/").replace("http", "ws", 1) + "/api/ws"
-    headers = client_headers(token)
-    async with aiohttp.ClientSession() as session, session.ws_connect(ws_url, headers=headers) as socket:
-        async for message in socket:
-            record = json.loads(message.data)
-            kind = record.get("type")
-            if kind == "state":
-                status.update(previous_state=record["from"], event=record["event"], state=record["to"])
-            elif kind == "emotion":
-                status.update({k: record[k] for k in ("emotion", "pleasure", "arousal", "dominance")})
-            else:
-                continue
-            show(status)
 
 
 COMMANDS = [event_command, say_command, emotion_group, status_command]

@@ -3,7 +3,7 @@
 The command tool (`cyborg event`, `cyborg say`, `cyborg emotion ...`,
 `cyborg status`) and the dashboard talk to it. It is a node on the robot's
 transport: commands become messages on the thesis's topics, and everything the
-robot does arrives as records (see :mod:`cyborg.sim.records`), kept in a ring
+robot does arrives as records (see :mod:`cyborg.observe.records`), kept in a ring
 buffer and streamed over a websocket. Bound to 127.0.0.1 unless told otherwise.
 """
 
@@ -24,13 +24,13 @@ from aiohttp import WSCloseCode, WSMsgType, web
 from cyborg.controller.machine import MachineSpec
 from cyborg.emotion.model import EmotionSettings
 from cyborg.errors import CyborgError
-from cyborg.interfaces.access import DEFAULT_PORT as DEFAULT_PORT
-from cyborg.interfaces.security import Access, Guard, needs_token, new_token
 from cyborg.limits import MAX_TEXT_LENGTH
-from cyborg.sim.records import Record, RecordStream
+from cyborg.observe.records import Record, RecordStream
 from cyborg.transport import topics
 from cyborg.transport.base import Node
 from cyborg.transport.messages import EmotionalFeedback, String
+from cyborg.web.access import DEFAULT_PORT as DEFAULT_PORT
+from cyborg.web.security import Access, Guard, needs_token, new_token
 
 log = logging.getLogger(__name__)
 
@@ -307,8 +307,8 @@ class RobotAPI:
         return web.json_response({"layout": layout, **info})
 
     async def _lay_out(self, machine: MachineSpec) -> tuple[bytes, str, dict[str, Any]]:
-        from cyborg.controller.graph import list_svg
-        from cyborg.controller.layout import draw, lay_out, machine_key, run_graphviz
+        from cyborg.drawing.graph import list_svg
+        from cyborg.drawing.layout import draw, lay_out, machine_key, run_graphviz
 
         key = machine_key(machine)
         if key in _DRAWINGS:
@@ -351,7 +351,7 @@ class RobotAPI:
         )
 
     async def get_openapi(self, request: web.Request) -> web.Response:
-        from cyborg.interfaces.openapi import OPENAPI
+        from cyborg.web.openapi import OPENAPI
 
         return web.json_response(OPENAPI)
 
@@ -381,7 +381,7 @@ class RobotAPI:
 
     @property
     def token(self) -> str | None:
-        """The bearer token every /api/ request needs, if any (see :mod:`cyborg.interfaces.security`)."""
+        """The bearer token every /api/ request needs, if any (see :mod:`cyborg.web.security`)."""
         return self.guard.access.token
 
     async def start(self, host: str = "127.0.0.1", port: int = DEFAULT_PORT) -> str:

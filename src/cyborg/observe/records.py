@@ -16,10 +16,10 @@ import math
 from collections.abc import Callable
 from typing import Any
 
-from cyborg.modules.speech import SPOKEN_TOPIC
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Node
 from cyborg.transport.messages import EmotionalState, PoseWithCovarianceStamped, String, SystemState
+from cyborg.transport.topics import SPOKEN_TOPIC
 
 Record = dict[str, Any]
 POSE_INTERVAL = 1.0

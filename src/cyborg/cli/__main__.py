@@ -1,0 +1,5 @@
+"""``python -m cyborg.cli``: the command line (how a launch starts its nodes)."""
+
+from cyborg.cli import main
+
+main()

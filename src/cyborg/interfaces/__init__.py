@@ -1,1 +1,0 @@
-"""User interfaces: the `cyborg` command line and the dashboard."""

@@ -1,0 +1,246 @@
+"""One part of the robot as one ROS node process (``cyborg node NAME``): build, wait, serve.
+
+:func:`run_node` runs in three steps, each its own function: :func:`build_node` joins the
+middleware's graph and builds the part (or the ``cyborg_scenario`` node) with the composition
+root (:mod:`cyborg.app.parts`), plus the ``/clock`` and controller-statistics publishers;
+:func:`await_start` waits for the topics' connections and for the launch's shared origin of
+virtual time (:mod:`cyborg.run.simtime`); :func:`serve_node` runs the part until SIGINT/SIGTERM
+(the ``cyborg_api`` part serves the HTTP API and dashboard, :mod:`cyborg.web.build`) and says
+with its exit code how it ended. Everything a node is told comes in one :class:`NodeOptions`.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import random
+import signal
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import click
+
+from cyborg.app.config import LoadedConfig
+from cyborg.app.context import BuildContext
+from cyborg.app.parts import API, Part, build_part
+from cyborg.app.tuning import freeze_built
+from cyborg.errors import CyborgError
+from cyborg.run.middleware import Middleware
+from cyborg.run.scenario import SCENARIO, ScenarioFiles, ScenarioNode
+from cyborg.run.simtime import CLOCK_TOPIC, SimTime, is_simulated_base, publish_clock, wait_for_epoch
+from cyborg.transport import topics
+from cyborg.transport.base import Publisher, Transport
+from cyborg.transport.clock import Clock, VirtualClock
+from cyborg.transport.messages import Clock as ClockMessage
+from cyborg.transport.messages import String
+from cyborg.web.access import DEFAULT_PORT, Access
+
+if TYPE_CHECKING:
+    from cyborg.web.api import RobotAPI
+
+__all__ = ["ApiOptions", "BuiltNode", "NodeOptions", "await_start", "build_node", "run_node", "serve_node"]
+
+log = logging.getLogger(__name__)
+
+CONNECT_TIMEOUT = 5.0  # real seconds a node waits for its topics' connections before it starts
+
+
+@dataclass(frozen=True)
+class ApiOptions:
+    """Where the ``cyborg_api`` part serves the HTTP API and dashboard, and who may use it."""
+
+    host: str = "127.0.0.1"
+    port: int = DEFAULT_PORT
+    access: Access | None = None
+
+
+@dataclass(frozen=True)
+class NodeOptions:
+    """Everything ``cyborg node`` (or a launch, through it) tells one node: built once, passed whole."""
+
+    config: LoadedConfig
+    data_dir: Path
+    map_path: Path | None = None
+    seed: int = 0
+    resume: bool = True
+    """The controller may take over a recently stored emotion (``--fresh`` turns it off)."""
+    time: SimTime = field(default_factory=SimTime)
+    publish_clock: bool | None = None
+    """Publish /clock (with a speed only); None: when the part is a simulated base."""
+    api: ApiOptions = field(default_factory=ApiOptions)
+    scenario: ScenarioFiles | None = None
+    """What ``cyborg_scenario`` plays; only that part reads it."""
+
+
+@dataclass
+class BuiltNode:
+    """A node's process after :func:`build_node`: its graph, clock and part, not yet started."""
+
+    name: str
+    middleware: Middleware
+    clock: Clock
+    transport: Transport
+    context: BuildContext
+    part: Part
+    scenario: ScenarioNode | None = None
+    clock_publisher: Publisher[ClockMessage] | None = None
+    stats_publisher: Publisher[String] | None = None
+
+    def close(self) -> None:
+        """Leave the graph and stop the clock."""
+        self.transport.close()
+        self.clock.close()
+
+
+def run_node(name: str, options: NodeOptions, middleware: Middleware) -> int:
+    """Run part ``name`` as the node of the same name until SIGINT/SIGTERM; return the exit code.
+
+    ``cyborg_scenario`` (with ``options.scenario``) plays its script and ends with it.
+    """
+    node = build_node(name, options, middleware)
+    try:
+        if not await_start(node, options.time):
+            return 0
+        return node.clock.run(serve_node(node, options))
+    finally:
+        node.close()
+
+
+def build_node(name: str, options: NodeOptions, middleware: Middleware) -> BuiltNode:
+    """Join ``middleware``'s graph as node ``name`` and build its part, not started yet."""
+    clock = options.time.make_clock()
+    transport = middleware.transport(clock, name, use_sim_time=options.time.virtual)
+    context = BuildContext(
+        data_dir=options.data_dir,
+        rng=random.Random(options.seed),
+        map_path=options.map_path,
+        resume=options.resume,
+        base_api=middleware.base_api,
+    )
+    node = BuiltNode(name, middleware, clock, transport, context, Part(name))
+    if name == SCENARIO:
+        if options.scenario is None:
+            raise CyborgError(f"{SCENARIO} plays a script; fix: give it --script FILE")
+        node.scenario = ScenarioNode(transport.node(SCENARIO), options.scenario)
+        node.part = Part(name, [node.scenario])
+    else:
+        node.part = build_part(name, options.config, transport, context)
+    publish = options.publish_clock
+    if publish is None:
+        publish = is_simulated_base(options.config, name)
+    if publish and options.time.virtual:
+        # Made now, so every node is connected when the time starts (they all wait for /clock).
+        node.clock_publisher = transport.node(f"{name}_clock").publisher(
+            CLOCK_TOPIC, ClockMessage, queue_size=1
+        )
+    if node.part.controller is not None:  # its counters, for the cyborg_api node's dashboard
+        node.stats_publisher = node.part.controller.node.publisher(
+            topics.CONTROLLER_STATS, String, latch=True
+        )
+    return node
+
+
+def await_start(node: BuiltNode, sim_time: SimTime) -> bool:
+    """Wait for the topics' connections, then for the shared origin of virtual time and its
+    moment; False when interrupted (Ctrl-C) meanwhile."""
+    missing = node.transport.wait_for_connections(CONNECT_TIMEOUT)
+    if missing:  # e.g. a node killed without leaving the graph: the node starts anyway
+        log.warning(
+            "%d connection(s) not made within %.0f s, whose first messages may be lost: %s",
+            len(missing),
+            CONNECT_TIMEOUT,
+            "; ".join(missing[:5]) + (" ..." if len(missing) > 5 else ""),
+        )
+    clock = node.clock
+    try:
+        rendezvous = sim_time.rendezvous
+        if rendezvous is not None:
+            assert isinstance(clock, VirtualClock)
+            clock.anchor(wait_for_epoch(rendezvous, node.name))
+        if isinstance(clock, VirtualClock) and clock.real_origin > time.time():
+            time.sleep(clock.real_origin - time.time())  # everyone starts at the origin
+    except KeyboardInterrupt:
+        return False
+    return True
+
+
+async def serve_node(node: BuiltNode, options: NodeOptions) -> int:
+    """Run the built node until SIGINT/SIGTERM (or its script's end); the process's exit code."""
+    stop = asyncio.Event()
+    loop = asyncio.get_running_loop()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        loop.add_signal_handler(sig, stop.set)
+    background: list[asyncio.Task[None]] = []
+    if node.clock_publisher is not None:
+        assert isinstance(node.clock, VirtualClock)
+        background.append(loop.create_task(publish_clock(node.clock_publisher, node.clock), name="clock"))
+    controller = node.part.controller
+    if node.stats_publisher is not None and controller is not None:
+        from cyborg.web.ros_view import publish_controller_stats
+
+        counters = publish_controller_stats(node.stats_publisher, controller)
+        background.append(loop.create_task(counters, name="controller stats"))
+    api = await _serve_api(node, options) if node.name == API else None
+    freeze_built()  # what the part built lives as long as the node: out of GC's way (app.tuning)
+    controller_task = controller.start() if controller is not None else None
+    click.echo(f"node {node.name} running", err=True)
+    if node.scenario is not None:
+        return await _play(node.scenario, stop, node.name)
+    waiter = asyncio.ensure_future(stop.wait())
+    await asyncio.wait(
+        {waiter, *([controller_task] if controller_task else [])}, return_when=asyncio.FIRST_COMPLETED
+    )
+    waiter.cancel()
+    code = 0
+    if controller_task is not None and controller_task.done():
+        # It logged why (critical). Leave, so that `cyborg launch` (or roslaunch's respawn) starts it again.
+        click.echo(f"node {node.name}: the controller stopped; ending this node with exit code 1", err=True)
+        code = 1
+    elif controller is not None:
+        await controller.stop()
+    if api is not None:
+        await api.stop()
+    return code
+
+
+async def _serve_api(node: BuiltNode, options: NodeOptions) -> RobotAPI:
+    """The HTTP API and dashboard over a mirror of the robot read from the graph."""
+    from cyborg.web.build import build_api, start_api
+    from cyborg.web.ros_view import remote_robot
+
+    config = options.config
+    api_node = node.transport.node(API)
+    has_base = any(
+        isinstance(m, dict) and m.get("kind") == "simulated_base" for m in config.model.modules.values()
+    )
+    mirror = remote_robot(api_node, config, node.context.occupancy_map() if has_base else None)
+    api = build_api(
+        api_node,
+        config,
+        mirror,
+        access=options.api.access,
+        extra_status=lambda: {"emotion_enabled": mirror.emotion_enabled()},
+    )
+    await start_api(
+        api,
+        options.api.host,
+        options.api.port,
+        lambda text, colour: click.secho(text, fg=colour, err=True),
+        token_given=options.api.access is not None and options.api.access.token is not None,
+    )
+    return api
+
+
+async def _play(scenario: ScenarioNode, stop: asyncio.Event, name: str) -> int:
+    run = asyncio.ensure_future(scenario.play())
+    waiter = asyncio.ensure_future(stop.wait())
+    await asyncio.wait({run, waiter}, return_when=asyncio.FIRST_COMPLETED)
+    waiter.cancel()
+    if not run.done():
+        run.cancel()
+        return 1
+    run.result()
+    click.echo(f"node {name}: script ended, {scenario.driver.count} records", err=True)
+    return 0

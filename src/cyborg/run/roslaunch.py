@@ -1,0 +1,32 @@
+"""A roslaunch file that starts the robot's nodes (``cyborg launch --write``), and the parts to start."""
+
+from __future__ import annotations
+
+import xml.sax.saxutils
+from pathlib import Path
+
+from cyborg.app.config import LoadedConfig
+from cyborg.app.parts import CONTROLLER, part_names
+
+__all__ = ["all_parts", "roslaunch_xml"]
+
+
+def roslaunch_xml(config_path: Path, parts: list[str], data_dir: Path) -> str:
+    """A roslaunch file starting the same nodes (for people who prefer roslaunch)."""
+    lines = [
+        "<launch>",
+        "  <!-- written by cyborg launch (write option): one node per part; the roslaunch node name is",
+        "       the part's, since roslaunch renames the node it starts and gatekeepers go by names -->",
+    ]
+    for name in parts:
+        fresh = " --fresh" if name == CONTROLLER else ""
+        args = xml.sax.saxutils.quoteattr(f"node {name} --config {config_path} --db {data_dir}{fresh}")
+        lines.append(
+            f'  <node name="{name}" pkg="cyborg_controller" type="cyborg" args={args} required="true" output="screen"/>'
+        )
+    lines.append("</launch>")
+    return "\n".join(lines) + "\n"
+
+
+def all_parts(config: LoadedConfig) -> list[str]:
+    return part_names(config)

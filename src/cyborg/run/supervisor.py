@@ -1,0 +1,248 @@
+"""``cyborg launch`` and ``cyborg sim --ros``: the whole robot as ROS nodes, one process per part.
+
+Each part runs as ``cyborg node NAME`` (:mod:`cyborg.run.node`) on the launch's middleware
+(:mod:`cyborg.run.middleware`), which prepares the graph first: ROS 1 starts a master when none
+answers at ``ROS_MASTER_URI`` and sets ``/use_sim_time`` with a speed; ROS 2 (``--ros2``, nodes
+in ``.venv-ros2``'s Python) has no master, and its nodes meet the launch in a folder. With a
+speed the launch fixes the shared origin of virtual time once every node is ready
+(:mod:`cyborg.run.simtime`). ``cyborg sim --ros --script FILE`` adds the ``cyborg_scenario``
+node (:mod:`cyborg.run.scenario`).
+
+``cyborg launch`` keeps the robot running when a node stops: it says so and starts that node again
+(as roslaunch's ``respawn``), after RESPAWN_DELAY seconds, doubled for each stop within
+RESPAWN_STEADY seconds of its start, up to RESPAWN_MAX_DELAY. The controller comes back without
+``--fresh``, so it resumes the emotion it stored. A roscore the launch started is started again on
+its port; every node registers again with it (:mod:`cyborg.transport.ros`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import subprocess
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+
+import click
+
+from cyborg.app.config import LoadedConfig
+from cyborg.app.parts import API, CONTROLLER
+from cyborg.errors import CyborgError
+from cyborg.run.middleware import ROS1, LaunchGraph, Middleware, exit_description
+from cyborg.run.simtime import EPOCH_MARGIN, READY_TIMEOUT, Rendezvous, clock_owner_of
+from cyborg.transport.clock import DEFAULT_VIRTUAL_START
+
+__all__ = ["Launch", "launch"]
+
+RESPAWN_DELAY = 1.0  # seconds before a stopped node is started again
+RESPAWN_STEADY = 10.0  # a node that ran this long before it stopped is started again after RESPAWN_DELAY
+RESPAWN_MAX_DELAY = 30.0  # a node stopping again and again waits at most this long
+
+
+@dataclass
+class Launch:
+    """The graph prepared by the middleware, then every part as its own ``cyborg node`` process.
+
+    With ``speed``: the parts share one origin of virtual time (fixed once all are ready) and the
+    clock publisher starts first. With ``respawn``: once started, a node that stops is started
+    again (see the module's doc).
+    """
+
+    config_path: Path
+    config: LoadedConfig
+    parts: list[str]
+    data_dir: Path
+    map_path: Path | None = None
+    port: int = 8642
+    echo: bool = True
+    speed: float | None = None
+    start: datetime = DEFAULT_VIRTUAL_START
+    seed: int = 0
+    extra_args: dict[str, list[str]] = field(default_factory=dict)
+    say: Callable[[str], None] = click.echo
+    processes: dict[str, subprocess.Popen[bytes]] = field(default_factory=dict)
+    respawn: bool = False
+    middleware: Middleware = ROS1
+    _graph: LaunchGraph | None = None
+    _rendezvous: Rendezvous | None = None
+    _epoch_argument: str | None = None
+    _clock_owner: str | None = None
+    _started_at: dict[str, float] = field(default_factory=dict)
+    _respawn_delay: dict[str, float] = field(default_factory=dict)
+    _respawn_at: dict[str, float] = field(default_factory=dict)
+
+    def command(self, name: str, clock_owner: str | None, *, fresh: bool = True) -> list[str]:
+        """The command line of part ``name``'s process."""
+        command = [
+            self.middleware.python(),
+            "-m",
+            "cyborg.cli",
+            "node",
+            name,
+            "--config",
+            str(self.config_path),
+            "--db",
+            str(self.data_dir),
+            "--seed",
+            str(self.seed),
+        ]
+        if self.map_path is not None:
+            command += ["--map", str(self.map_path)]
+        if name == API:
+            command += ["--port", str(self.port)]
+        if name == CONTROLLER and fresh:
+            command += ["--fresh"]  # a launch is a fresh start: neutral, emotion system on
+        command += self.middleware.node_arguments
+        if self.speed is not None:
+            assert self._epoch_argument is not None
+            command += [
+                "--speed",
+                repr(self.speed),
+                "--epoch",
+                self._epoch_argument,
+                "--start",
+                self.start.isoformat(),
+                "--publish-clock" if name == clock_owner else "--no-publish-clock",
+            ]
+        return command + self.extra_args.get(name, [])
+
+    def start_all(self) -> None:
+        """Prepare the graph, start every part, and with a speed fix the origin once all are ready."""
+        self._graph = self.middleware.launch_graph(self.data_dir, self.say)
+        self._rendezvous, self._epoch_argument = self._graph.open(self.speed)
+        if self.speed is not None:
+            self._clock_owner = clock_owner_of(self.config, self.parts)
+            self.parts.sort(
+                key=lambda name: name != self._clock_owner
+            )  # /clock first: the others wait for it
+        for name in self.parts:
+            self._spawn(name, fresh=True)
+        self.say(f"launched {len(self.processes)} nodes: {', '.join(self.parts)}")
+        self.say(
+            f"their warnings and errors show here, prefixed [node]; every log line is in "
+            f"{self.middleware.log_file('NODE').parent}/NODE.log"
+        )
+        if self.speed is not None:
+            self._start_virtual_time()
+
+    def _start_virtual_time(self) -> None:
+        assert self._rendezvous is not None and self._graph is not None
+        deadline = time.monotonic() + READY_TIMEOUT
+        while True:
+            ready = self._rendezvous.ready_names()
+            waiting = [name for name in self.parts if name not in ready]
+            if not waiting:
+                break
+            self.check_alive()
+            if time.monotonic() > deadline:
+                raise CyborgError(
+                    f"node(s) not ready within {READY_TIMEOUT:.0f} s: {', '.join(waiting)}; "
+                    "fix: check their output above"
+                )
+            time.sleep(0.05)
+        epoch = time.time() + EPOCH_MARGIN
+        self._rendezvous.set_epoch(epoch)
+        self._graph.origin_fixed(epoch)
+        self.say(
+            f"virtual time: {self.start.isoformat()} at speed {self.speed:g}, "
+            f"starting at {datetime.fromtimestamp(epoch, UTC):%H:%M:%S.%f} UTC"
+        )
+
+    def _spawn(self, name: str, *, fresh: bool) -> subprocess.Popen[bytes]:
+        process = subprocess.Popen(
+            self.command(name, self._clock_owner, fresh=fresh),
+            stdout=None if self.echo else subprocess.DEVNULL,
+            env=self.middleware.environment(),
+        )
+        self.processes[name] = process
+        self._started_at[name] = time.monotonic()
+        return process
+
+    def supervise(self, ignore: Sequence[str] = ()) -> None:
+        """Start again what the graph needs (a master the launch started) and each node that
+        stopped (not ``ignore``)."""
+        if self._graph is not None:
+            self._graph.keep_up()
+        now = time.monotonic()
+        for name, process in list(self.processes.items()):
+            if name in ignore or process.poll() is None:
+                continue
+            due = self._respawn_at.get(name)
+            if due is None:
+                ran = now - self._started_at.get(name, now)
+                previous = self._respawn_delay.get(name)
+                steady = previous is None or ran >= RESPAWN_STEADY
+                delay = RESPAWN_DELAY if previous is None or steady else min(previous * 2, RESPAWN_MAX_DELAY)
+                self._respawn_delay[name], self._respawn_at[name] = delay, now + delay
+                self.say(
+                    f"node {name} stopped ({exit_description(process.returncode)}) after {ran:.1f} s; "
+                    f"the robot runs on; starting {name} again in {delay:g} s"
+                    + ("" if steady else " (it stopped soon after its last start: see its output above)")
+                )
+            elif now >= due:
+                del self._respawn_at[name]
+                started = self._spawn(name, fresh=False)
+                resumes = " without --fresh: it resumes the emotion it stored" if name == CONTROLLER else ""
+                self.say(f"started node {name} again (pid {started.pid}){resumes}")
+
+    def check_alive(self, ignore: Sequence[str] = ()) -> None:
+        """Raise a :class:`CyborgError` naming the nodes that stopped (not ``ignore``)."""
+        failed = [n for n, p in self.processes.items() if n not in ignore and p.poll() is not None]
+        if failed:
+            raise CyborgError(f"node(s) stopped: {', '.join(failed)}; the whole robot is stopped too")
+
+    def wait(self, *, until: str | None = None, timeout: float | None = None) -> int | None:
+        """Until node ``until`` ends (its exit code), ``timeout`` real seconds pass or (without
+        ``respawn``) another node stops (an error)."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while True:
+            if until is not None and self.processes[until].poll() is not None:
+                return self.processes[until].returncode
+            if self.respawn:
+                self.supervise(ignore=[until] if until else [])
+            else:
+                self.check_alive(ignore=[until] if until else [])
+            if deadline is not None and time.monotonic() > deadline:
+                return None
+            time.sleep(0.1)
+
+    def stop_all(self) -> None:
+        """SIGINT every node (killed after 10 s), then put the graph back as it was."""
+        try:
+            for process in self.processes.values():
+                if process.poll() is None:
+                    process.send_signal(signal.SIGINT)
+            for process in self.processes.values():
+                with contextlib.suppress(subprocess.TimeoutExpired):
+                    process.wait(timeout=10)
+                if process.poll() is None:
+                    process.kill()
+                    process.wait(timeout=5)
+        finally:
+            if self._graph is not None:
+                self._graph.close()
+
+
+def launch(robot: Launch, *, duration: float | None = None) -> None:
+    """Run ``robot`` (respawning its nodes) until SIGINT/SIGTERM or ``duration`` seconds
+    (virtual with a speed), then stop it."""
+
+    def stop_on_term(signum: int, frame: object) -> None:
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, stop_on_term)  # `kill` and `timeout` stop the nodes too
+    # Ctrl-C stops the robot even when the launch inherited SIGINT ignored (a script's background
+    # job, nohup): Python then leaves it ignored, and the launch could only be killed.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    robot.respawn = True
+    try:
+        robot.start_all()
+        real_duration = None if duration is None else duration / (robot.speed or 1.0)
+        robot.wait(timeout=real_duration)
+    except KeyboardInterrupt:
+        click.echo("stopping")
+    finally:
+        robot.stop_all()
