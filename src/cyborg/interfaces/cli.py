@@ -2,7 +2,7 @@
 
 Top of the import chain: it may use every layer below it, but imports each part only in the
 command that needs it, so that ``cyborg --help`` and the command tool (``cyborg say``) load
-click and an HTTP client only, and ``cyborg node`` only its own part (issue 13).
+click and an HTTP client only, and ``cyborg node`` only its own part.
 """
 
 from __future__ import annotations
