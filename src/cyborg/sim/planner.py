@@ -67,7 +67,7 @@ class RoutePlanner:
 
     A route is the A* grid path (diagonal steps cost as much as straight ones)
     pulled taut; on Glassgården it is on average 0.2 % and at worst 11 % longer
-    than a true-Euclidean grid search would give (docs/benchmarks.md, "Route planning on the real
+    than a true-Euclidean grid search would give (docs/benchmarks-history.md, "Route planning on the real
     Glassgården map").
 
     ``keep_out`` replaces the map's own keep-out zones when given. The robot's
