@@ -1,4 +1,4 @@
-"""The controller's loop with a machine of 5,000 states (issue 18): handovers, garbage collection and
+"""The controller's loop with a machine of 5,000 states: handovers, garbage collection and
 what the dashboard polls.
 
 Builds the whole in-process robot of a generated machine (cyborg.testing.machines.structured: a hub,

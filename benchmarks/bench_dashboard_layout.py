@@ -1,11 +1,11 @@
-"""Benchmark (not a test): drawing the state machine as it grows (issue 16).
+"""Benchmark (not a test): drawing the state machine as it grows.
 
 For structured machines (superstates of 5-20 states) and random ones at 17, 100, 1,000 and 5,000
 states: the time and peak memory of the layout one superstate at a time plus Graphviz's drawing
 (each in its own process, so its peak RSS is its own and a runaway one is killed at the timeout),
 the old one-shot ``dot`` on the same machine for comparison (smaller sizes only), and the
 dashboard's first paint in headless Chromium (page load until the graph is drawn with its
-states marked). Prints medians as Markdown rows for docs/benchmarks.md.
+states marked). Prints medians as Markdown rows for docs/benchmarks-history.md.
 
     .venv/bin/python benchmarks/bench_dashboard_layout.py [--repeats 3] [--no-browser]
 """

@@ -1,4 +1,4 @@
-"""Footprint of the robot's processes (issue 13), beside a bare rospy node measured in the same run.
+"""Footprint of the robot's processes, beside a bare rospy node measured in the same run.
 
 * floor: a plain python script (this venv's python) that does ``rospy.init_node`` and serves one
   ``actionlib.SimpleActionServer`` on ``cyborg_controller/StateMachine``; its RSS once serving.

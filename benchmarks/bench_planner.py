@@ -6,8 +6,8 @@
   p50, p95, max and count, for routes found and for pairs refused (different floors).
 
 With scikit-image installed it also times ``skimage.graph.MCP_Geometric`` on the same
-pairs, as the reference for route length. Prints a markdown table (paste it into
-docs/benchmarks.md, section "Route planning"); with --write also saves it to docs/bench-planner.md.
+pairs, as the reference for route length. Prints a markdown table (a new round for
+docs/benchmarks-history.md, section "Route planning"); with --write also saves it to docs/bench-planner.md.
 
 Run: .venv/bin/python benchmarks/bench_planner.py
 """

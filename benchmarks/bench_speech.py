@@ -1,4 +1,4 @@
-"""Speech recognition (issue 15): accuracy on synthesised speech and end-of-speech -> /text_from_speech latency.
+"""Speech recognition: accuracy on synthesised speech and end-of-speech -> /text_from_speech latency.
 
 Usage: .venv/bin/python benchmarks/bench_speech.py
 

@@ -46,9 +46,12 @@ def module_name(path: Path) -> str:
 
 
 def package_of(module: str) -> str:
-    """``cyborg.navigation.module`` -> ``navigation``; ``cyborg.errors`` -> ``errors``."""
+    """``cyborg.navigation.module`` -> ``navigation``; ``cyborg.errors`` -> ``errors``.
+
+    ``cyborg`` itself and ``cyborg.__version__`` (a string, importing nothing) are in no layer: "".
+    """
     parts = module.split(".")
-    return parts[1] if len(parts) > 1 else ""
+    return parts[1] if len(parts) > 1 and parts[1] != "__version__" else ""
 
 
 def imports_of(path: Path) -> Iterator[tuple[int, str]]:

@@ -6,4 +6,6 @@ imports flow through them, are in ``docs/architecture.md`` (``tests/test_layers.
 enforces them).
 """
 
-__version__ = "0.1.0"
+from cyborg.__version__ import __version__
+
+__all__ = ["__version__"]

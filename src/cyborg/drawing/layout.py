@@ -1,7 +1,7 @@
 """Lay out a state machine of any size with Graphviz, one superstate at a time.
 
 Graphviz's ``dot`` lays a whole machine with clusters out in one go, and that grows much faster
-than the machine (minutes at 100 states, gigabytes at 1,000; docs/benchmarks.md). A superstate is
+than the machine (minutes at 100 states, gigabytes at 1,000; docs/benchmarks-history.md). A superstate is
 a box whose inside does not depend on the outside, so here each superstate's contents are laid out
 on their own (a *block*: its substates, superstates inside it as boxes of the size their own block
 needs) and the blocks are put together: the innermost first, all blocks of one depth in one ``dot``
@@ -53,13 +53,13 @@ LABEL = 24.0  # points of a superstate's title line
 CHAR = 8.0  # points per character of a superstate's title, for its width
 # An arrow's label lists up to this many events, one a line; with more it counts them ("5 events"),
 # all of them in its tooltip. One long line of events made the shipped machine's drawing five times
-# as wide as high and its names unreadable at first view (docs/benchmarks.md).
+# as wide as high and its names unreadable at first view (docs/benchmarks-history.md).
 MAX_LABEL_EVENTS = 2
 # A block with more arrows than this (per state in it) is dense: only each state's first arrow
 # places the states, and the others are drawn straight and unlabelled (their events in a tooltip).
 DENSE_PER_STATE = 2.0
 # Per block: a layered layout, crossing minimisation and network simplex bounded, so a dense
-# block cannot take minutes (measured in docs/benchmarks.md, "The dashboard for a robot that grows");
+# block cannot take minutes (docs/benchmarks-history.md, "Drawing the state machine as it grows");
 # states and ranks closer than dot's defaults (0.25 and 0.5 inches).
 DOT_ARGS = [
     "-Gmclimit=0.5",

@@ -36,7 +36,7 @@ SAMPLE_RATE = 16000
 """Samples per second of the audio the recogniser takes (16-bit mono)."""
 DEFAULT_MIN_CONFIDENCE = 0.0
 """The whole-sentence test does the rejecting; a posterior threshold on top cost right sentences
-more than it saved (docs/benchmarks.md, "Speech recognition")."""
+more than it saved (docs/benchmarks-history.md, "Speech recognition")."""
 BACKGROUND_WORDS = 1000
 """How many common English words compete with the grammar (the rejection's "anything else")."""
 GRAMMAR_WEIGHT = 1000

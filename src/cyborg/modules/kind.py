@@ -1,13 +1,7 @@
 """What a module kind is: its settings, its factory, and the contract of what it builds.
 
-A *kind* is what a block of the YAML's ``modules:`` section names with ``kind:``. Each
-kind lives beside its module's code as a :class:`ModuleKind` and is registered through
-the ``cyborg.module_kinds`` entry-point group, so a package installed next to this one
-adds kinds exactly like the built-in ones::
-
-    # pyproject.toml of a student's package
-    [project.entry-points."cyborg.module_kinds"]
-    greeter = "greeter.module:KIND"
+A *kind* is what a block of the YAML's ``modules:`` section names with ``kind:``; how one is
+registered and found: ``docs/modules.md``, "How a kind is found".
 
 The composition root (:mod:`cyborg.app`) validates a block against ``settings``, then calls
 ``build`` with the module's own node, the validated settings and a :class:`BuildContext`.

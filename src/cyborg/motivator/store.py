@@ -12,9 +12,9 @@ on a busy disk); what waits is latest-value-wins, so a burst of saves is one com
 ``commit_window`` (the composition root gives ``COMMIT_WINDOW``, 20 ms of real time, only to a
 virtual clock that runs as fast as it can) the thread starts a commit that long after the first
 save that waits for it, so the saves of that moment share it: at most 50 commits a second however
-fast the clock runs (issue 18: a simulated day made ~1,200 commits, each taking the interpreter's
-lock from the loop). Without one (a real robot, ROS launches) each save is committed at once, so a
-crash loses at most the write in flight. Reads of those values first wait for the writes queued
+fast the clock runs (each commit takes the interpreter's lock from the loop). Without one (a real
+robot, ROS launches) each save is committed at once, so a crash loses at most the write in
+flight. Reads of those values first wait for the writes queued
 before them (without waiting out the window), and closing writes everything.
 
 A missing file is created with defaults (events seeded from the caller's list);

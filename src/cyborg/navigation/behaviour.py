@@ -146,7 +146,7 @@ def plan(
 
 
 def should_stop_wandering(emotion: str) -> bool:
-    """Wandering ends once the robot is no longer bored, unconcerned or curious (issue; thesis 11.3.1).
+    """Wandering ends once the robot is no longer bored, unconcerned or curious (thesis 11.3.1).
 
     It ends when the robot feels something else: elated, angry, puzzled, ... ``neutral`` does
     not end it: it is no emotion of its own but the region near no prototype (the threshold of

@@ -417,7 +417,7 @@ class SimulatedBase:
 
 START_PLACES = ("information desk", "info")
 """Named goals the robot starts at when the map has one: the Cyborg's post is the information desk
-(issue; thesis 10.2.1 obs. 0, "The Cyborg is located at the information desk")."""
+(thesis 10.2.1 obs. 0, "The Cyborg is located at the information desk")."""
 
 
 def _default_start(occupancy_map: OccupancyMap) -> NamedPose | Point:

@@ -6,11 +6,11 @@ every wall and keep-out zone by the robot's radius and labels the connected
 free areas; a query then asks ``pyastar2d`` (A* in C++) for a grid path and
 pulls it taut into a few straight, collision-free legs. Pure: no I/O, no clock.
 
-Memory (issue 13): the planner keeps two grids of one byte a cell, ``inflated``
+Memory: the planner keeps two grids of one byte a cell, ``inflated``
 and the free-area labels (two bytes a cell beyond 255 areas). Inflating is a
 boolean dilation by a disc (a few shifted ORs, no distance transform), and the
 A* weights, cut to the free area's bounding box, are kept for the area searched last only
-(issue 18: making them took a quarter of each search's time; the peak is the same).
+(making them again for every search would cost about a quarter of its time; the peak is the same).
 """
 
 from __future__ import annotations
@@ -67,7 +67,7 @@ class RoutePlanner:
 
     A route is the A* grid path (diagonal steps cost as much as straight ones)
     pulled taut; on Glassgården it is on average 0.2 % and at worst 11 % longer
-    than a true-Euclidean grid search would give (docs/benchmarks.md, "Route planning on the real
+    than a true-Euclidean grid search would give (docs/benchmarks-history.md, "Route planning on the real
     Glassgården map").
 
     ``keep_out`` replaces the map's own keep-out zones when given. The robot's

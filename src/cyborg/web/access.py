@@ -3,7 +3,7 @@ policy (token, allowed origins, limits), the client's headers and what a server 
 
 Kept apart from :mod:`cyborg.web.security` (the server's checks, on aiohttp) so that the
 command line and the command tool import neither aiohttp nor yarl: ``cyborg --help`` and
-``cyborg say`` stay quick (issue 13).
+``cyborg say`` stay quick.
 """
 
 from __future__ import annotations
