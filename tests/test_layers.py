@@ -186,3 +186,81 @@ def test_the_doc_lists_the_same_layers() -> None:
 def test_the_imports_the_review_found_would_fail(importer: str, imported: str) -> None:
     """The imports issue 13's review listed (in their new homes) run against the layers."""
     assert LEVEL[package_of(imported)] > LEVEL[package_of(importer)]
+
+
+def third_party_imports(path: Path) -> Iterator[tuple[int, str]]:
+    """(line, module) of every absolute import of ``path`` outside this package."""
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                yield node.lineno, alias.name
+        elif isinstance(node, ast.ImportFrom) and not node.level and node.module:
+            yield node.lineno, node.module
+
+
+OWNERS = {
+    "aiohttp": {"web", "client"},  # the server in web/, a websocket client in client/
+    "rospy": {"transport"},
+    "rclpy": {"transport"},
+    "actionlib": {"transport"},
+    "rospkg": {"transport", "run"},  # ROS 1's log folder, for the middleware's log_file
+    "click": {"cli", "run"},  # run/ prints a node's state as the command line does
+}
+"""Which packages may import a framework: each one's code sits behind one boundary."""
+
+
+def test_frameworks_are_imported_only_behind_their_boundary() -> None:
+    wrong = []
+    for path in sorted(SRC.rglob("*.py")):
+        own = package_of(module_name(path))
+        for line, name in third_party_imports(path):
+            owners = OWNERS.get(name.split(".")[0])
+            if owners is not None and own not in owners:
+                wrong.append(f"{module_name(path)}:{line} imports {name} (only {sorted(owners)} may)")
+    assert wrong == [], "\n".join(wrong)
+
+
+def test_aiohttp_serves_only_from_web() -> None:
+    wrong = [
+        f"{module_name(path)}:{line}"
+        for path in sorted(SRC.rglob("*.py"))
+        for line, name in third_party_imports(path)
+        if name.startswith("aiohttp")
+        and package_of(module_name(path)) != "web"
+        and _imports_server(path, line)
+    ]
+    assert wrong == [], "aiohttp's server outside cyborg.web: " + ", ".join(wrong)
+
+
+def _imports_server(path: Path, line: int) -> bool:
+    text = path.read_text(encoding="utf-8").splitlines()[line - 1]
+    return "web" in text.split("import", 1)[-1] or "aiohttp.web" in text
+
+
+MIDDLEWARE_AWARE = {"run", "transport"}
+"""Only these packages may ask which ROS the robot runs on."""
+
+
+def test_no_middleware_switch_outside_run_and_the_transports() -> None:
+    """The middleware is a strategy object (``cyborg.run.middleware``): no ``ros2`` flag is passed
+    through other layers, and nothing else asks ``ros_version``."""
+    wrong = []
+    for path in sorted(SRC.rglob("*.py")):
+        if package_of(module_name(path)) in MIDDLEWARE_AWARE:
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.arg) and node.arg in ("ros2", "ros_version"):
+                wrong.append(f"{module_name(path)}:{node.lineno} parameter {node.arg}")
+            elif isinstance(node, ast.Attribute) and node.attr in ("ros2", "ros_version"):
+                wrong.append(f"{module_name(path)}:{node.lineno} .{node.attr}")
+            elif isinstance(node, ast.keyword) and node.arg in ("ros2", "ros_version"):
+                wrong.append(f"{module_name(path)}:{node.lineno} {node.arg}=")
+    assert wrong == [], "\n".join(wrong)
+
+
+def test_the_boundary_checks_see_a_violation() -> None:
+    """The AST walks find what they look for (a check that could not fail proves nothing)."""
+    tree = ast.parse("def f(ros2: bool) -> None:\n    node.ros_version\n    g(ros2=True)\n")
+    found = [n for n in ast.walk(tree) if isinstance(n, ast.arg | ast.Attribute | ast.keyword)]
+    names = {getattr(n, "arg", None) or getattr(n, "attr", None) for n in found}
+    assert {"ros2", "ros_version"} <= names

@@ -247,11 +247,11 @@ def launch_command(
         fail(exc)
 
 
-def _middleware(ros2: bool) -> Middleware:
-    """``--ros2`` picks ROS 2; without it, ROS 1."""
+def _middleware(flag: bool) -> Middleware:
+    """``--ros2`` (``flag``) picks ROS 2; without it, ROS 1."""
     from cyborg.run.middleware import ROS1, ROS2
 
-    return ROS2 if ros2 else ROS1
+    return ROS2 if flag else ROS1
 
 
 def parse_epoch(value: str | None) -> float | str | None:
