@@ -9,7 +9,6 @@ launch file `cyborg launch --write` all find it through its entry point.
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 import sys
 from pathlib import Path
@@ -18,8 +17,7 @@ import pytest
 
 from cyborg.app.registry import ENTRY_POINT_GROUP, KindRegistry
 from cyborg.errors import ConfigError
-
-CYBORG = Path(sys.executable).with_name("cyborg")
+from tests.support import tools
 
 GREETER = '''
 """A greeter module: answers "good morning" (a student's package, not part of cyborg)."""
@@ -124,10 +122,8 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def cyborg(site: Path, *args: str | Path, cwd: Path) -> subprocess.CompletedProcess[str]:
-    env = {**os.environ, "PYTHONPATH": str(site)}
-    return subprocess.run(
-        [str(CYBORG), *map(str, args)], env=env, cwd=cwd, capture_output=True, text=True, timeout=120
-    )
+    """The installed ``cyborg`` with the greeter's folder first on PYTHONPATH."""
+    return tools.cyborg(*args, env=tools.pythonpath(site), cwd=cwd, script=True)
 
 
 def test_validate_knows_the_installed_kind_and_its_settings(site: Path, tmp_path: Path) -> None:
@@ -146,9 +142,7 @@ def test_validate_knows_the_installed_kind_and_its_settings(site: Path, tmp_path
 def test_without_the_package_the_kind_is_unknown_and_the_error_says_how_to_get_it(tmp_path: Path) -> None:
     config = tmp_path / "greeter.yaml"
     config.write_text(CONFIG)
-    result = subprocess.run(
-        [str(CYBORG), "validate", str(config)], capture_output=True, text=True, cwd=tmp_path
-    )
+    result = tools.cyborg("validate", config, cwd=tmp_path, script=True)
     assert result.returncode == 1
     assert "module 'greeter': unknown kind 'greeter'" in result.stderr and "pip install" in result.stderr
 
@@ -160,7 +154,9 @@ def test_a_scenario_runs_the_installed_module(site: Path, tmp_path: Path) -> Non
     script.write_text(SCRIPT)
     transcript = tmp_path / "out.jsonl"
     result = cyborg(
-        site, "sim", "--config", config, "--script", script, "--transcript", transcript, cwd=tmp_path
+        site,
+        *("sim", "--config", config, "--script", script, "--speed", "max", "--transcript", transcript),
+        cwd=tmp_path,
     )
     assert result.returncode == 0, result.stderr
     records = [json.loads(line) for line in transcript.read_text().splitlines()]

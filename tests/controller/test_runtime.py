@@ -11,6 +11,7 @@ import pytest
 from cyborg.app.config import parse_config
 from cyborg.controller.runtime import Controller
 from cyborg.modules.behaviour import Abort, BehaviourModule, GoalContext
+from cyborg.testing import wait_until
 from cyborg.transport import topics
 from cyborg.transport.base import GoalStatus, MessageInfo, ServerGoalHandle
 from cyborg.transport.clock import VirtualClock
@@ -93,9 +94,7 @@ def setup(clock: VirtualClock, **kw: Any) -> tuple[EmbeddedTransport, Controller
 async def until(clock: VirtualClock, condition: Callable[[], bool], timeout: float = 5.0) -> float:
     """Seconds until ``condition`` holds, polled every millisecond; fails after ``timeout`` (virtual) s."""
     start = clock.monotonic()
-    while not condition():
-        assert clock.monotonic() - start < timeout, f"condition not met within {timeout} s"
-        await clock.sleep(0.001)
+    assert await wait_until(condition, clock, timeout=timeout, interval=0.001), f"not met within {timeout} s"
     return clock.monotonic() - start
 
 

@@ -7,12 +7,12 @@ import logging
 from typing import Any
 
 import pytest
-from test_runtime import MACHINE, Modules, Recorder
 
 from cyborg.app.config import parse_config
 from cyborg.controller.runtime import Controller
 from cyborg.transport.clock import VirtualClock
 from cyborg.transport.embedded import EmbeddedTransport
+from tests.controller.test_runtime import MACHINE, Modules, Recorder
 
 
 def test_a_failing_set_param_is_logged_and_the_state_is_entered_anyway(

@@ -17,6 +17,10 @@ from cyborg.app.robot import Robot, build_robot
 from cyborg.app.view import BaseStatus
 from cyborg.emotion.model import EmotionSettings
 from cyborg.emotion.system import EmotionSystem
+from cyborg.maps import Cell, KeepOutZone, NamedPose, OccupancyMap
+from cyborg.modules.behaviour import HEARTBEAT_SECONDS
+from cyborg.transport import topics
+from cyborg.transport.messages import String
 from cyborg.web.api import RobotAPI
 from cyborg.web.dashboard import (
     MAP_COLOURS,
@@ -28,12 +32,7 @@ from cyborg.web.dashboard import (
     route_points,
 )
 from cyborg.web.ros_view import remote_robot
-from cyborg.maps import Cell, KeepOutZone, NamedPose, OccupancyMap
-from cyborg.modules.behaviour import HEARTBEAT_SECONDS
-from cyborg.transport import topics
-from cyborg.transport.clock import RealClock
-from cyborg.transport.embedded import EmbeddedTransport
-from cyborg.transport.messages import String
+from tests.support.api import real_time, served
 
 MACHINE = """
 initial: idle
@@ -82,36 +81,29 @@ def serve(tmp_path: Path, base: object | None, check: Callable[[Fetch, Robot], A
     """Start a robot with the dashboard on a free port, run ``check`` against it, stop everything."""
     config_path = tmp_path / "machine.yaml"
     config_path.write_text(MACHINE)
-    clock = RealClock()
-    transport = EmbeddedTransport(clock)
-    robot = build_robot(load_config(config_path), transport, data_dir=tmp_path / "data")
-    if base is not None:
-        robot.components["rosarnl_node"] = base
+    with real_time() as (clock, transport):
+        robot = build_robot(load_config(config_path), transport, data_dir=tmp_path / "data")
+        if base is not None:
+            robot.components["rosarnl_node"] = base
 
-    async def main() -> None:
-        api = RobotAPI(transport.node("cyborg_api"), machine=robot.config.machine)
-        register(api, robot)
-        url = (await api.start("127.0.0.1", 0)).rstrip("/")
-        robot.start()
-        async with ClientSession() as session:
+        async def main() -> None:
+            api = RobotAPI(transport.node("cyborg_api"), machine=robot.config.machine)
+            register(api, robot)
+            async with served(api) as url, ClientSession() as session:
+                robot.start()
 
-            async def fetch(path: str) -> tuple[int, Any]:
-                async with session.get(url + path) as response:
-                    if response.content_type == "application/json":
-                        return response.status, await response.json()
-                    return response.status, await response.read()
+                async def fetch(path: str) -> tuple[int, Any]:
+                    async with session.get(url + path) as response:
+                        if response.content_type == "application/json":
+                            return response.status, await response.json()
+                        return response.status, await response.read()
 
-            try:
-                await check(fetch, robot)
-            finally:
-                await robot.controller.stop()
-                await api.stop()
+                try:
+                    await check(fetch, robot)
+                finally:
+                    await robot.controller.stop()
 
-    try:
         clock.run(main())
-    finally:
-        transport.shutdown()
-        clock.close()
 
 
 def read_png(data: bytes) -> tuple[np.ndarray[Any, Any], list[tuple[int, int, int, int]]]:
@@ -282,17 +274,14 @@ def test_under_ros_the_emotion_switch_is_read_from_the_emotion_systems_parameter
     config_path = tmp_path / "machine.yaml"
     config_path.write_text(MACHINE)
     config = load_config(config_path)
-    clock = RealClock()
-    transport = EmbeddedTransport(clock)
+    with real_time() as (clock, transport):
 
-    async def main() -> None:
-        node = transport.node("cyborg_api")
-        api = RobotAPI(node, machine=config.machine)
-        register(api, remote_robot(node, config, None))
-        url = (await api.start("127.0.0.1", 0)).rstrip("/")
-        switch = transport.node("rostopic_pub").publisher(topics.EMOTIONAL_CONTROLLER, String)
-        try:
-            async with ClientSession() as session:
+        async def main() -> None:
+            node = transport.node("cyborg_api")
+            api = RobotAPI(node, machine=config.machine)
+            register(api, remote_robot(node, config, None))
+            switch = transport.node("rostopic_pub").publisher(topics.EMOTIONAL_CONTROLLER, String)
+            async with served(api) as url, ClientSession() as session:
 
                 async def enabled(expected: bool | None) -> None:
                     for _ in range(100):
@@ -314,11 +303,5 @@ def test_under_ros_the_emotion_switch_is_read_from_the_emotion_systems_parameter
                 async with session.post(url + "/api/emotion/switch", json={"on": True}) as response:
                     assert response.status == 200
                 await enabled(True)  # the API's own command counts as well
-        finally:
-            await api.stop()
 
-    try:
         clock.run(main())
-    finally:
-        transport.shutdown()
-        clock.close()

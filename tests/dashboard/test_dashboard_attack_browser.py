@@ -21,7 +21,8 @@ from typing import Any
 
 import pytest
 from playwright.sync_api import Browser, expect
-from test_dashboard_browser import (  # the dashboard tests' robot, browser and page helpers
+
+from tests.dashboard.test_dashboard_browser import (  # the dashboard tests' robot, browser and page helpers
     CHROMIUM,
     CHROMIUM_ARGS,
     CYBORG,

@@ -12,7 +12,9 @@ from pathlib import Path
 import pytest
 import yaml
 from playwright.sync_api import Browser, Page, expect
-from test_dashboard_browser import (  # the dashboard tests' robot, browser and page helpers
+
+from cyborg.testing.machines import structured
+from tests.dashboard.test_dashboard_browser import (  # the dashboard tests' robot, browser and page helpers
     SHOTS,
     SMALL,
     Sim,
@@ -23,8 +25,6 @@ from test_dashboard_browser import (  # the dashboard tests' robot, browser and 
     open_page,
     sim,  # noqa: F401  (a fixture)
 )
-
-from cyborg.testing.machines import structured
 
 THOUSAND = 1000
 

@@ -24,6 +24,7 @@ import pytest
 from playwright.sync_api import Browser, ConsoleMessage, Page, Route, WebSocketRoute, expect, sync_playwright
 
 from cyborg.app.config import packaged_config
+from tests.support.paths import GLASSGARDEN
 
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = [
@@ -309,7 +310,6 @@ def test_without_a_base_the_map_panel_says_so(browser: Browser, tmp_path: Path) 
     assert not errors, "the page logged errors:\n" + "\n".join(errors)
 
 
-GLASSGARDEN = Path(__file__).resolve().parents[2].parent / "shared" / "maps" / "glassgarden.map"
 SMALL = (1280, 800)  # the smallest window the layout is made for
 Box = dict[str, float]
 

@@ -22,8 +22,7 @@ from cyborg.app.config import load_config
 from cyborg.drawing.layout import DIRECTIONS
 from cyborg.web import api as api_module
 from cyborg.web.api import RobotAPI
-from cyborg.transport.clock import RealClock
-from cyborg.transport.embedded import EmbeddedTransport
+from tests.support.api import real_time, served
 
 FAKE_DOT = """#!{python}
 import os, resource, subprocess, sys, time
@@ -81,23 +80,17 @@ def serve(tmp_path: Path, states: int, check: Check) -> None:
     path = tmp_path / "machine.yaml"
     path.write_text(machine_yaml(states))
     machine = load_config(path).machine
-    clock = RealClock()
-    transport = EmbeddedTransport(clock)
+    with real_time() as (clock, transport):
 
-    async def main() -> None:
-        api = RobotAPI(transport.node("cyborg_api"), machine=machine)
-        url = (await api.start("127.0.0.1", 0)).rstrip("/")
-        try:
-            async with aiohttp.ClientSession(timeout=aiohttp.ClientTimeout(total=30)) as session:
+        async def main() -> None:
+            api = RobotAPI(transport.node("cyborg_api"), machine=machine)
+            async with (
+                served(api) as url,
+                aiohttp.ClientSession(timeout=aiohttp.ClientTimeout(total=30)) as session,
+            ):
                 await check(api, url, session)
-        finally:
-            await api.stop()
 
-    try:
         clock.run(main())
-    finally:
-        transport.shutdown()
-        clock.close()
 
 
 def test_many_requests_share_one_layout_run_under_a_memory_cap(tmp_path: Path, fake_dot: Path) -> None:

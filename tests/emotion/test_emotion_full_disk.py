@@ -15,7 +15,7 @@ from cyborg.transport.base import MessageInfo
 from cyborg.transport.clock import VirtualClock
 from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import EmotionalFeedback, EmotionalState, String
-from full_disk import Disk
+from tests.support.full_disk import Disk
 
 HALVES = HalfLives(pleasure=10.0, arousal=10.0, dominance=10.0)
 

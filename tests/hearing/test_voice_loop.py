@@ -12,7 +12,10 @@ from cyborg.hearing.recogniser import Recogniser
 from cyborg.hearing.synth import VOICES, as_heard, synthesise
 from cyborg.modules.speech import TextToSpeech
 from cyborg.transport.clock import VirtualClock
-from navigation.test_module import OFFER, Cyborg  # the default robot and a user, as in the navigation tests
+from tests.navigation.test_module import (  # the default robot and a user, as in the navigation tests
+    OFFER,
+    Cyborg,
+)
 
 
 def test_where_is_the_cafeteria_then_yes_drives_there(tmp_path: Path) -> None:

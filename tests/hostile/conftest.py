@@ -5,13 +5,13 @@ from __future__ import annotations
 import os
 import resource
 import subprocess
-import sys
 from collections.abc import Callable
 from pathlib import Path
 
 import pytest
 
-CYBORG = Path(sys.executable).with_name("cyborg")
+from tests.support.tools import CYBORG_SCRIPT
+
 GUARD_SECONDS = 300  # a guard against a hang, far above what any case takes; not a speed test
 MEMORY_LIMIT = 3 * 2**30  # address space: an alias bomb or a giant map fails instead of eating the machine
 
@@ -23,7 +23,7 @@ def _limit_memory() -> None:
 def run_cyborg(args: list[str], tmp_path: Path) -> subprocess.CompletedProcess[str]:
     env = {**os.environ, "CYBORG_DATA_DIR": str(tmp_path / "data"), "NO_COLOR": "1"}
     return subprocess.run(
-        [str(CYBORG), "--log-level", "ERROR", *args],
+        [str(CYBORG_SCRIPT), "--log-level", "ERROR", *args],
         cwd=tmp_path,
         env=env,
         capture_output=True,

@@ -8,52 +8,42 @@ from typing import Any
 from aiohttp import ClientSession
 
 from cyborg.emotion.model import EmotionSettings
-from cyborg.web.api import RobotAPI
 from cyborg.limits import MAX_TEXT_LENGTH
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo
-from cyborg.transport.clock import RealClock
-from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import String
+from cyborg.web.api import RobotAPI
+from tests.support.api import real_time, served
 
 
 def post_all(requests: list[tuple[str, bytes]]) -> tuple[list[tuple[int, Any]], dict[str, list[str]]]:
     """POST each (path, body) to a fresh API; return (status, JSON) answers and what reached each topic."""
-    clock = RealClock()
-    transport = EmbeddedTransport(clock)
     settings = EmotionSettings()
     published: dict[str, list[str]] = {topics.SET_EMOTIONAL_STATE: [], topics.TEXT_FROM_SPEECH: []}
-    listener = transport.node("listener")
-    for topic, seen in published.items():
+    with real_time() as (clock, transport):
+        listener = transport.node("listener")
+        for topic, seen in published.items():
 
-        def keep(message: String, info: MessageInfo, seen: list[str] = seen) -> None:
-            seen.append(message.data)
+            def keep(message: String, info: MessageInfo, seen: list[str] = seen) -> None:
+                seen.append(message.data)
 
-        listener.subscribe(topic, String, keep)
+            listener.subscribe(topic, String, keep)
 
-    async def main() -> list[tuple[int, Any]]:
-        api = RobotAPI(
-            transport.node("cyborg_api"),
-            emotions=dict(settings.prototypes),
-            emotion_aliases=settings.usable_aliases(),
-        )
-        url = (await api.start("127.0.0.1", 0)).rstrip("/")
-        answers = []
-        try:
-            async with ClientSession() as session:
+        async def main() -> list[tuple[int, Any]]:
+            api = RobotAPI(
+                transport.node("cyborg_api"),
+                emotions=dict(settings.prototypes),
+                emotion_aliases=settings.usable_aliases(),
+            )
+            answers = []
+            async with served(api) as url, ClientSession() as session:
                 for path, body in requests:
                     headers = {"Content-Type": "application/json"}
                     async with session.post(url + path, data=body, headers=headers) as response:
                         answers.append((response.status, await response.json()))
-        finally:
-            await api.stop()
-        return answers
+            return answers
 
-    try:
         return clock.run(main()), published
-    finally:
-        transport.shutdown()
-        clock.close()
 
 
 def test_hostile_bodies_are_answered_400_naming_the_problem() -> None:

@@ -7,11 +7,10 @@ from __future__ import annotations
 
 from typing import Any
 
-from test_gatekeeper_speech import build
-
 from cyborg.transport import topics
 from cyborg.transport.clock import VirtualClock
 from cyborg.transport.messages import String, SystemState
+from tests.modules.test_gatekeeper_speech import build
 
 
 def test_the_holders_first_sentence_passes_before_its_state_change_arrives(clock: VirtualClock) -> None:

@@ -5,8 +5,6 @@ from __future__ import annotations
 
 from typing import Any
 
-from test_gatekeeper_speech import MACHINE, Talker, build
-
 from cyborg.app.config import parse_config
 from cyborg.controller.runtime import Controller
 from cyborg.errors import TransportError
@@ -14,6 +12,7 @@ from cyborg.modules.gatekeeper import READ_RETRY
 from cyborg.transport import topics
 from cyborg.transport.clock import VirtualClock
 from cyborg.transport.messages import String
+from tests.modules.test_gatekeeper_speech import MACHINE, Talker, build
 
 
 def test_a_gatekeeper_that_cannot_read_the_resources_passes_nothing_until_it_can(

@@ -277,7 +277,7 @@ def test_the_motivator_decides_and_rewards_while_the_disk_is_full(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
     """Issue 12, item 4: saving the saturations fails, yet the robot goes on (in memory) and saves later."""
-    from full_disk import Disk
+    from tests.support.full_disk import Disk
 
     clock, _, robot, watch = start(CONFIG, tmp_path)
     disk = Disk(robot.store)

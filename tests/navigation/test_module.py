@@ -24,22 +24,21 @@ from zoneinfo import ZoneInfo
 import pytest
 import yaml
 
-from cyborg.app.config import LoadedConfig, parse_config
+from cyborg.app.config import LoadedConfig, packaged_config, parse_config
 from cyborg.app.registry import module_kinds
 from cyborg.app.robot import build_robot
 from cyborg.emotion.model import NEUTRAL, TABLE_2_2
-from cyborg.app.config import packaged_config
 from cyborg.maps import Cell, OccupancyMap, Point, default_map_path, load_map
 from cyborg.modules.kind import BuildContext, ModuleKind
-from cyborg.transport.topics import SPOKEN_TOPIC
 from cyborg.modules.speech import estimated_duration
 from cyborg.navigation.content import DEFAULT_RESPONSES
 from cyborg.navigation.database import NavigationDatabase
 from cyborg.navigation.kind import NavigationSettings
-from cyborg.navigation.module import WANDER_CHECK, WANDER_DEBOUNCE, NavigationModule
 from cyborg.navigation.models import CalendarEvent, Location, ResponseType
+from cyborg.navigation.module import WANDER_CHECK, WANDER_DEBOUNCE, NavigationModule
 from cyborg.sim.base import PathState, SimulatedBase, SimulatedBaseSettings
 from cyborg.sim.planner import RoutePlanner
+from cyborg.testing import wait_until
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Node
 from cyborg.transport.clock import VirtualClock
@@ -51,6 +50,8 @@ from cyborg.transport.messages import (
     String,
     SystemState,
 )
+from cyborg.transport.topics import SPOKEN_TOPIC
+from tests.support.paths import GLASSGARDEN
 
 CONFIG = packaged_config("cyborg.yaml")
 EMOTIONS = sorted([NEUTRAL, *TABLE_2_2])
@@ -59,7 +60,6 @@ ARRIVED = 0.1  # metres
 OFFER = "I think I know where that is, would you like me to show you?"
 NAV = "cyborg_navigation"
 CAMPUS = load_map(default_map_path())
-GLASSGARDEN = Path(__file__).resolve().parents[2].parent / "shared" / "maps" / "glassgarden.map"
 CROWDED = {"information desk", "cafeteria", "entrance", "waiting area"}
 QUIET = {"entrance 2", "el5", "el6", "elevator"}
 
@@ -218,13 +218,10 @@ class Cyborg:
         return sum(math.dist(a, b) for a, b in itertools.pairwise(points))
 
     async def until(self, condition: Callable[[], bool], timeout: float, what: str) -> None:
-        deadline = self.clock.monotonic() + timeout
-        while not condition():
-            if self.clock.monotonic() >= deadline:
-                raise AssertionError(
-                    f"waited {timeout} s for {what}; states {self.transitions()}, said {self.sentences()}"
-                )
-            await self.clock.sleep(0.1)
+        if not await wait_until(condition, self.clock, timeout=timeout, interval=0.1):
+            raise AssertionError(
+                f"waited {timeout} s for {what}; states {self.transitions()}, said {self.sentences()}"
+            )
 
     async def settle(self, emotion: str = NEUTRAL) -> None:
         """Let the robot start (idle), then set the emotion and wait until it is in effect."""

@@ -8,12 +8,9 @@ import json
 import time
 import urllib.request
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from conftest import free_port, yaml_path
-
-if TYPE_CHECKING:
-    from conftest import Observers, Processes
+from tests.support.ros import Observers, Processes, free_port, yaml_path
 
 
 def health(port: int) -> dict[str, Any]:

@@ -11,13 +11,11 @@ import subprocess
 import sys
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from cyborg_controller.msg import EmotionalState  # type: ignore[import-not-found]
 from std_msgs.msg import String  # type: ignore[import-not-found]
 
-if TYPE_CHECKING:
-    from conftest import Observers, Processes
+from tests.support.ros import Observers, Processes
 
 FAULTS = Path(__file__).resolve().parent / "faults.yaml"
 

@@ -10,13 +10,10 @@ from __future__ import annotations
 
 import time
 import xmlrpc.client
-from typing import TYPE_CHECKING
 
 from cyborg.testing.wait import wait_until
 from cyborg.transport.messages import String
-
-if TYPE_CHECKING:
-    from conftest import RosSession
+from tests.support.ros import RosSession
 
 
 def test_a_dropped_subscription_is_connected_again_and_then_hears_the_first_message(ros: RosSession) -> None:

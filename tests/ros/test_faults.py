@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import actionlib  # type: ignore[import-not-found]
 import pytest
@@ -23,8 +23,7 @@ from cyborg_controller.msg import (  # type: ignore[import-not-found]
 from cyborg_controller.srv import EmotionalStateService  # type: ignore[import-not-found]
 from std_msgs.msg import String  # type: ignore[import-not-found]
 
-if TYPE_CHECKING:
-    from conftest import Observers, Processes
+from tests.support.ros import Observers, Processes
 
 HERE = Path(__file__).resolve().parent
 FAULTS = HERE / "faults.yaml"

@@ -21,12 +21,10 @@ import time
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import pytest
 
-if TYPE_CHECKING:
-    from conftest import NodeProcess, Processes
+from tests.support.ros import NodeProcess, Processes
 
 HERE = Path(__file__).resolve().parent
 MACHINE = HERE / "netns.yaml"

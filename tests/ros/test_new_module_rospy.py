@@ -14,8 +14,8 @@ import rospy  # type: ignore[import-not-found]
 from click.testing import CliRunner
 from std_msgs.msg import String  # type: ignore[import-not-found]
 
-from conftest import Observers, Processes
 from cyborg.cli import cli
+from tests.support.ros import Observers, Processes
 
 
 def test_the_rospy_variant_is_driven_by_our_controller_and_is_heard(

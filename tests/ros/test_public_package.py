@@ -19,7 +19,6 @@ import subprocess
 import sys
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from actionlib_msgs.msg import GoalStatus  # type: ignore[import-not-found]
 from cyborg_controller.msg import (  # type: ignore[import-not-found]
@@ -28,8 +27,7 @@ from cyborg_controller.msg import (  # type: ignore[import-not-found]
     StateMachineGoal,
 )
 
-if TYPE_CHECKING:
-    from conftest import Observers, Processes
+from tests.support.ros import Observers, Processes
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent.parent

@@ -17,16 +17,13 @@ import sys
 import threading
 import time
 import xmlrpc.client
-from collections.abc import Callable
 from pathlib import Path
-from typing import IO, TYPE_CHECKING, Any
+from typing import IO, Any
 
 from actionlib_msgs.msg import GoalStatus, GoalStatusArray  # type: ignore[import-not-found]
 
-from conftest import free_port, master_answers, yaml_path
-
-if TYPE_CHECKING:
-    from conftest import NodeProcess, Observers, Processes
+from tests.support.ros import NodeProcess, Observers, Processes, free_port, master_answers, yaml_path
+from tests.support.wait import wait_for
 
 HERE = Path(__file__).resolve().parent
 PROBE = HERE / "ros_probe.py"
@@ -39,15 +36,6 @@ OUTAGE_NODES = (
     "cyborg_controller",
 )
 CALLER = "/cyborg_tests"
-
-
-def wait_until(condition: Callable[[], object], *, timeout: float, what: str) -> None:
-    """Polls a condition of another process (a master's answer, a log line) until it holds."""
-    deadline = time.monotonic() + timeout
-    while not condition():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"not within {timeout} s: {what}")
-        time.sleep(0.02)
 
 
 def master_value(uri: str, method: str, *args: Any) -> Any:
@@ -178,7 +166,7 @@ class PrivateMaster:
             env=self.env,
             new_session=True,
         )
-        wait_until(lambda: master_answers(self.uri), timeout=30, what=f"roscore answering at {self.uri}")
+        wait_for(lambda: master_answers(self.uri), timeout=30, what=f"roscore answering at {self.uri}")
 
     def kill(self) -> None:
         """SIGKILL to roscore, rosmaster and rosout at once: no goodbye to anyone. (roscore starts
@@ -187,7 +175,7 @@ class PrivateMaster:
         for pid in [self.core.pid, *children(self.core.pid)]:
             os.kill(pid, signal.SIGKILL)
         self.core.process.wait(timeout=10)
-        wait_until(lambda: not master_answers(self.uri), timeout=10, what="the master gone")
+        wait_for(lambda: not master_answers(self.uri), timeout=10, what="the master gone")
 
 
 def test_a_master_restart_keeps_the_robot_running_and_every_node_registers_again(
@@ -220,7 +208,7 @@ def test_a_master_restart_keeps_the_robot_running_and_every_node_registers_again
         mark = before.mark()
         before.send("work")
         before.wait_line("state idle work working", after=mark)
-        wait_until(
+        wait_for(
             lambda: "does not answer" in controller.log(),
             timeout=10,
             what="the controller logging the outage",
@@ -231,14 +219,14 @@ def test_a_master_restart_keeps_the_robot_running_and_every_node_registers_again
         master.start()
         answered = time.monotonic()
         expected = {f"/{name}" for name in OUTAGE_NODES}
-        wait_until(
+        wait_for(
             lambda: expected <= listed_nodes(master.uri),
             timeout=15,
             what=f"every node listed again: {sorted(expected)}",
         )
         listed = time.monotonic()
         # The parameter set during the outage reaches the new master: the gatekeeper reads the right one.
-        wait_until(
+        wait_for(
             lambda: param(master.uri, "/state_resources") == {"speech": "cyborg_test_worker"},
             timeout=10,
             what="/state_resources of 'working' on the new master",
@@ -294,23 +282,21 @@ def test_launch_restarts_a_killed_node_and_the_robot_keeps_running(
     processes.wait_ready(launch)
     changes.wait_state("idle", event="start", timeout=60)
 
-    wait_until(lambda: node_pid(uri, "/cyborg_test_worker"), timeout=60, what="the worker registered")
+    wait_for(lambda: node_pid(uri, "/cyborg_test_worker"), timeout=60, what="the worker registered")
     # killed only once it serves its action: a worker killed earlier never says it runs, and the
     # count of "running" lines below would then wait for a second line that cannot come
-    wait_until(
-        lambda: "node cyborg_test_worker running" in launch.log(), timeout=60, what="the worker running"
-    )
+    wait_for(lambda: "node cyborg_test_worker running" in launch.log(), timeout=60, what="the worker running")
     worker = node_pid(uri, "/cyborg_test_worker")
     assert worker is not None
     os.kill(worker, signal.SIGKILL)
-    wait_until(
+    wait_for(
         lambda: node_pid(uri, "/cyborg_test_worker") not in (None, worker),
         timeout=30,
         what="the worker started again",
     )
     assert launch.process.poll() is None, launch.log()[-3000:]
     assert "node cyborg_test_worker stopped" in launch.log()
-    wait_until(
+    wait_for(
         lambda: launch.log().count("node cyborg_test_worker running") == 2,
         timeout=60,
         what="the restarted worker serving its action",
@@ -360,7 +346,7 @@ def test_launch_starts_its_roscore_again_and_the_robot_works_through_the_new_one
     processes.wait_ready(launch, timeout=60)
     assert f"started roscore at {uri}" in launch.log()
     expected = {f"/{part}" for part in parts}
-    wait_until(
+    wait_for(
         lambda: all(f"node {part} running" in launch.log() for part in parts),
         timeout=60,
         what="every node running",
@@ -370,8 +356,8 @@ def test_launch_starts_its_roscore_again_and_the_robot_works_through_the_new_one
     for pid in [*roscore, *children(roscore[0])]:
         os.kill(pid, signal.SIGKILL)
     killed = time.monotonic()
-    wait_until(lambda: "starting it again" in launch.log(), timeout=10, what="the launch noticing")
-    wait_until(lambda: expected <= listed_nodes(uri), timeout=30, what="every node listed again")
+    wait_for(lambda: "starting it again" in launch.log(), timeout=10, what="the launch noticing")
+    wait_for(lambda: expected <= listed_nodes(uri), timeout=30, what="every node listed again")
     listed = time.monotonic()
     with (tmp_path / "probe.log").open("wb") as probe_log:
         probe = Probe("cyborg_test_probe", env, probe_log)
@@ -423,7 +409,7 @@ def test_launch_shows_each_nodes_warnings_in_its_terminal_and_says_where_the_log
     mark = changes.mark()
     events.send("work")
     changes.wait_state("recovering", event="aborted", after=mark, timeout=30)
-    wait_until(
+    wait_for(
         lambda: (
             "[cyborg_controller] WARNING cyborg.controller.runtime: no action server cyborg_test_worker/work"
             in launch.log()

@@ -8,33 +8,21 @@ checks as the embedded run (tests/scenarios/expectations.py).
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import subprocess
 import sys
 from datetime import UTC
 from pathlib import Path
-from types import ModuleType
 
 import pytest
 
-from conftest import Observers, RosSession
 from cyborg.sim.scenario import script_start
 from cyborg.sim.script import load_script
+from tests.scenarios.expectations import check_transcript
+from tests.support.paths import SCENARIOS
+from tests.support.ros import Observers, RosSession
 
-SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
 SPEED = 25.0  # virtual seconds per real second
-
-
-def _expectations() -> ModuleType:
-    name = "scenario_expectations"
-    if name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(name, SCENARIOS / "expectations.py")
-        assert spec is not None and spec.loader is not None
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[name] = module
-        spec.loader.exec_module(module)
-    return sys.modules[name]
 
 
 @pytest.mark.parametrize("name", ["scenario_a", "scenario_b", "scenario_c", "scenario_d"])
@@ -50,7 +38,7 @@ def test_scenario_over_ros(name: str, ros: RosSession, observe: Observers, tmp_p
     result = subprocess.run(command, capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
     records = [json.loads(line) for line in transcript.read_text().splitlines()]
-    _expectations().check_transcript(name, records, transcript)
+    check_transcript(name, records, transcript)
     assert records[-1]["t"] <= script.until + 1
 
     # Simulated time on /clock, from the simulated base, starting at the script's start.

@@ -12,13 +12,10 @@ import subprocess
 import sys
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from cyborg.emotion.model import PAD
 from cyborg.motivator.store import ControllerStore
-
-if TYPE_CHECKING:
-    from conftest import Observers, Processes
+from tests.support.ros import Observers, Processes
 
 FAULTS = Path(__file__).resolve().parent / "faults.yaml"
 ACTIVATE = Path(sys.prefix) / "bin" / "activate"

@@ -11,7 +11,6 @@ from __future__ import annotations
 import os
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from actionlib_msgs.msg import GoalStatus  # type: ignore[import-not-found]
 from cyborg_controller.msg import (  # type: ignore[import-not-found]
@@ -19,8 +18,7 @@ from cyborg_controller.msg import (  # type: ignore[import-not-found]
     StateMachineActionResult,
 )
 
-if TYPE_CHECKING:
-    from conftest import Observers, Processes
+from tests.support.ros import Observers, Processes
 
 HERE = Path(__file__).resolve().parent
 MACHINE = HERE / "third_party.yaml"

@@ -20,16 +20,16 @@ from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.context import Context
 from rclpy.node import Node
 from std_msgs.msg import String
-from test_ros2_foreign_module import support
 
 from cyborg.transport.ros2.executor import HandOffExecutor
+from tests.support.ros2 import isolate
 
 WINDOW = 0.5  # seconds the second message waits for the executor's thread
 
 
 @pytest.fixture
 def context() -> Iterator[Context]:
-    support().isolate()
+    isolate()
     context = Context()
     rclpy.init(context=context)
     try:

@@ -18,14 +18,15 @@ from pathlib import Path
 import pytest
 from action_msgs.msg import GoalStatus, GoalStatusArray
 from rclpy.action.server import qos_profile_action_status_default
-from test_ros2_foreign_module import PATIENCE, Process, support
 
 from cyborg.app.config import load_config
 from cyborg.app.context import BuildContext
 from cyborg.app.parts import build_part
-from cyborg.transport import topics
 from cyborg.testing.wait import wait_until
+from cyborg.transport import topics
 from cyborg.transport.messages import String, SystemState
+from tests.ros2.test_ros2_foreign_module import PATIENCE, Process
+from tests.support.ros2 import isolate, ros2_session
 
 HERE = Path(__file__).resolve().parent
 FAULTS = HERE.parent / "ros" / "faults.yaml"  # the same machine as the ROS 1 test
@@ -33,7 +34,7 @@ FAULTS = HERE.parent / "ros" / "faults.yaml"  # the same machine as the ROS 1 te
 
 @pytest.fixture
 def worker(tmp_path: Path) -> Iterator[Process]:
-    support().isolate()
+    isolate()
     process = Process(
         [sys.executable, str(HERE / "part_process.py"), str(FAULTS), "cyborg_test_worker", str(tmp_path)]
     )
@@ -46,7 +47,7 @@ def worker(tmp_path: Path) -> Iterator[Process]:
 def test_module_killed_mid_goal_makes_the_controller_take_aborted_within_2_s(
     worker: Process, request: pytest.FixtureRequest, tmp_path: Path
 ) -> None:
-    session = support().ros2_session(request.config)
+    session = ros2_session(request.config)
     transport, clock = session.transport, session.clock
     config = load_config(FAULTS)
     context = BuildContext(data_dir=tmp_path / "here", resume=False)

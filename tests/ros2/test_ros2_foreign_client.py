@@ -8,13 +8,14 @@ import sys
 from pathlib import Path
 
 import pytest
-from test_ros2_foreign_module import PATIENCE, Process, support
 
 from cyborg.app.config import load_config
 from cyborg.app.robot import build_robot
-from cyborg.transport import topics
 from cyborg.testing.wait import wait_until
+from cyborg.transport import topics
 from cyborg.transport.messages import SystemState
+from tests.ros2.test_ros2_foreign_module import PATIENCE, Process
+from tests.support.ros2 import ros2_session
 
 HERE = Path(__file__).resolve().parent
 FAULTS = HERE.parent / "ros" / "faults.yaml"  # idle and working, both served in this process
@@ -23,7 +24,7 @@ FAULTS = HERE.parent / "ros" / "faults.yaml"  # idle and working, both served in
 def test_plain_rclpy_client_reads_state_asks_emotion_and_sends_an_event(
     request: pytest.FixtureRequest, tmp_path: Path
 ) -> None:
-    session = support().ros2_session(request.config)
+    session = ros2_session(request.config)
     transport, clock = session.transport, session.clock
     robot = build_robot(load_config(FAULTS), transport, data_dir=tmp_path)
     observer = transport.node("cyborg_test_client_observer")

@@ -12,7 +12,6 @@ the controller's cancel is handed over after the preempt timeout and silenced, a
 from __future__ import annotations
 
 import asyncio
-import importlib.util
 import os
 import subprocess
 import sys
@@ -21,7 +20,6 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from types import ModuleType
 from typing import Any
 
 import pytest
@@ -29,28 +27,17 @@ import pytest
 from cyborg.app.config import load_config
 from cyborg.app.robot import Robot, build_robot
 from cyborg.modules.gatekeeper import Gatekeeper
+from cyborg.testing.wait import wait_until
 from cyborg.transport import topics
 from cyborg.transport.clock import Clock
-from cyborg.testing.wait import wait_until
 from cyborg.transport.messages import String, SystemState
+from tests.support.ros2 import isolate, ros2_session
 
 HERE = Path(__file__).resolve().parent
 CONFIG = HERE / "foreign.yaml"
 GATEKEEPER = "cyborg_test_speech_gatekeeper"
 PREEMPT_TIMEOUT = 1.0  # foreign.yaml's timeouts.preempt
 PATIENCE = 20.0  # real seconds a wait may take on a loaded machine before the test fails
-
-
-def support() -> ModuleType:
-    """tests/ros2/support.py, shared with the contract suite (one ROS 2 transport per process)."""
-    name = "cyborg_tests_ros2_support"
-    if name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(name, HERE / "support.py")
-        assert spec is not None and spec.loader is not None
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[name] = module
-        spec.loader.exec_module(module)
-    return sys.modules[name]
 
 
 class Process:
@@ -152,7 +139,7 @@ class World:
 
 @pytest.fixture
 def foreign() -> Iterator[Process]:
-    support().isolate()
+    isolate()
     module = Process([sys.executable, str(HERE / "foreign_module.py")])
     try:
         yield module
@@ -162,7 +149,7 @@ def foreign() -> Iterator[Process]:
 
 @pytest.fixture
 def world(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[World]:
-    session = support().ros2_session(request.config)
+    session = ros2_session(request.config)
     robot = build_robot(load_config(CONFIG), session.transport, data_dir=tmp_path)
     try:
         yield World(robot, session.clock)

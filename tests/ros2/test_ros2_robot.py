@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import importlib.util
 import json
 import os
 import signal
@@ -25,29 +24,20 @@ import urllib.request
 from collections.abc import Iterator
 from datetime import UTC
 from pathlib import Path
-from types import ModuleType
 from typing import Any
 
 import pytest
-from support import Ros2Session, isolate
 
 from cyborg.sim.scenario import script_start
 from cyborg.sim.script import load_script
 from cyborg.transport.base import MessageInfo
 from cyborg.transport.messages import Clock, String
+from tests.scenarios.expectations import check_transcript
+from tests.support.paths import ROOT, SCENARIOS
+from tests.support.ros2 import Ros2Session, isolate
 
-ROOT = Path(__file__).resolve().parents[2]
-SCENARIOS = ROOT / "tests" / "scenarios"
 TOOLS = Path(__file__).resolve().parent / "tools.yaml"
 SPEED = 25.0  # virtual seconds per real second, as the ROS 1 runs (tests/ros/test_scenarios_ros.py)
-
-
-def _expectations() -> ModuleType:
-    spec = importlib.util.spec_from_file_location("ros2_scenario_expectations", SCENARIOS / "expectations.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 @pytest.mark.parametrize("name", ["scenario_a", "scenario_b", "scenario_c", "scenario_d"])
@@ -77,7 +67,7 @@ def test_ros2_scenario(name: str, own_session: Ros2Session, tmp_path: Path) -> N
         observer.shutdown()
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
     records = [json.loads(line) for line in transcript.read_text().splitlines()]
-    _expectations().check_transcript(name, records, transcript)
+    check_transcript(name, records, transcript)
     assert records[-1]["t"] <= script.until + 1
     assert "virtual time: " in result.stdout and f"wrote {len(records)} records" in result.stdout
 

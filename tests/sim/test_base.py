@@ -9,13 +9,12 @@ from __future__ import annotations
 
 import math
 import random
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from cyborg.errors import PlanningError
-from cyborg.maps import Cell, NamedPose, OccupancyMap, Point, default_map_path, load_map
+from cyborg.maps import Cell, NamedPose, OccupancyMap, Point, load_map
 from cyborg.sim.base import PathState, SimulatedBase, pose_stamped, quaternion_to_yaw
 from cyborg.sim.planner import RoutePlanner
 from cyborg.transport import topics
@@ -31,22 +30,12 @@ from cyborg.transport.messages import (
     PoseWithCovarianceStamped,
     String,
 )
+from tests.support.paths import GLASSGARDEN
 
-GLASSGARDEN = Path(__file__).resolve().parents[2].parent / "shared" / "maps" / "glassgarden.map"
 SPEED = 0.6
 ARRIVED = 0.1  # metres: "the pose ends there"
 
 MoveHandle = ClientGoalHandle[MoveBaseGoal, MoveBaseResult, MoveBaseFeedback]
-
-
-@pytest.fixture(scope="module")
-def campus() -> OccupancyMap:
-    return load_map(default_map_path())
-
-
-@pytest.fixture(scope="module")
-def campus_planner(campus: OccupancyMap) -> RoutePlanner:
-    return RoutePlanner(campus, 0.35)  # built once: inflating the map is the slow part
 
 
 class Client:

@@ -9,7 +9,6 @@ the embedded run; over real ROS 2 processes, see tests/ros2/test_ros2_robot.py.
 
 from __future__ import annotations
 
-import importlib.util
 import itertools
 import math
 import random
@@ -18,21 +17,20 @@ from pathlib import Path
 
 import pytest
 
-from cyborg.app.config import load_config
-from cyborg.app.config import packaged_config
-from cyborg.maps import OccupancyMap, default_map_path, load_map
+from cyborg.app.config import load_config, packaged_config
+from cyborg.maps import OccupancyMap
 from cyborg.sim import scenario
 from cyborg.sim.base import SimulatedBase, pose_stamped
 from cyborg.sim.planner import RoutePlanner
 from cyborg.sim.script import load_script
 from cyborg.transport import topics
-from cyborg.transport.topics import BaseApi
 from cyborg.transport.base import GoalStatus
 from cyborg.transport.clock import VirtualClock
 from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import NavigateToPoseAction, NavigateToPoseFeedback, NavigateToPoseGoal
-
-SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
+from cyborg.transport.topics import BaseApi
+from tests.scenarios import expectations
+from tests.support.paths import SCENARIOS
 
 
 @pytest.fixture
@@ -40,11 +38,6 @@ def ros2_transport(clock: VirtualClock) -> Iterator[EmbeddedTransport]:
     transport = EmbeddedTransport(clock)
     yield transport
     transport.shutdown()
-
-
-@pytest.fixture(scope="module")
-def campus() -> OccupancyMap:
-    return load_map(default_map_path())
 
 
 def test_navigate_to_pose_arrives_reporting_the_distance_left(
@@ -128,10 +121,6 @@ def test_scenario_a_with_the_ros2_navigation_interface(
 ) -> None:
     """The navigation module drives and wanders through navigate_to_pose (no move_base, no
     wander service on the graph) and scenario A passes the embedded run's checks."""
-    spec = importlib.util.spec_from_file_location("nav2_expectations", SCENARIOS / "expectations.py")
-    assert spec is not None and spec.loader is not None
-    expectations = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(expectations)
     config = load_config(packaged_config("cyborg.yaml"))
     for raw in config.model.modules.values():
         if isinstance(raw, dict) and raw.get("kind") in ("navigation", "simulated_base"):

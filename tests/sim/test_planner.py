@@ -15,8 +15,8 @@ from scipy import ndimage
 from cyborg.errors import PlanningError
 from cyborg.maps import Cell, KeepOutZone, OccupancyMap, Point, default_map_path, load_map, segment_cells
 from cyborg.sim.planner import Route, RoutePlanner, _close_diagonal_gaps, inflate
+from tests.support.paths import GLASSGARDEN, MAPS
 
-MAPS = Path(__file__).resolve().parents[2].parent / "shared" / "maps"
 RESOLUTION = 0.05
 
 
@@ -228,7 +228,7 @@ def test_random_reachable_points_are_free_reachable_and_repeatable() -> None:
 
 @pytest.fixture(scope="module")
 def glassgarden_planner() -> RoutePlanner:
-    return RoutePlanner(load_map(MAPS / "glassgarden.map"))
+    return RoutePlanner(load_map(GLASSGARDEN))
 
 
 def specks(seed: int = 7, size: int = 200, density: float = 0.01) -> OccupancyMap:
@@ -353,7 +353,7 @@ def inflated_by_distance_transform(
     return np.asarray(clearance < robot_radius + resolution / 2)
 
 
-@pytest.mark.parametrize("map_path", [default_map_path(), MAPS / "glassgarden.map", MAPS / "willow.yaml"])
+@pytest.mark.parametrize("map_path", [default_map_path(), GLASSGARDEN, MAPS / "willow.yaml"])
 def test_inflation_is_the_distance_transforms_on_the_real_maps(map_path: Path) -> None:
     occupancy_map = load_map(map_path)
     blocked = occupancy_map.blocked | occupancy_map.keep_out_mask()

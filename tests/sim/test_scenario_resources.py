@@ -6,7 +6,6 @@ from __future__ import annotations
 import errno
 import json
 import subprocess
-import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -16,6 +15,7 @@ from click.testing import CliRunner
 
 from cyborg.cli import cli
 from cyborg.sim import scenario
+from tests.support.tools import CYBORG_SCRIPT
 
 SCRIPT = """\
 until: 900
@@ -59,7 +59,7 @@ def test_a_second_sim_on_the_same_data_folder_is_refused_naming_the_first(tmp_pa
     data = tmp_path / "data"
     script = tmp_path / "long.yaml"
     script.write_text("until: 3600\n", encoding="utf-8")
-    cyborg = str(Path(sys.executable).with_name("cyborg"))
+    cyborg = str(CYBORG_SCRIPT)
     first = subprocess.Popen(
         [cyborg, "sim", "--script", str(script), "--speed", "1", "--data-dir", str(data)],
         stdout=subprocess.DEVNULL,

@@ -8,16 +8,16 @@ import os
 import re
 import signal
 import subprocess
-import sys
 import time
 from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
 
-from cyborg.errors import ConfigError
 from cyborg.cli import cli
+from cyborg.errors import ConfigError
 from cyborg.sim.script import Match, parse_script, parse_seconds
+from tests.support.tools import CYBORG_SCRIPT
 
 
 @pytest.mark.parametrize(
@@ -121,8 +121,7 @@ def test_calendar_entry_at_an_unknown_place_names_its_line(tmp_path: Path) -> No
 
 
 def test_transcript_ends_a_trip_with_the_arrival_pose(tmp_path: Path) -> None:
-    from cyborg.app.config import load_config
-    from cyborg.app.config import packaged_config
+    from cyborg.app.config import load_config, packaged_config
     from cyborg.sim.base import SimulatedBase
     from cyborg.sim.scenario import ScenarioRun
 
@@ -150,7 +149,7 @@ def test_ctrl_c_stops_a_scripted_day_cleanly_with_its_transcript(tmp_path: Path)
     how many records it wrote (all of them in the transcript), leaves no traceback and no process."""
     script, transcript = tmp_path / "day.yaml", tmp_path / "day.jsonl"
     script.write_text("until: 28800\n")
-    cyborg = Path(sys.executable).with_name("cyborg")
+    cyborg = CYBORG_SCRIPT
     env = {**os.environ, "CYBORG_DATA_DIR": str(tmp_path / "data")}
     args = [str(cyborg), "sim", "--script", str(script), "--speed", "max", "--transcript", str(transcript)]
     errors = (tmp_path / "stderr.txt").open("w+")  # a file: the log must not fill a pipe nobody reads

@@ -11,7 +11,7 @@ import signal
 
 import pytest
 
-from cyborg.maps import OccupancyMap, default_map_path, load_map
+from cyborg.maps import OccupancyMap
 from cyborg.sim.base import SimulatedBase
 from cyborg.sim.planner import RoutePlanner
 from cyborg.transport import topics
@@ -21,16 +21,6 @@ from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import EmptyService, PoseWithCovarianceStamped
 
 Pose = tuple[float, float, float, float]
-
-
-@pytest.fixture(scope="module")
-def campus() -> OccupancyMap:
-    return load_map(default_map_path())
-
-
-@pytest.fixture(scope="module")
-def campus_planner(campus: OccupancyMap) -> RoutePlanner:
-    return RoutePlanner(campus, 0.35)
 
 
 def wander(

@@ -15,18 +15,15 @@ from __future__ import annotations
 
 import asyncio
 import dataclasses
-import importlib.util
 import itertools
-import sys
 import time
 from collections.abc import Awaitable, Callable, Iterator
-from pathlib import Path
-from types import ModuleType
 from typing import Any, TypeVar
 
 import pytest
 
 from cyborg.errors import ServiceTimeoutError, ServiceUnavailableError, TransportError
+from cyborg.testing.wait import wait_until
 from cyborg.transport.base import (
     ClientGoalHandle,
     GoalStatus,
@@ -37,7 +34,6 @@ from cyborg.transport.base import (
     Transport,
 )
 from cyborg.transport.clock import Clock, VirtualClock
-from cyborg.testing.wait import wait_until
 from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import (
     EmotionalStateService,
@@ -49,6 +45,8 @@ from cyborg.transport.messages import (
     String,
     SystemState,
 )
+from tests.support.ros import ros_session
+from tests.support.ros2 import ros2_session
 
 T = TypeVar("T")
 _test_numbers = itertools.count(1)
@@ -106,39 +104,11 @@ class Graph:
             time.sleep(1.0)
 
 
-def _ros_support() -> ModuleType:
-    """tests/ros/conftest.py: the session's roscore and this process's ROS transport."""
-    name = "cyborg_tests_ros_support"
-    module = sys.modules.get(name)
-    if module is None:
-        path = Path(__file__).resolve().parent.parent / "ros" / "conftest.py"
-        spec = importlib.util.spec_from_file_location(name, path)
-        assert spec is not None and spec.loader is not None
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[name] = module
-        spec.loader.exec_module(module)
-    return module
-
-
-def _ros2_support() -> ModuleType:
-    """tests/ros2/support.py: the session's ROS 2 transport (only in .venv-ros2)."""
-    name = "cyborg_tests_ros2_support"
-    module = sys.modules.get(name)
-    if module is None:
-        path = Path(__file__).resolve().parent.parent / "ros2" / "support.py"
-        spec = importlib.util.spec_from_file_location(name, path)
-        assert spec is not None and spec.loader is not None
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[name] = module
-        spec.loader.exec_module(module)
-    return module
-
-
 @pytest.fixture(params=["embedded", "ros", "ros2"])
 def graph(request: pytest.FixtureRequest) -> Iterator[Graph]:
     prefix = f"contract{next(_test_numbers)}"
     if request.param == "ros2":  # in .venv-ros2 (tests/transport/conftest.py); every node a ROS 2 node
-        session2 = _ros2_support().ros2_session(request.config)
+        session2 = ros2_session(request.config)
         made2: list[Node] = []
 
         def make2(name: str) -> Node:
@@ -163,7 +133,7 @@ def graph(request: pytest.FixtureRequest) -> Iterator[Graph]:
             embedded.shutdown()
             clock.close()
         return
-    session = _ros_support().ros_session(request.config)
+    session = ros_session(request.config)
     transport = session.transport
     made: list[Node] = []
 

@@ -6,7 +6,6 @@ import json
 import os
 import re
 import subprocess
-import sys
 import time
 import urllib.error
 import urllib.request
@@ -16,8 +15,7 @@ from pathlib import Path
 import pytest
 
 from cyborg.app.config import packaged_config
-
-CYBORG = [sys.executable, "-m", "cyborg.cli"]
+from tests.support.tools import CYBORG, tool
 
 
 @pytest.fixture
@@ -54,10 +52,6 @@ def start_sim(config: str, data: Path, *extra: str) -> Iterator[str]:
     finally:
         process.terminate()
         process.wait(timeout=10)
-
-
-def tool(url: str, *args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([*CYBORG, *args, "--url", url], capture_output=True, text=True, timeout=30)
 
 
 def wait_for_state(url: str, state: str) -> dict[str, object]:

@@ -14,12 +14,11 @@ import pytest
 from aiohttp import ClientSession, WSServerHandshakeError
 
 from cyborg.app.config import load_config
+from cyborg.transport import topics
+from cyborg.transport.messages import String
 from cyborg.web.api import RobotAPI
 from cyborg.web.security import Access, Limits
-from cyborg.transport import topics
-from cyborg.transport.clock import RealClock
-from cyborg.transport.embedded import EmbeddedTransport
-from cyborg.transport.messages import String
+from tests.support.api import real_time, served
 
 MACHINE = """
 initial: idle
@@ -29,12 +28,13 @@ states:
 
 
 class Robot:
-    """An API on a free port of ``host``, and what reached the robot's topics through it."""
+    """An API on a free port of ``host`` (``url`` without the trailing slash), and what reached the
+    robot's topics through it."""
 
     def __init__(self, api: RobotAPI, url: str) -> None:
         self.api = api
         self.url = url
-        self.port = int(url.rstrip("/").rsplit(":", 1)[1])
+        self.port = int(url.rsplit(":", 1)[1])
         self.heard: list[str] = []
         self.switched: list[str] = []
 
@@ -49,26 +49,21 @@ def run(
     config_path = tmp_path / "machine.yaml"
     config_path.write_text(MACHINE)
     config = load_config(config_path)
-    clock = RealClock()
-    transport = EmbeddedTransport(clock)
+    with real_time() as (clock, transport):
 
-    async def main() -> None:
-        api = RobotAPI(transport.node("cyborg_api"), machine=config.machine, access=access)
-        robot = Robot(api, await api.start(host, 0))
-        listener = transport.node("listener")
-        listener.subscribe(topics.TEXT_FROM_SPEECH, String, lambda m, i: robot.heard.append(m.data))
-        listener.subscribe(topics.EMOTIONAL_CONTROLLER, String, lambda m, i: robot.switched.append(m.data))
-        try:
-            async with ClientSession(timeout=aiohttp.ClientTimeout(total=20)) as session:
-                await check(robot, session)
-        finally:
-            await api.stop()
+        async def main() -> None:
+            api = RobotAPI(transport.node("cyborg_api"), machine=config.machine, access=access)
+            async with served(api, host) as url:
+                robot = Robot(api, url)
+                listener = transport.node("listener")
+                listener.subscribe(topics.TEXT_FROM_SPEECH, String, lambda m, i: robot.heard.append(m.data))
+                listener.subscribe(
+                    topics.EMOTIONAL_CONTROLLER, String, lambda m, i: robot.switched.append(m.data)
+                )
+                async with ClientSession(timeout=aiohttp.ClientTimeout(total=20)) as session:
+                    await check(robot, session)
 
-    try:
         clock.run(main())
-    finally:
-        transport.shutdown()
-        clock.close()
 
 
 async def answer(response: aiohttp.ClientResponse) -> tuple[int, str]:
@@ -79,7 +74,7 @@ def test_another_site_can_neither_command_the_robot_nor_listen_in(tmp_path: Path
     """What a page of another origin can send without a CORS preflight, and a rebinding Host."""
 
     async def check(robot: Robot, session: ClientSession) -> None:
-        url = robot.url.rstrip("/")
+        url = robot.url
         # A "simple request": text/plain or an HTML form, no preflight, the body still JSON-shaped.
         async with session.post(
             url + "/api/emotion/switch", data='{"on": false}', headers={"Content-Type": "text/plain"}
@@ -102,7 +97,7 @@ def test_another_site_can_neither_command_the_robot_nor_listen_in(tmp_path: Path
         rebound = f"attacker.example:{robot.port}"
         async with session.get(url + "/api/status", headers={"Host": rebound}) as response:
             status, text = await answer(response)
-        assert status == 403 and "attacker.example" in text and robot.url in text
+        assert status == 403 and "attacker.example" in text and robot.url + "/" in text
         async with session.get(url + "/", headers={"Host": rebound}) as response:
             assert response.status == 403, "the page itself is not served to a rebound name either"
         # The speech stream: a websocket from another origin is refused at the handshake.
@@ -175,7 +170,7 @@ def test_a_given_token_is_required_on_loopback_too_and_allow_origin_trusts_a_pro
     access = Access(token="t" * 32, allowed_origins=(proxy,))
 
     async def check(robot: Robot, session: ClientSession) -> None:
-        url = robot.url.rstrip("/")
+        url = robot.url
         async with session.get(url + "/api/status") as response:
             assert response.status == 401
         headers = {"Authorization": "Bearer " + "t" * 32, "Origin": proxy, "Host": "cyborg.example"}
@@ -193,7 +188,7 @@ def test_oversized_bodies_and_too_many_streams_are_refused_naming_the_limit(tmp_
     access = Access(limits=Limits(max_body=1024, max_websockets=2))
 
     async def check(robot: Robot, session: ClientSession) -> None:
-        url = robot.url.rstrip("/")
+        url = robot.url
         async with session.post(url + "/api/say", json={"text": "x" * 5000}) as response:
             status, text = await answer(response)
         assert status == 413 and "larger than 1024 bytes" in text and "fix:" in text
@@ -236,7 +231,7 @@ def test_idle_connections_make_room_for_a_real_client(tmp_path: Path) -> None:
             still_open = [c for c, gone in zip(idle, closed, strict=True) if not gone]
             await asyncio.sleep(robot.api.guard.limits.grace)  # past their grace the 20 count as idle
             before = robot.api.guard.refused.get("idle-closed", 0)
-            async with session.get(robot.url + "api/status") as response:
+            async with session.get(robot.url + "/api/status") as response:
                 assert response.status == 200
             assert robot.api.guard.refused["idle-closed"] == before + 1
             made_room = await asyncio.gather(*(closed_by_server(c, within=1) for c in still_open))
@@ -256,7 +251,7 @@ def test_a_request_that_never_finishes_its_headers_is_cut_off(tmp_path: Path) ->
         slow[1].write(b"GET /api/status HTTP/1.1\r\nHost: 127.0.0.1\r\n")  # and nothing more
         try:
             assert await closed_by_server(slow, within=10)
-            async with session.get(robot.url + "api/status") as response:
+            async with session.get(robot.url + "/api/status") as response:
                 assert response.status == 200
         finally:
             slow[1].close()
@@ -268,7 +263,7 @@ def test_when_every_connection_is_busy_a_new_one_is_told_the_limit(tmp_path: Pat
     access = Access(limits=Limits(max_connections=3))
 
     async def check(robot: Robot, session: ClientSession) -> None:
-        url = robot.url.rstrip("/")
+        url = robot.url
         streams = [await session.ws_connect(url + "/api/ws") for _ in range(3)]  # each holds its connection
         try:
             async with ClientSession() as other, other.get(url + "/api/status") as response:

@@ -10,7 +10,6 @@ import re
 import resource
 import signal
 import subprocess
-import sys
 import time
 import urllib.request
 from collections.abc import Iterator
@@ -20,8 +19,8 @@ import aiohttp
 import pytest
 
 from cyborg.app.config import packaged_config
+from tests.support.tools import CYBORG, tool
 
-CYBORG = [sys.executable, "-m", "cyborg.cli"]
 ADDRESS = re.compile(r"dashboard and API: (http://127\.0\.0\.1:(\d+))/(#token=(\S+))?")
 
 
@@ -127,17 +126,6 @@ def test_a_thousand_idle_connections_under_the_usual_file_limit_lock_nobody_out(
     finally:
         resource.setrlimit(resource.RLIMIT_NOFILE, (soft, hard))
     assert status == 200
-
-
-def tool(url: str, *args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
-    environment = {k: v for k, v in os.environ.items() if k != "CYBORG_TOKEN"}
-    return subprocess.run(
-        [*CYBORG, *args, "--url", url],
-        capture_output=True,
-        text=True,
-        timeout=30,
-        env={**environment, **(env or {})},
-    )
 
 
 def test_beyond_loopback_the_sim_warns_and_prints_the_token_the_tool_needs(

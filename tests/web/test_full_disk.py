@@ -1,7 +1,7 @@
 """A robot whose disk is full, seen through the API and the command tool (issue 12, item 4).
 
 The robot is served in this process (`serve_api`, as `cyborg sim` does) so that its store's
-disk can fill up on demand (see tests/full_disk.py); the command tool runs as a user runs it.
+disk can fill up on demand (see tests/support/full_disk.py); the command tool runs as a user runs it.
 """
 
 from __future__ import annotations
@@ -9,31 +9,24 @@ from __future__ import annotations
 import asyncio
 import logging
 import re
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
 import pytest
 from aiohttp import ClientSession
 
-from cyborg.app.config import load_config
+from cyborg.app.config import load_config, packaged_config
 from cyborg.app.robot import build_robot
-from cyborg.app.config import packaged_config
-from cyborg.web.build import serve_api
 from cyborg.motivator.store import ControllerStore
-from cyborg.transport.clock import RealClock
 from cyborg.testing.wait import wait_until
+from cyborg.transport.clock import RealClock
 from cyborg.transport.embedded import EmbeddedTransport
-from full_disk import Disk
+from cyborg.web.build import serve_api
+from tests.support.full_disk import Disk
+from tests.support.tools import tool
 
-CYBORG = [sys.executable, "-m", "cyborg.cli"]
 FULL = "database or disk is full"
 FIX = "free some space on that disk (or give another folder with --data-dir)"
-
-
-def tool(url: str, *args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([*CYBORG, *args, "--url", url], capture_output=True, text=True, timeout=30)
 
 
 def test_with_the_disk_full_commands_work_in_memory_and_everything_says_it_is_not_saved(

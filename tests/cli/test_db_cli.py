@@ -15,6 +15,7 @@ from cyborg.cli import db as db_cli
 from cyborg.cli.db import db_group
 from cyborg.navigation.database import NavigationDatabase
 from cyborg.navigation.models import ResponseType
+from tests.support.paths import GLASSGARDEN
 
 
 @pytest.fixture
@@ -279,7 +280,7 @@ def test_import_map_reads_goals_of_a_real_arnl_map(db_path: Path, tmp_path: Path
 
 
 def test_import_map_of_glassgarden_places_the_default_places_at_its_goals(db_path: Path) -> None:
-    glassgarden = Path(__file__).resolve().parents[2].parent / "shared" / "maps" / "glassgarden.map"
+    glassgarden = GLASSGARDEN
     result = run(db_path, "import-map", str(glassgarden))
     assert result.exit_code == 0, result.output
     assert "updated 'waiting area' (the map's 'waitingarea') to (-33.58, 10.63)" in result.output

@@ -11,11 +11,10 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from cyborg.errors import InvalidValueError
 from cyborg.cli import cli
 from cyborg.cli.new import module_files
-
-CYBORG = Path(sys.executable).with_name("cyborg")
+from cyborg.errors import InvalidValueError
+from tests.support.tools import CYBORG_SCRIPT, pythonpath
 
 
 @pytest.fixture(scope="module")
@@ -48,7 +47,7 @@ def greeter(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
 
 
 def run(site: Path, *args: str | Path, cwd: Path) -> subprocess.CompletedProcess[str]:
-    env = {**os.environ, "PYTHONPATH": str(site)}
+    env = {**os.environ, **pythonpath(site)}
     return subprocess.run([*map(str, args)], env=env, cwd=cwd, capture_output=True, text=True, timeout=300)
 
 
@@ -75,9 +74,9 @@ def test_its_own_test_passes_and_every_command_knows_the_kind(greeter: tuple[Pat
     tests = run(site, sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "tests", cwd=folder)
     assert tests.returncode == 0, tests.stdout + tests.stderr
     assert "3 passed" in tests.stdout
-    kinds = run(site, CYBORG, "kinds", cwd=folder)
+    kinds = run(site, CYBORG_SCRIPT, "kinds", cwd=folder)
     assert "greeter" in kinds.stdout and "cyborg-greeter 0.1.0" in kinds.stdout
-    valid = run(site, CYBORG, "validate", "robot.yaml", cwd=folder)
+    valid = run(site, CYBORG_SCRIPT, "validate", "robot.yaml", cwd=folder)
     assert valid.returncode == 0 and "warning" not in valid.stderr, valid.stderr
 
 
@@ -85,7 +84,7 @@ def test_its_scenario_with_expect_steps_passes_in_cyborg_sim(greeter: tuple[Path
     folder, site = greeter
     result = run(
         site,
-        CYBORG,
+        CYBORG_SCRIPT,
         "sim",
         "--config",
         "robot.yaml",

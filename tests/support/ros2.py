@@ -1,6 +1,6 @@
 """The ROS 2 session of a test process in .venv-ros2: one Ros2Transport on a real clock.
 
-Loaded by tests/transport/test_contract.py (its ``ros2`` graph) and the tests under
+Used by tests/transport/test_contract.py (its ``ros2`` graph) and the tests under
 tests/ros2. The process runs on a ROS_DOMAIN_ID of its own with discovery kept on this host
 (tests/ros2/conftest.py and the runner in the ROS 1 venv set both before rclpy starts).
 """

@@ -1,0 +1,1 @@
+"""Helpers the tests share, written once: paths, subprocess runners, the API server, ROS sessions."""
