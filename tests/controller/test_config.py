@@ -12,6 +12,7 @@ from typing import Any
 
 import pytest
 import yaml
+from pydantic import BaseModel
 
 from cyborg.app.config import load_config, parse_config
 from cyborg.configfile import reader
@@ -366,7 +367,11 @@ def test_doc_pointer_is_true_and_the_doc_names_every_key() -> None:
     ]
     assert missing == [], "docs/configuration.md does not mention these keys"
     wrong_defaults = []
-    tables = {"Top level": ConfigModel, "`emotion`": EmotionSettings, "`motivator`": MotivatorSettings}
+    tables: dict[str, type[BaseModel]] = {
+        "Top level": ConfigModel,
+        "`emotion`": EmotionSettings,
+        "`motivator`": MotivatorSettings,
+    }
     for title, model in tables.items():
         section = doc.split(f"## {title}\n", 1)[1].split("\n## ", 1)[0]
         for key, written in re.findall(r"^\| `([\w.]+)` \| `([^`]+)` \|", section, re.M):

@@ -277,7 +277,7 @@ def test_random_events_never_put_two_modules_in_control(
     machine = parse_config(MACHINE).machine
     node = transport.node("cyborg_controller")
     make_client = node.action_client
-    node.action_client = lambda name, action_type: SpyClient(make_client(name, action_type), name, world)  # type: ignore[method-assign]
+    node.action_client = lambda name, action_type: SpyClient(make_client(name, action_type), name, world)  # type: ignore[method-assign, assignment, return-value]
     controller = world.controller = Controller(node, machine)
     controller.add_state_listener(world.on_change)
     controller.start()

@@ -84,7 +84,7 @@ def serve(tmp_path: Path, base: object | None, check: Callable[[Fetch, Robot], A
     with real_time() as (clock, transport):
         robot = build_robot(load_config(config_path), transport, data_dir=tmp_path / "data")
         if base is not None:
-            robot.components["rosarnl_node"] = base
+            robot.components["rosarnl_node"] = base  # type: ignore[assignment]  # the dashboard reads a BaseView
 
         async def main() -> None:
             api = RobotAPI(transport.node("cyborg_api"), machine=robot.config.machine)

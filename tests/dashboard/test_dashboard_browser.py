@@ -16,12 +16,21 @@ import shutil
 import subprocess
 import sys
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
 import pytest
-from playwright.sync_api import Browser, ConsoleMessage, Page, Route, WebSocketRoute, expect, sync_playwright
+from playwright.sync_api import (
+    Browser,
+    ConsoleMessage,
+    Locator,
+    Page,
+    Route,
+    WebSocketRoute,
+    expect,
+    sync_playwright,
+)
 
 from cyborg.app.config import packaged_config
 from tests.support.paths import GLASSGARDEN
@@ -94,7 +103,7 @@ def open_page(
     url: str,
     errors: list[str],
     size: tuple[int, int] = (1400, 900),
-    before: Callable[[Page], None] | None = None,
+    before: Callable[[Page], object] | None = None,
 ) -> Page:
     """A page (1400x900 unless told) on ``url`` that appends its console errors to ``errors``;
     ``before`` may route requests before the page loads."""
@@ -311,7 +320,7 @@ def test_without_a_base_the_map_panel_says_so(browser: Browser, tmp_path: Path) 
 
 
 SMALL = (1280, 800)  # the smallest window the layout is made for
-Box = dict[str, float]
+Box = Mapping[str, Any]  # a bounding box (x, y, width, height), a place label's with its name
 
 
 def box_of(page: Page, selector: str) -> Box:
@@ -321,7 +330,7 @@ def box_of(page: Page, selector: str) -> Box:
 
 
 def inside(inner: Box, outer: Box, slack: float = 1.0) -> bool:
-    return (
+    return bool(
         inner["x"] >= outer["x"] - slack
         and inner["y"] >= outer["y"] - slack
         and inner["x"] + inner["width"] <= outer["x"] + outer["width"] + slack
@@ -597,7 +606,8 @@ def test_layout_at_1280x800_shows_every_module_and_a_readable_log(browser: Brows
 
         figure = box_of(page, "#panel-emotion .emotion-plots figure")
         for item in page.locator("#pad-legend span").all():
-            assert inside(item.bounding_box() or {}, figure), f"the legend's {item.inner_text()} is cut"
+            legend = item.bounding_box()
+            assert legend is not None and inside(legend, figure), f"the legend's {item.inner_text()} is cut"
         space = page.evaluate("() => window.cyborgDashboard.spaceLabels")
         assert len(space["labels"]) == 10
         for label in space["labels"]:
@@ -610,7 +620,7 @@ def test_layout_at_1280x800_shows_every_module_and_a_readable_log(browser: Brows
 
 
 def label_height(page: Page, state: str) -> float:
-    return box_of(page, f'[id="state:{state}"] text')["height"]
+    return float(box_of(page, f'[id="state:{state}"] text')["height"])
 
 
 def test_state_machine_zooms_to_readable_labels(browser: Browser, sim: str) -> None:
@@ -759,7 +769,10 @@ def test_heard_sentences_show_their_confidence_and_rejected_ones_are_greyed(
         )
         expect(believed).to_contain_text("“where is the cafeteria” 42 %")
         expect(rejected).to_contain_text("“where is the like” 0 % (rejected)")
-        opacity = lambda row: float(row.evaluate("e => getComputedStyle(e).opacity"))  # noqa: E731
+
+        def opacity(row: Locator) -> float:
+            return float(row.evaluate("e => getComputedStyle(e).opacity"))
+
         assert opacity(believed) == 1.0 and opacity(rejected) < 0.6, "a rejected sentence is greyed"
         page.locator('.log-filters input[data-type="recognised"]').uncheck()
         expect(believed).to_be_hidden()

@@ -194,8 +194,12 @@ def test_controller_busy_reports_the_handover_and_holds_the_motivator(tmp_path: 
     events = transport.node("someone").publisher(topics.REGISTER_EVENT, String)
     seen: list[tuple[float, bool]] = []
     clock.loop.call_later(9.5, lambda: events.publish(String(data="go")))
+
+    def note(t: float) -> None:
+        seen.append((t, busy()))
+
     for t in (5.0, 11.0, 20.0):
-        clock.loop.call_later(t, lambda t=t: seen.append((t, busy())))
+        clock.loop.call_later(t, note, t)
     try:
         clock.run(clock.sleep(25))
     finally:

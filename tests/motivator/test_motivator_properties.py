@@ -7,6 +7,7 @@ from hypothesis import strategies as st
 
 from cyborg.emotion.model import PAD
 from cyborg.motivator.logic import (
+    Candidate,
     DecisionStatus,
     MotivationalEvent,
     MotivatorSettings,
@@ -48,7 +49,10 @@ def test_chosen_event_is_a_given_event_of_the_state_with_reward_above_cost(
     assert decision.chosen in in_state
     winner = next(c for c in decision.candidates if c.event == decision.chosen)
     assert winner.reward > winner.cost
-    score = (lambda c: c.net) if rule is SelectionRule.NET else (lambda c: c.reward)
+
+    def score(c: Candidate) -> float:
+        return c.net if rule is SelectionRule.NET else c.reward
+
     assert all(score(winner) >= score(c) for c in decision.candidates if c.eligible)
 
 

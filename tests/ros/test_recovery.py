@@ -16,13 +16,20 @@ import subprocess
 import sys
 import threading
 import time
-import xmlrpc.client
 from pathlib import Path
 from typing import IO, Any
 
 from actionlib_msgs.msg import GoalStatus, GoalStatusArray  # type: ignore[import-not-found]
 
-from tests.support.ros import NodeProcess, Observers, Processes, free_port, master_answers, yaml_path
+from tests.support.ros import (
+    NodeProcess,
+    Observers,
+    Processes,
+    free_port,
+    master_answers,
+    xmlrpc_server,
+    yaml_path,
+)
 from tests.support.wait import wait_for
 
 HERE = Path(__file__).resolve().parent
@@ -39,7 +46,7 @@ CALLER = "/cyborg_tests"
 
 
 def master_value(uri: str, method: str, *args: Any) -> Any:
-    code, message, value = getattr(xmlrpc.client.ServerProxy(uri), method)(CALLER, *args)
+    code, message, value = getattr(xmlrpc_server(uri), method)(CALLER, *args)
     assert code == 1, f"{method}{args} at {uri}: {message}"
     return value
 
@@ -54,17 +61,17 @@ def listed_nodes(uri: str) -> set[str]:
 
 
 def param(uri: str, key: str) -> Any:
-    code, _, value = xmlrpc.client.ServerProxy(uri).getParam(CALLER, key)
+    code, _, value = xmlrpc_server(uri).getParam(CALLER, key)
     return value if code == 1 else None
 
 
 def node_pid(uri: str, node: str) -> int | None:
     """The pid of ``node`` as the node itself reports it (None if the master does not list it)."""
-    code, _, api = xmlrpc.client.ServerProxy(uri).lookupNode(CALLER, node)
+    code, _, api = xmlrpc_server(uri).lookupNode(CALLER, node)
     if code != 1:
         return None
     try:
-        _, _, pid = xmlrpc.client.ServerProxy(api).getPid(CALLER)
+        _, _, pid = xmlrpc_server(api).getPid(CALLER)
     except OSError:
         return None  # listed, but gone
     return int(pid)

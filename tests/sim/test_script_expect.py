@@ -11,6 +11,7 @@ from click.testing import CliRunner
 from cyborg.app.config import load_config, packaged_config
 from cyborg.cli import cli
 from cyborg.errors import ConfigError, ScenarioFailed
+from cyborg.observe.records import Record
 from cyborg.sim.scenario import run_scenario
 from cyborg.sim.script import parse_script
 
@@ -24,7 +25,7 @@ steps:
 """
 
 
-def run(text: str) -> list[dict[str, object]]:
+def run(text: str) -> list[Record]:
     return run_scenario(load_config(packaged_config("cyborg.yaml")), parse_script(text, source="test.yaml"))
 
 

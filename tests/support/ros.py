@@ -63,9 +63,14 @@ def sourced_environment(setup_sh: Path, base: dict[str, str]) -> dict[str, str]:
     return dict(pairs)
 
 
+def xmlrpc_server(uri: str) -> Any:
+    """An XML-RPC server (a ROS master or node) at ``uri``; its answers are untyped."""
+    return xmlrpc.client.ServerProxy(uri)
+
+
 def master_answers(uri: str) -> bool:
     try:
-        code, _, state = xmlrpc.client.ServerProxy(uri).getSystemState("/cyborg_tests")
+        code, _, state = xmlrpc_server(uri).getSystemState("/cyborg_tests")
     except (OSError, xmlrpc.client.Error):
         return False
     return code == 1 and any(node == "/rosout" for _, nodes in state[0] for node in nodes)
