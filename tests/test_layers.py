@@ -7,15 +7,17 @@ and under ``TYPE_CHECKING``: a lazy import that runs against the layers is a hid
 from __future__ import annotations
 
 import ast
+import functools
 import re
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+from tests.support.paths import DOCS, ROOT
+
 SRC = ROOT / "src" / "cyborg"
-DOC = ROOT / "docs" / "architecture.md"
+DOC = DOCS / "architecture.md"
 
 LAYERS: list[set[str]] = [
     {"errors", "limits"},
@@ -54,11 +56,23 @@ def package_of(module: str) -> str:
     return parts[1] if len(parts) > 1 and parts[1] != "__version__" else ""
 
 
+@functools.cache
+def sources() -> tuple[Path, ...]:
+    """Every module of the package, in path order."""
+    return tuple(sorted(SRC.rglob("*.py")))
+
+
+@functools.cache
+def tree_of(path: Path) -> ast.Module:
+    """``path`` parsed, once for all the tests here."""
+    return ast.parse(path.read_text(encoding="utf-8"))
+
+
 def imports_of(path: Path) -> Iterator[tuple[int, str]]:
     """(line, imported cyborg module) for every import in ``path``, however deep in the code."""
     module = module_name(path)
     package = module if path.name == "__init__.py" else module.rpartition(".")[0]
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    for node in ast.walk(tree_of(path)):
         if isinstance(node, ast.Import):
             for alias in node.names:
                 yield node.lineno, alias.name
@@ -77,9 +91,10 @@ def _is_module(name: str) -> bool:
     return (SRC / relative).with_suffix(".py").is_file() or (SRC / relative / "__init__.py").is_file()
 
 
+@functools.cache
 def all_imports() -> dict[str, list[tuple[int, str]]]:
     found: dict[str, list[tuple[int, str]]] = {}
-    for path in sorted(SRC.rglob("*.py")):
+    for path in sources():
         found[module_name(path)] = [
             (line, target) for line, target in imports_of(path) if target.split(".")[0] == "cyborg"
         ]
@@ -190,7 +205,7 @@ def test_the_imports_the_review_found_would_fail(importer: str, imported: str) -
 
 def third_party_imports(path: Path) -> Iterator[tuple[int, str]]:
     """(line, module) of every absolute import of ``path`` outside this package."""
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    for node in ast.walk(tree_of(path)):
         if isinstance(node, ast.Import):
             for alias in node.names:
                 yield node.lineno, alias.name
@@ -211,7 +226,7 @@ OWNERS = {
 
 def test_frameworks_are_imported_only_behind_their_boundary() -> None:
     wrong = []
-    for path in sorted(SRC.rglob("*.py")):
+    for path in sources():
         own = package_of(module_name(path))
         for line, name in third_party_imports(path):
             owners = OWNERS.get(name.split(".")[0])
@@ -223,7 +238,7 @@ def test_frameworks_are_imported_only_behind_their_boundary() -> None:
 def test_aiohttp_serves_only_from_web() -> None:
     wrong = [
         f"{module_name(path)}:{line}"
-        for path in sorted(SRC.rglob("*.py"))
+        for path in sources()
         for line, name in third_party_imports(path)
         if name.startswith("aiohttp")
         and package_of(module_name(path)) != "web"
@@ -245,10 +260,10 @@ def test_no_middleware_switch_outside_run_and_the_transports() -> None:
     """The middleware is a strategy object (``cyborg.run.middleware``): no ``ros2`` flag is passed
     through other layers, and nothing else asks ``ros_version``."""
     wrong = []
-    for path in sorted(SRC.rglob("*.py")):
+    for path in sources():
         if package_of(module_name(path)) in MIDDLEWARE_AWARE:
             continue
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        for node in ast.walk(tree_of(path)):
             if isinstance(node, ast.arg) and node.arg in ("ros2", "ros_version"):
                 wrong.append(f"{module_name(path)}:{node.lineno} parameter {node.arg}")
             elif isinstance(node, ast.Attribute) and node.attr in ("ros2", "ros_version"):
