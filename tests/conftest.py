@@ -1,13 +1,27 @@
-"""Shared fixtures: a virtual clock and an embedded transport on it."""
+"""Shared fixtures (a virtual clock and an embedded transport on it) and the folder markers."""
 
 from __future__ import annotations
 
 from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
 
 from cyborg.transport.clock import VirtualClock
 from cyborg.transport.embedded import EmbeddedTransport
+
+TESTS = Path(__file__).resolve().parent
+FOLDER_MARKERS = {"ros": pytest.mark.ros, "ros2": pytest.mark.ros2}
+"""Every test in these folders needs that middleware (pyproject.toml lists the markers)."""
+
+
+@pytest.hookimpl(tryfirst=True)  # before -m deselects by marker
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    for item in items:
+        if TESTS in item.path.parents:
+            marker = FOLDER_MARKERS.get(item.path.relative_to(TESTS).parts[0])
+            if marker is not None:
+                item.add_marker(marker)
 
 
 @pytest.fixture

@@ -126,6 +126,7 @@ def cyborg(site: Path, *args: str | Path, cwd: Path) -> subprocess.CompletedProc
     return tools.cyborg(*args, env=tools.pythonpath(site), cwd=cwd, script=True)
 
 
+@pytest.mark.e2e  # pip-installs a package
 def test_validate_knows_the_installed_kind_and_its_settings(site: Path, tmp_path: Path) -> None:
     config = tmp_path / "greeter.yaml"
     config.write_text(CONFIG)
@@ -147,6 +148,7 @@ def test_without_the_package_the_kind_is_unknown_and_the_error_says_how_to_get_i
     assert "module 'greeter': unknown kind 'greeter'" in result.stderr and "pip install" in result.stderr
 
 
+@pytest.mark.e2e  # pip-installs a package
 def test_a_scenario_runs_the_installed_module(site: Path, tmp_path: Path) -> None:
     config = tmp_path / "greeter.yaml"
     config.write_text(CONFIG)
@@ -166,6 +168,7 @@ def test_a_scenario_runs_the_installed_module(site: Path, tmp_path: Path) -> Non
     assert said == ["Good morning, student!"], "the reply passed the speech gatekeeper"
 
 
+@pytest.mark.e2e  # pip-installs a package
 def test_the_launch_file_starts_the_installed_module_as_its_own_node(site: Path, tmp_path: Path) -> None:
     config = tmp_path / "greeter.yaml"
     config.write_text(CONFIG)

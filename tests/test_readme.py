@@ -8,7 +8,9 @@ import shlex
 import subprocess
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+import pytest
+
+from tests.support.paths import ROOT, SHARED
 
 
 def quick_start_commands() -> list[str]:
@@ -27,10 +29,12 @@ def test_quick_start_has_exactly_two_commands_and_ci_runs_the_second() -> None:
         assert os.access(ROOT / command, os.X_OK)
 
 
+@pytest.mark.e2e
+@pytest.mark.timeout(900)  # the run below may take 600 s: a fresh .venv, every dependency, 400 s of robot
 def test_main_job_runs_from_a_clean_clone(tmp_path: Path) -> None:
     clone = tmp_path / "clone"
     subprocess.run(["git", "clone", "-q", str(ROOT), str(clone)], check=True)
-    (tmp_path / "shared").symlink_to(ROOT.parent / "shared")
+    (tmp_path / "shared").symlink_to(SHARED)
     run, _ = quick_start_commands()
     result = subprocess.run(
         [

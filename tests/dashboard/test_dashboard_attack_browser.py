@@ -32,6 +32,8 @@ from tests.dashboard.test_dashboard_browser import (  # the dashboard tests' rob
     open_page,
 )
 
+pytestmark = pytest.mark.browser
+
 ATTACK = """<!doctype html>
 <html><head><title>Free cat pictures</title></head><body>
 <h1>Free cat pictures</h1>

@@ -26,6 +26,8 @@ from tests.dashboard.test_dashboard_browser import (  # the dashboard tests' rob
     sim,  # noqa: F401  (a fixture)
 )
 
+pytestmark = pytest.mark.browser
+
 THOUSAND = 1000
 
 

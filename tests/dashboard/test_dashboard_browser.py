@@ -35,6 +35,8 @@ from playwright.sync_api import (
 from cyborg.app.config import packaged_config
 from tests.support.paths import GLASSGARDEN
 
+pytestmark = pytest.mark.browser
+
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = [
     "--no-sandbox",

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
 from cyborg.hearing.audio import read_wav
 from cyborg.hearing.grammar import build_grammar
 from cyborg.hearing.module import KIND, SpeechInput, SpeechInputSettings
@@ -18,6 +20,7 @@ from tests.navigation.test_module import (  # the default robot and a user, as i
 )
 
 
+@pytest.mark.slow  # about 13 s: real speech synthesis and recognition of every turn
 def test_where_is_the_cafeteria_then_yes_drives_there(tmp_path: Path) -> None:
     clock = VirtualClock(speed=10.0)  # time runs while espeak-ng writes and pocketsphinx decodes
     cyborg = Cyborg(clock, tmp_path / "data")

@@ -144,6 +144,7 @@ def test_transcript_ends_a_trip_with_the_arrival_pose(tmp_path: Path) -> None:
     assert at_arrival[0] in around, "the arrival pose is recorded"
 
 
+@pytest.mark.slow  # about 13 s: a subprocess runs wander trips until it has printed 400 lines
 def test_ctrl_c_stops_a_scripted_day_cleanly_with_its_transcript(tmp_path: Path) -> None:
     """Ctrl-C in the terminal (SIGINT to the whole process group): the run stops where it is, says
     how many records it wrote (all of them in the transcript), leaves no traceback and no process."""

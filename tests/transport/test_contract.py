@@ -104,7 +104,13 @@ class Graph:
             time.sleep(1.0)
 
 
-@pytest.fixture(params=["embedded", "ros", "ros2"])
+@pytest.fixture(
+    params=[
+        "embedded",
+        pytest.param("ros", marks=pytest.mark.ros),
+        pytest.param("ros2", marks=pytest.mark.ros2),
+    ]
+)
 def graph(request: pytest.FixtureRequest) -> Iterator[Graph]:
     prefix = f"contract{next(_test_numbers)}"
     if request.param == "ros2":  # in .venv-ros2 (tests/transport/conftest.py); every node a ROS 2 node
