@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import re
 import tomllib
-from pathlib import Path
 from typing import Any
 
 from cyborg.app.checks import robot_warnings
@@ -12,8 +11,9 @@ from cyborg.app.config import parse_config
 from cyborg.app.registry import module_kinds
 from cyborg.sim.scenario import run_scenario
 from cyborg.sim.script import parse_script
+from tests.support.paths import DOCS
 
-DOC = Path(__file__).resolve().parents[1] / "docs" / "modules.md"
+DOC = DOCS / "modules.md"
 BLOCK = re.compile(r"^```(\w+)(?: (\w+))?\n(.*?)^```", re.S | re.M)
 
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 from click.testing import CliRunner
 
@@ -11,8 +10,9 @@ from cyborg.app.kinds_doc import kinds_markdown, settings_rows
 from cyborg.app.registry import module_kinds
 from cyborg.cli import cli
 from cyborg.modules.placeholder import PlaceholderSettings
+from tests.support.paths import DOCS
 
-DOC = Path(__file__).resolve().parents[1] / "docs" / "configuration.md"
+DOC = DOCS / "configuration.md"
 BUILT_IN = [
     "conversation",
     "event_script",

@@ -3,13 +3,11 @@
 from __future__ import annotations
 
 import tomllib
-from pathlib import Path
 
 from packaging.version import Version  # pytest depends on packaging
 
 import cyborg
-
-ROOT = Path(__file__).resolve().parents[1]
+from tests.support.paths import ROOT
 
 
 def test_pyproject_reads_the_version_from_the_package() -> None:

@@ -17,6 +17,7 @@ from pydantic import BaseModel
 from cyborg.app.config import load_config, parse_config
 from cyborg.configfile import reader
 from cyborg.errors import ConfigError
+from tests.support.paths import DOCS
 
 
 @pytest.fixture(autouse=True, params=["C loader", "Python loader"])
@@ -345,7 +346,7 @@ def test_doc_pointer_is_true_and_the_doc_names_every_key() -> None:
     from cyborg.emotion.model import EmotionSettings, HalfLives
     from cyborg.motivator.logic import MotivationalEvent, MotivatorSettings
 
-    doc_path = Path(__file__).resolve().parents[2] / "docs" / "configuration.md"
+    doc_path = DOCS / "configuration.md"
     doc = doc_path.read_text(encoding="utf-8")
     models: list[Any] = [
         ConfigModel,

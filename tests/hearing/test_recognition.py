@@ -17,6 +17,7 @@ from cyborg.modules.conversation import is_greeting
 from cyborg.modules.kind import Listening
 from cyborg.navigation.database import NavigationDatabase
 from cyborg.navigation.keywords import detect_answer, detect_navigation
+from tests.support.paths import SCENARIOS
 
 SCENARIO_LINES = [  # every line a user says in tests/scenarios/scenario_*.yaml, but "nothing to see here"
     "hello",
@@ -53,7 +54,7 @@ def event_of(text: str, db: NavigationDatabase) -> str | None:
 
 def test_the_scenario_lines_in_the_tests_are_those_of_the_scenarios() -> None:
     said = set()
-    for path in Path(__file__).parents[1].joinpath("scenarios").glob("scenario_*.yaml"):
+    for path in SCENARIOS.glob("scenario_*.yaml"):
         said |= {
             line.split("say:", 1)[1].strip().strip('"')
             for line in path.read_text().splitlines()

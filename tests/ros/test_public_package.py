@@ -27,10 +27,10 @@ from cyborg_controller.msg import (  # type: ignore[import-not-found]
     StateMachineGoal,
 )
 
+from tests.support.paths import ROOT
 from tests.support.ros import Observers, Processes
 
 HERE = Path(__file__).resolve().parent
-REPO = HERE.parent.parent
 MACHINE = HERE / "public_package.yaml"
 MODULE = HERE / "public_package_module.py"
 SYSTEM_PYTHON = "/usr/bin/python3"  # Debian's, which the ROS packages are built for
@@ -56,7 +56,7 @@ def install_public_flavour(tmp_path: Path) -> Path:
     venv = tmp_path / "venv"
     subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True)
     done = subprocess.run(
-        [str(REPO / "scripts" / "install-ros"), "--venv", str(venv), "--flavour", "public"],
+        [str(ROOT / "scripts" / "install-ros"), "--venv", str(venv), "--flavour", "public"],
         capture_output=True,
         text=True,
     )
@@ -67,7 +67,7 @@ def install_public_flavour(tmp_path: Path) -> Path:
     assert "controller fills with EXECUTE" in done.stdout
     assert (venv / "ros" / "flavour").read_text().strip() == "public"
     again = subprocess.run(
-        [str(REPO / "scripts" / "install-ros"), "--venv", str(venv)], capture_output=True, text=True
+        [str(ROOT / "scripts" / "install-ros"), "--venv", str(venv)], capture_output=True, text=True
     )
     assert (again.returncode, again.stdout) == (0, ""), "a later run without --flavour must keep the choice"
     assert (venv / "ros" / "flavour").read_text().strip() == "public"
