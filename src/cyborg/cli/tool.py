@@ -25,7 +25,7 @@ from cyborg.web.access import TOKEN_ENV
 __all__ = ["COMMANDS", "ToolError", "link_options"]
 
 
-class ToolError(click.ClickException):
+class ToolError(CyborgError, click.ClickException):
     """A command to the robot failed: printed as 'Error: ...', exit code 1."""
 
 
