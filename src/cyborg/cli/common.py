@@ -101,6 +101,38 @@ def check_data_folder(ctx: click.Context, param: click.Parameter, value: Path | 
     return value
 
 
+config_option = click.option(
+    "--config",
+    "config_path",
+    type=click.Path(path_type=Path),
+    help="state machine YAML (default: the packaged Cyborg)",
+)
+"""``--config FILE``: the robot's configuration (the command receives ``config_path``)."""
+
+map_option = click.option(
+    "--map",
+    "map_path",
+    type=click.Path(path_type=Path),
+    help="map for the simulated base: ARNL .map or map_server .yaml",
+)
+"""``--map FILE``: the world's map (the command receives ``map_path``)."""
+
+
+def data_dir_option(
+    help: str = "folder of the databases",
+) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """``--db``/``--data-dir FOLDER``: where the robot keeps its databases (``data_dir``)."""
+    return click.option(
+        "--db",
+        "--data-dir",
+        "data_dir",
+        type=click.Path(path_type=Path),
+        default=None,
+        callback=check_data_folder,
+        help=help,
+    )
+
+
 duration_option = click.option(
     "--duration",
     type=float,
