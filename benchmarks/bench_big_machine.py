@@ -29,16 +29,16 @@ import yaml
 from _machine import machine_line, percentile
 
 from cyborg.app.config import parse_config
-from cyborg.app.tuning import freeze_built, thaw
 from cyborg.app.robot import build_robot
-from cyborg.web.api import RobotAPI
-from cyborg.web.dashboard import Dashboard
+from cyborg.app.tuning import freeze_built, thaw
 from cyborg.testing.machines import structured
 from cyborg.transport import topics
 from cyborg.transport.base import GoalStatus
 from cyborg.transport.clock import RealClock
 from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import String
+from cyborg.web.api import RobotAPI
+from cyborg.web.dashboard import Dashboard
 
 
 def main() -> None:

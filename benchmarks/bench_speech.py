@@ -23,12 +23,11 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _machine import machine_line, percentile
 
-from cyborg.app.config import load_config
+from cyborg.app.config import load_config, packaged_config
 from cyborg.app.context import heard_by
 from cyborg.app.registry import module_kinds
 from cyborg.hearing.module import SpeechInput
 from cyborg.hearing.synth import VOICES, synthesise
-from cyborg.app.config import packaged_config
 from cyborg.modules.conversation import is_greeting
 from cyborg.navigation.database import NavigationDatabase
 from cyborg.navigation.keywords import detect_answer, detect_navigation

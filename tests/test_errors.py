@@ -125,10 +125,10 @@ def test_framework_errors_keep_their_framework_base() -> None:
     import click
     from aiohttp import web
 
-    from cyborg.web.api import CommandError
-    from cyborg.cli.tool import ToolError
     from cyborg.cli.db import InputError
+    from cyborg.cli.tool import ToolError
     from cyborg.storage import Unusable
+    from cyborg.web.api import CommandError
 
     assert issubclass(InputError, click.ClickException) and InputError("x").exit_code == 2
     assert issubclass(ToolError, click.ClickException)

@@ -10,9 +10,8 @@ import asyncio
 import sqlite3
 from pathlib import Path
 
-from cyborg.app.config import load_config
+from cyborg.app.config import load_config, packaged_config
 from cyborg.app.robot import build_robot
-from cyborg.app.config import packaged_config
 from cyborg.modules.kind import Component
 from cyborg.transport import topics
 from cyborg.transport.clock import VirtualClock

@@ -7,7 +7,8 @@ import re
 
 import pytest
 
-from cyborg.app.config import load_config
+from cyborg.app.config import load_config, packaged_config
+from cyborg.controller.machine import MachineSpec
 from cyborg.drawing.layout import (
     ROOT,
     START,
@@ -19,8 +20,6 @@ from cyborg.drawing.layout import (
     machine_key,
     placing_arrows,
 )
-from cyborg.controller.machine import MachineSpec
-from cyborg.app.config import packaged_config
 from cyborg.testing.machines import machine_spec, random_machine, structured
 
 

@@ -17,6 +17,12 @@ from cyborg.app.robot import Robot, build_robot
 from cyborg.app.view import BaseStatus
 from cyborg.emotion.model import EmotionSettings
 from cyborg.emotion.system import EmotionSystem
+from cyborg.maps import Cell, KeepOutZone, NamedPose, OccupancyMap
+from cyborg.modules.behaviour import HEARTBEAT_SECONDS
+from cyborg.transport import topics
+from cyborg.transport.clock import RealClock
+from cyborg.transport.embedded import EmbeddedTransport
+from cyborg.transport.messages import String
 from cyborg.web.api import RobotAPI
 from cyborg.web.dashboard import (
     MAP_COLOURS,
@@ -28,12 +34,6 @@ from cyborg.web.dashboard import (
     route_points,
 )
 from cyborg.web.ros_view import remote_robot
-from cyborg.maps import Cell, KeepOutZone, NamedPose, OccupancyMap
-from cyborg.modules.behaviour import HEARTBEAT_SECONDS
-from cyborg.transport import topics
-from cyborg.transport.clock import RealClock
-from cyborg.transport.embedded import EmbeddedTransport
-from cyborg.transport.messages import String
 
 MACHINE = """
 initial: idle

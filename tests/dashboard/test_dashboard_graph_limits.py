@@ -20,10 +20,10 @@ import pytest
 
 from cyborg.app.config import load_config
 from cyborg.drawing.layout import DIRECTIONS
-from cyborg.web import api as api_module
-from cyborg.web.api import RobotAPI
 from cyborg.transport.clock import RealClock
 from cyborg.transport.embedded import EmbeddedTransport
+from cyborg.web import api as api_module
+from cyborg.web.api import RobotAPI
 
 FAKE_DOT = """#!{python}
 import os, resource, subprocess, sys, time

@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from cyborg.app.config import load_config
+from cyborg.app.config import load_config, packaged_config
 from cyborg.app.context import heard_by
 from cyborg.app.registry import module_kinds
-from cyborg.app.config import packaged_config
 from cyborg.modules.kind import Listening
 
 

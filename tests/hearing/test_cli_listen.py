@@ -7,8 +7,8 @@ from pathlib import Path
 
 from click.testing import CliRunner
 
-from cyborg.hearing.synth import VOICES, synthesise
 from cyborg.cli import cli
+from cyborg.hearing.synth import VOICES, synthesise
 
 
 def test_listen_to_a_wav_prints_the_sentence_and_that_no_robot_took_it(tmp_path: Path) -> None:

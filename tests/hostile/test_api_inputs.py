@@ -8,13 +8,13 @@ from typing import Any
 from aiohttp import ClientSession
 
 from cyborg.emotion.model import EmotionSettings
-from cyborg.web.api import RobotAPI
 from cyborg.limits import MAX_TEXT_LENGTH
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo
 from cyborg.transport.clock import RealClock
 from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import String
+from cyborg.web.api import RobotAPI
 
 
 def post_all(requests: list[tuple[str, bytes]]) -> tuple[list[tuple[int, Any]], dict[str, list[str]]]:

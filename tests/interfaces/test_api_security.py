@@ -14,12 +14,12 @@ import pytest
 from aiohttp import ClientSession, WSServerHandshakeError
 
 from cyborg.app.config import load_config
-from cyborg.web.api import RobotAPI
-from cyborg.web.security import Access, Limits
 from cyborg.transport import topics
 from cyborg.transport.clock import RealClock
 from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import String
+from cyborg.web.api import RobotAPI
+from cyborg.web.security import Access, Limits
 
 MACHINE = """
 initial: idle

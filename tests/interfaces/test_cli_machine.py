@@ -6,8 +6,8 @@ from pathlib import Path
 
 from click.testing import CliRunner
 
-from cyborg.cli import cli
 from cyborg.app.config import packaged_config
+from cyborg.cli import cli
 
 GOOD = """
 states:

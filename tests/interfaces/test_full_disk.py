@@ -17,14 +17,13 @@ from typing import Any
 import pytest
 from aiohttp import ClientSession
 
-from cyborg.app.config import load_config
+from cyborg.app.config import load_config, packaged_config
 from cyborg.app.robot import build_robot
-from cyborg.app.config import packaged_config
-from cyborg.web.build import serve_api
 from cyborg.motivator.store import ControllerStore
-from cyborg.transport.clock import RealClock
 from cyborg.testing.wait import wait_until
+from cyborg.transport.clock import RealClock
 from cyborg.transport.embedded import EmbeddedTransport
+from cyborg.web.build import serve_api
 from full_disk import Disk
 
 CYBORG = [sys.executable, "-m", "cyborg.cli"]

@@ -11,9 +11,9 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from cyborg.errors import InvalidValueError
 from cyborg.cli import cli
 from cyborg.cli.new import module_files
+from cyborg.errors import InvalidValueError
 
 CYBORG = Path(sys.executable).with_name("cyborg")
 

@@ -6,10 +6,10 @@ from __future__ import annotations
 from typing import Any
 
 from cyborg.errors import TransportError
-from cyborg.web.ros_view import EmotionSwitchMirror
 from cyborg.transport import topics
 from cyborg.transport.clock import VirtualClock
 from cyborg.transport.embedded import EmbeddedTransport
+from cyborg.web.ros_view import EmotionSwitchMirror
 
 
 def test_the_switch_reads_as_unknown_while_the_master_is_away(clock: VirtualClock) -> None:

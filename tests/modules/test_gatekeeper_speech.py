@@ -6,15 +6,15 @@ import itertools
 
 from cyborg.app.config import parse_config
 from cyborg.controller.runtime import Controller
-from cyborg.modules.gatekeeper import Gatekeeper
 from cyborg.modules.behaviour import BehaviourModule, GoalContext
-from cyborg.transport.topics import SPEECH_INPUT_TOPIC, SPOKEN_TOPIC
+from cyborg.modules.gatekeeper import Gatekeeper
 from cyborg.modules.speech import TextToSpeech, estimated_duration
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo
 from cyborg.transport.clock import VirtualClock
 from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import String
+from cyborg.transport.topics import SPEECH_INPUT_TOPIC, SPOKEN_TOPIC
 
 MACHINE = """
 states:

@@ -5,11 +5,11 @@ from __future__ import annotations
 import wave
 from pathlib import Path
 
-from cyborg.transport.topics import SPEECH_INPUT_TOPIC
 from cyborg.modules.speech import TextToSpeech
 from cyborg.transport.clock import RealClock
 from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import String
+from cyborg.transport.topics import SPEECH_INPUT_TOPIC
 
 
 def test_sentences_become_wav_files(tmp_path: Path) -> None:

@@ -8,9 +8,8 @@ import math
 import pytest
 from pydantic import ValidationError
 
-from cyborg.app.config import load_config
+from cyborg.app.config import load_config, packaged_config
 from cyborg.emotion.model import PAD
-from cyborg.app.config import packaged_config
 from cyborg.motivator.logic import (
     DecisionStatus,
     MotivationalEvent,

@@ -24,20 +24,18 @@ from zoneinfo import ZoneInfo
 import pytest
 import yaml
 
-from cyborg.app.config import LoadedConfig, parse_config
+from cyborg.app.config import LoadedConfig, packaged_config, parse_config
 from cyborg.app.registry import module_kinds
 from cyborg.app.robot import build_robot
 from cyborg.emotion.model import NEUTRAL, TABLE_2_2
-from cyborg.app.config import packaged_config
 from cyborg.maps import Cell, OccupancyMap, Point, default_map_path, load_map
 from cyborg.modules.kind import BuildContext, ModuleKind
-from cyborg.transport.topics import SPOKEN_TOPIC
 from cyborg.modules.speech import estimated_duration
 from cyborg.navigation.content import DEFAULT_RESPONSES
 from cyborg.navigation.database import NavigationDatabase
 from cyborg.navigation.kind import NavigationSettings
-from cyborg.navigation.module import WANDER_CHECK, WANDER_DEBOUNCE, NavigationModule
 from cyborg.navigation.models import CalendarEvent, Location, ResponseType
+from cyborg.navigation.module import WANDER_CHECK, WANDER_DEBOUNCE, NavigationModule
 from cyborg.sim.base import PathState, SimulatedBase, SimulatedBaseSettings
 from cyborg.sim.planner import RoutePlanner
 from cyborg.transport import topics
@@ -51,6 +49,7 @@ from cyborg.transport.messages import (
     String,
     SystemState,
 )
+from cyborg.transport.topics import SPOKEN_TOPIC
 
 CONFIG = packaged_config("cyborg.yaml")
 EMOTIONS = sorted([NEUTRAL, *TABLE_2_2])

@@ -23,8 +23,8 @@ from test_ros2_foreign_module import PATIENCE, Process, support
 from cyborg.app.config import load_config
 from cyborg.app.context import BuildContext
 from cyborg.app.parts import build_part
-from cyborg.transport import topics
 from cyborg.testing.wait import wait_until
+from cyborg.transport import topics
 from cyborg.transport.messages import String, SystemState
 
 HERE = Path(__file__).resolve().parent

@@ -12,8 +12,8 @@ from test_ros2_foreign_module import PATIENCE, Process, support
 
 from cyborg.app.config import load_config
 from cyborg.app.robot import build_robot
-from cyborg.transport import topics
 from cyborg.testing.wait import wait_until
+from cyborg.transport import topics
 from cyborg.transport.messages import SystemState
 
 HERE = Path(__file__).resolve().parent

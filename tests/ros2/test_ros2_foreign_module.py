@@ -29,9 +29,9 @@ import pytest
 from cyborg.app.config import load_config
 from cyborg.app.robot import Robot, build_robot
 from cyborg.modules.gatekeeper import Gatekeeper
+from cyborg.testing.wait import wait_until
 from cyborg.transport import topics
 from cyborg.transport.clock import Clock
-from cyborg.testing.wait import wait_until
 from cyborg.transport.messages import String, SystemState
 
 HERE = Path(__file__).resolve().parent

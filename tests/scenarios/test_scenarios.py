@@ -11,8 +11,7 @@ from pathlib import Path
 import pytest
 from expectations import CHECKS, Record
 
-from cyborg.app.config import load_config
-from cyborg.app.config import packaged_config
+from cyborg.app.config import load_config, packaged_config
 from cyborg.sim.scenario import run_scenario
 from cyborg.sim.script import load_script
 

@@ -18,19 +18,18 @@ from pathlib import Path
 
 import pytest
 
-from cyborg.app.config import load_config
-from cyborg.app.config import packaged_config
+from cyborg.app.config import load_config, packaged_config
 from cyborg.maps import OccupancyMap, default_map_path, load_map
 from cyborg.sim import scenario
 from cyborg.sim.base import SimulatedBase, pose_stamped
 from cyborg.sim.planner import RoutePlanner
 from cyborg.sim.script import load_script
 from cyborg.transport import topics
-from cyborg.transport.topics import BaseApi
 from cyborg.transport.base import GoalStatus
 from cyborg.transport.clock import VirtualClock
 from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import NavigateToPoseAction, NavigateToPoseFeedback, NavigateToPoseGoal
+from cyborg.transport.topics import BaseApi
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
 

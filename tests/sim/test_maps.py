@@ -366,9 +366,8 @@ def test_a_map_without_goals_leaves_the_last_maps_places_behind(tmp_path: Path) 
     """The same data folder, first the campus map, then Willow (no goals): no campus place is a target."""
     import random
 
-    from cyborg.app.config import load_config
+    from cyborg.app.config import load_config, packaged_config
     from cyborg.app.robot import build_robot
-    from cyborg.app.config import packaged_config
     from cyborg.navigation.database import NavigationDatabase
     from cyborg.transport.clock import VirtualClock
     from cyborg.transport.embedded import EmbeddedTransport

@@ -15,8 +15,8 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from cyborg.errors import ConfigError
 from cyborg.cli import cli
+from cyborg.errors import ConfigError
 from cyborg.sim.script import Match, parse_script, parse_seconds
 
 
@@ -121,8 +121,7 @@ def test_calendar_entry_at_an_unknown_place_names_its_line(tmp_path: Path) -> No
 
 
 def test_transcript_ends_a_trip_with_the_arrival_pose(tmp_path: Path) -> None:
-    from cyborg.app.config import load_config
-    from cyborg.app.config import packaged_config
+    from cyborg.app.config import load_config, packaged_config
     from cyborg.sim.base import SimulatedBase
     from cyborg.sim.scenario import ScenarioRun
 

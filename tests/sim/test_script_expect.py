@@ -8,10 +8,9 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from cyborg.app.config import load_config
-from cyborg.errors import ConfigError, ScenarioFailed
+from cyborg.app.config import load_config, packaged_config
 from cyborg.cli import cli
-from cyborg.app.config import packaged_config
+from cyborg.errors import ConfigError, ScenarioFailed
 from cyborg.sim.scenario import run_scenario
 from cyborg.sim.script import parse_script
 

@@ -27,6 +27,7 @@ from typing import Any, TypeVar
 import pytest
 
 from cyborg.errors import ServiceTimeoutError, ServiceUnavailableError, TransportError
+from cyborg.testing.wait import wait_until
 from cyborg.transport.base import (
     ClientGoalHandle,
     GoalStatus,
@@ -37,7 +38,6 @@ from cyborg.transport.base import (
     Transport,
 )
 from cyborg.transport.clock import Clock, VirtualClock
-from cyborg.testing.wait import wait_until
 from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import (
     EmotionalStateService,
