@@ -12,8 +12,8 @@ from typing import Any
 import pytest
 
 from cyborg.errors import TransportError
-from cyborg.transport._goals import ClientGoal
 from cyborg.transport._callbacks import CallbackRunner
+from cyborg.transport._goals import ClientGoal
 from cyborg.transport._queue import SubscriptionQueue
 from cyborg.transport.base import GoalStatus, MessageInfo, TransportStats
 from cyborg.transport.clock import VirtualClock
