@@ -21,6 +21,8 @@ POLL_PERIOD = 0.01  # clock seconds between two looks for a server
 
 
 class Host(Protocol):
+    """The transport, as its topics, services and actions see it."""
+
     clock: Clock
 
     @property

@@ -17,9 +17,10 @@ Threads and order, on every transport:
   callbacks) runs on the clock's event loop, one at a time, so components need no locks. None
   runs inside the call that caused it: ``publish``, ``send_goal`` or ``accept`` return first.
 * A callback that returns an awaitable has it run as a task; the transport does not wait for
-  it, so the next callback may run before it finishes.
+  it, so the next callback may run before it finishes. (A service handler's awaitable is
+  awaited instead: its result is the response.)
 * A callback (or its task) that raises is logged and counted in :attr:`Transport.stats`;
-  delivery carries on.
+  delivery carries on. (A service handler's failure goes to its caller instead.)
 * Call the methods of a transport, its nodes and what they hand out from the loop's thread.
   ROS delivers on threads of its own and hands every callback to the loop
   (:meth:`Transport.to_loop`).
@@ -368,6 +369,7 @@ class Node(ABC):
     ``navigate_to_pose`` action instead of ROSARNL's ``move_base``)."""
 
     def __init__(self, transport: Transport, name: str) -> None:
+        """An implementation calls this first, with the name :meth:`Transport.node` checked."""
         self.name = name
         self.clock = transport.clock
         self._transport = transport
@@ -514,6 +516,7 @@ class Transport(ABC):
     """The injected clock, whose loop runs every callback."""
 
     def __init__(self, clock: Clock) -> None:
+        """An implementation calls this first; its :meth:`node` hands the checks to ``_add_node``."""
         self.clock = clock
         self._stats = TransportStats()
         self._nodes: dict[str, Node] = {}
@@ -587,9 +590,11 @@ class Transport(ABC):
         """What :meth:`close` releases beyond the nodes, once: the middleware's context."""
 
     def __enter__(self) -> Self:
+        """The transport itself."""
         return self
 
     def __exit__(self, *exc_info: object) -> None:
+        """:meth:`close` it, whether the block raised or not."""
         self.close()
 
     def to_loop(self, callback: Callable[..., object], *args: Any) -> None:
