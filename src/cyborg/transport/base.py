@@ -316,8 +316,11 @@ class ClientGoalHandle(ABC, Generic[G, R, F]):
 
     @abstractmethod
     def add_done_callback(self, callback: Callable[[ClientGoalHandle[G, R, F]], None]) -> None:
-        """Call ``callback(handle)`` once, on the loop, when the goal reaches a terminal status
-        (on a later loop turn if it already has)."""
+        """Call ``callback(handle)`` once, on the loop, when the goal reaches a terminal status.
+
+        If it already has, the callback runs on a later loop turn with ``call_soon``: then a
+        failure goes to the loop's exception handler, uncounted, and an awaitable is not run.
+        """
 
 
 class ActionClient(ABC, Generic[G, R, F]):
@@ -526,7 +529,7 @@ class Transport(ABC):
             logging.getLogger(type(self).__module__), self._count_callback_error
         )
         """Runs a component's callback now, on the loop: logs and counts its failure, and runs an
-        awaitable it returns as a task. Everything a transport calls back goes through it."""
+        awaitable it returns as a task. A transport calls back through it (service handlers aside)."""
 
     @property
     def stats(self) -> TransportStats:
