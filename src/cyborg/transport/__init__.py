@@ -19,6 +19,7 @@ from cyborg.transport.base import (
     ServiceProxy,
     Subscription,
     Transport,
+    TransportStats,
 )
 from cyborg.transport.clock import Clock, RealClock, VirtualClock
 
@@ -40,6 +41,7 @@ __all__ = [
     "ServiceProxy",
     "Subscription",
     "Transport",
+    "TransportStats",
     "VirtualClock",
 ]
 

@@ -13,9 +13,9 @@ Its modules, one idea each:
   (:mod:`.host`: what they need of the transport);
 * :mod:`.convert`: our messages to and from the generated ROS 2 classes.
 
-The subscription queue and the client's goal handle are the ones every transport shares
-(:mod:`cyborg.transport._queue`, :mod:`cyborg.transport._goals`). This package is the only
-place that imports rclpy.
+The subscription queue, the client's goal handle and the message walk are the ones every
+transport shares (:mod:`cyborg.transport._queue`, :mod:`cyborg.transport._goals`,
+:mod:`cyborg.transport._convert`). This package is the only place that imports rclpy.
 """
 
 from cyborg.transport.ros2.transport import Ros2Node, Ros2Transport
