@@ -17,6 +17,7 @@ Its modules, one idea each:
   (:mod:`cyborg.transport._host`: what they need of the transport);
 * :mod:`.convert`: our messages to and from the generated ROS classes;
 * :mod:`.master`: calls to the master, and living through its outage or restart;
+  :mod:`.connections`: waiting until this process's topics are connected;
 * :mod:`.patches`: rospy's behaviour changed, installed when a RosTransport is made
   (importing changes nothing).
 

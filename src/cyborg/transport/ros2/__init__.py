@@ -11,7 +11,8 @@ Its modules, one idea each:
 * :mod:`.transport`: :class:`Ros2Transport`, its nodes and parameters (start here);
 * :mod:`.topics`, :mod:`.services`, :mod:`.actions`: what a node hands out
   (:mod:`.host`: what they need of the transport);
-* :mod:`.convert`: our messages to and from the generated ROS 2 classes.
+* :mod:`.convert`: our messages to and from the generated ROS 2 classes;
+* :mod:`.executor`: the executor that spins the rclpy nodes and hands work over to the loop.
 
 The subscription queue, the client's goal handle and the message walk are the ones every
 transport shares (:mod:`cyborg.transport._queue`, :mod:`cyborg.transport._goals`,
