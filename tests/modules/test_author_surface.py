@@ -8,7 +8,6 @@ import cyborg.modules
 import cyborg.testing
 
 MODULE_NAMES = [
-    "HEARTBEAT_SECONDS",
     "Abort",
     "BehaviourModule",
     "BuildContext",
@@ -20,7 +19,6 @@ MODULE_NAMES = [
     "ModuleSettings",
     "Node",
     "Outcome",
-    "StateServer",
 ]
 
 

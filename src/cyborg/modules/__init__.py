@@ -31,19 +31,11 @@ A module is a class on :class:`BehaviourModule` that serves one or more states; 
 
 from pydantic import Field
 
-from cyborg.modules.behaviour import (
-    HEARTBEAT_SECONDS,
-    Abort,
-    BehaviourModule,
-    GoalContext,
-    Outcome,
-    StateServer,
-)
+from cyborg.modules.behaviour import Abort, BehaviourModule, GoalContext, Outcome
 from cyborg.modules.kind import BuildContext, Component, ModuleKind, ModuleSettings
 from cyborg.transport.base import MessageInfo, Node
 
 __all__ = [
-    "HEARTBEAT_SECONDS",
     "Abort",
     "BehaviourModule",
     "BuildContext",
@@ -55,5 +47,4 @@ __all__ = [
     "ModuleSettings",
     "Node",
     "Outcome",
-    "StateServer",
 ]
