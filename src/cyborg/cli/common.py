@@ -119,16 +119,19 @@ map_option = click.option(
 
 
 def data_dir_option(
-    help: str = "folder of the databases",
+    help: str = "folder of the databases", *, checked: bool = True
 ) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
-    """``--db``/``--data-dir FOLDER``: where the robot keeps its databases (``data_dir``)."""
+    """``--db``/``--data-dir FOLDER``: where the robot keeps its databases (``data_dir``).
+
+    ``checked``: a file given as the folder is a usage error (exit 2); else the command finds out
+    when it opens the folder."""
     return click.option(
         "--db",
         "--data-dir",
         "data_dir",
         type=click.Path(path_type=Path),
         default=None,
-        callback=check_data_folder,
+        callback=check_data_folder if checked else None,
         help=help,
     )
 

@@ -43,7 +43,8 @@ if TYPE_CHECKING:
     help="port of the API and dashboard (0: any free port)",
 )
 @data_dir_option(
-    "folder of the databases (default: $CYBORG_DATA_DIR or ~/.local/share/cyborg; scripts: a temporary one)"
+    "folder of the databases (default: $CYBORG_DATA_DIR or ~/.local/share/cyborg; scripts: a temporary one)",
+    checked=False,
 )
 @click.option(
     "--script", "script_path", type=click.Path(path_type=Path), help="scenario script to run (YAML)"
