@@ -20,7 +20,7 @@ from typing import Any
 import actionlib  # type: ignore[import-not-found]
 
 from cyborg.transport._goals import ClientGoal
-from cyborg.transport._host import Host, poll_until
+from cyborg.transport._host import Host
 from cyborg.transport.base import (
     ActionClient,
     ActionServer,
@@ -271,8 +271,18 @@ class RosActionClient(ActionClient[G, R, F]):
         )
 
     async def wait_for_server(self, timeout: float) -> bool:
-        """Poll :meth:`server_available` on the clock (:func:`~cyborg.transport._host.poll_until`)."""
-        return await poll_until(self.server_available, self.transport.clock, timeout)
+        """Poll :meth:`server_available` until ``timeout`` *real* seconds pass.
+
+        rospy and actionlib find a server on their own threads, in real time, whatever speed the
+        clock runs at: a deadline on a virtual clock at speed 25 would give them 1/25 of it, and a
+        module's server found a moment late would end its state as aborted.
+        """
+        deadline = time.monotonic() + timeout
+        while not self.server_available():
+            if time.monotonic() >= deadline:
+                return False
+            await asyncio.sleep(0.01)
+        return True
 
     def send_goal(
         self,
