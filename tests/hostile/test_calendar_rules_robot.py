@@ -18,8 +18,8 @@ from subprocess import CompletedProcess
 
 import pytest
 
-from cyborg.navigation.calendar import import_ics
 from cyborg.navigation.database import NavigationDatabase
+from cyborg.navigation.ics import import_ics
 from cyborg.navigation.models import CalendarEvent
 
 SCRIPT = """\

@@ -1,4 +1,8 @@
-"""Greeting detection, the conversation's quiet timeout, and the generated tune."""
+"""Greeting detection, the conversation's quiet timeout, and the generated tune.
+
+The modules run in :class:`cyborg.testing.ModuleHarness`, as a module author's would; only the
+real player process, which needs real time, gets a transport of its own.
+"""
 
 from __future__ import annotations
 
@@ -10,13 +14,13 @@ from pathlib import Path
 
 import pytest
 
-from cyborg.modules.conversation import ConversationModule, is_greeting
-from cyborg.modules.music import MUSIC_ACTION, MusicModule, synthesise
-from cyborg.transport import topics
-from cyborg.transport.base import GoalStatus
-from cyborg.transport.clock import RealClock, VirtualClock
+from cyborg.modules.conversation import CONVERSATION_KIND, is_greeting
+from cyborg.modules.music import KIND as MUSIC_KIND
+from cyborg.modules.music import MUSIC_ACTION, MUSIC_FEEDBACK, MusicModule, synthesise
+from cyborg.testing import GoalStatus, ModuleHarness
+from cyborg.transport.clock import RealClock
 from cyborg.transport.embedded import EmbeddedTransport
-from cyborg.transport.messages import StateMachineAction, StateMachineGoal, String
+from cyborg.transport.messages import StateMachineAction, StateMachineGoal
 
 
 @pytest.mark.parametrize(
@@ -37,29 +41,18 @@ def test_greetings(text: str, expected: bool) -> None:
     assert is_greeting(text) is expected
 
 
-def test_greeting_asks_for_conversation_and_quiet_ends_it(clock: VirtualClock) -> None:
-    transport = EmbeddedTransport(clock)
-    ConversationModule(transport.node("cyborg_conversation"), quiet_seconds=30)
-    probe = transport.node("probe")
-    events: list[str] = []
-    probe.subscribe(topics.REGISTER_EVENT, String, lambda m, i: events.append(m.data))
-    speech = probe.publisher(topics.TEXT_FROM_SPEECH, String)
-    client = probe.action_client("cyborg_conversation/conversation", StateMachineAction)
-
-    async def main() -> tuple[GoalStatus, float]:
-        speech.publish(String("Hello!"))
-        await clock.sleep(0.1)
-        start = clock.monotonic()
-        handle = client.send_goal(StateMachineGoal("idle", "conversation_interest", "conversation"))
-        await clock.sleep(20)
-        speech.publish(String("what a nice day"))  # keeps the conversation going
-        status = await handle.wait()
-        return status, clock.monotonic() - start
-
-    status, lasted = clock.run(main())
-    assert events == ["conversation_interest"]
-    assert status is GoalStatus.SUCCEEDED
-    assert lasted == pytest.approx(50.0, abs=0.2)
+def test_greeting_asks_for_conversation_and_quiet_ends_it() -> None:
+    with ModuleHarness(CONVERSATION_KIND, {"quiet_seconds": 30}, node_name="cyborg_conversation") as robot:
+        robot.hear("Hello!")
+        assert robot.events == ["conversation_interest"]
+        goal = robot.start(event="conversation_interest")
+        robot.run(20)
+        robot.hear("what a nice day", then=0)  # keeps the conversation going
+        robot.run(29.8)
+        assert not goal.done, "30 quiet seconds count from the last sentence heard"
+        robot.run(0.4)
+        assert goal.status is GoalStatus.SUCCEEDED
+        assert robot.events == ["conversation_interest"], "only a greeting asks for the conversation"
 
 
 def test_tune_is_a_real_wav(tmp_path: Path) -> None:
@@ -70,39 +63,38 @@ def test_tune_is_a_real_wav(tmp_path: Path) -> None:
     assert 3 < duration < 15
 
 
-def _music_goal(
-    clock: VirtualClock | RealClock, module_player: tuple[str, ...] | None
-) -> tuple[GoalStatus, float, MusicModule]:
-    transport = EmbeddedTransport(clock)
-    music = MusicModule(transport.node("cyborg_music"), play_audio=False)
-    music.player = module_player
-    client = transport.node("controller").action_client(MUSIC_ACTION, StateMachineAction)
-
-    async def main() -> tuple[GoalStatus, float]:
-        handle = client.send_goal(StateMachineGoal("idle", "music_play", "music"))
-        await clock.sleep(1.0)
-        cancelled = clock.monotonic()
-        handle.cancel()
-        status = await handle.wait()
-        return status, clock.monotonic() - cancelled
-
-    status, took = clock.run(main())
-    return status, took, music
-
-
-def test_music_stops_the_moment_it_is_preempted(clock: VirtualClock) -> None:
-    status, took, music = _music_goal(clock, None)
-    assert music.duration > 3  # it would have played on
-    assert status is GoalStatus.PREEMPTED and took == 0.0
+def test_music_stops_the_moment_it_is_preempted() -> None:
+    with ModuleHarness(MUSIC_KIND, {"play_audio": False}, node_name="cyborg_music") as robot:
+        music = robot.module
+        assert isinstance(music, MusicModule) and music.duration > 3  # it would play on
+        goal = robot.start(event="music_play")
+        robot.run(1.0)
+        goal.cancel()
+        robot.run(0)
+        assert goal.status is GoalStatus.PREEMPTED, "the preemption is acknowledged at once"
+        assert [f.pad for f in robot.feedback] == [MUSIC_FEEDBACK]
 
 
 def test_music_kills_its_player_when_preempted() -> None:
+    """A real player process in real time: beyond ModuleHarness, whose clock is virtual."""
     clock = RealClock()
     try:
+        transport = EmbeddedTransport(clock)
+        music = MusicModule(transport.node("cyborg_music"), play_audio=False)
         # A stand-in player that would play for 30 s (the tune's path comes as its argument).
-        player = (sys.executable, "-c", "import time; time.sleep(30)")
+        music.player = (sys.executable, "-c", "import time; time.sleep(30)")
+        client = transport.node("controller").action_client(MUSIC_ACTION, StateMachineAction)
         before = {p.pid for p in live_children()}
-        status, took, _ = _music_goal(clock, player)
+
+        async def main() -> tuple[GoalStatus, float]:
+            handle = client.send_goal(StateMachineGoal("idle", "music_play", "music"))
+            await clock.sleep(1.0)
+            cancelled = clock.monotonic()
+            handle.cancel()
+            status = await handle.wait()
+            return status, clock.monotonic() - cancelled
+
+        status, took = clock.run(main())
     finally:
         clock.close()
     assert status is GoalStatus.PREEMPTED and took < 1.0

@@ -12,15 +12,15 @@ import pytest
 import recurring_ical_events
 
 from cyborg.errors import DatabaseError
-from cyborg.navigation.calendar import (
+from cyborg.navigation.database import NavigationDatabase
+from cyborg.navigation.ics import import_ics
+from cyborg.navigation.models import CalendarEvent
+from cyborg.navigation.recurrence import (
     build_rule_set,
-    import_ics,
     normalise_recurrence,
     occurrences_between,
     ongoing_occurrence,
 )
-from cyborg.navigation.database import NavigationDatabase
-from cyborg.navigation.models import CalendarEvent
 
 OSLO = ZoneInfo("Europe/Oslo")
 

@@ -63,13 +63,18 @@ class Graph:
         prefix: str,
         sender: Callable[[str], str],
         ros: bool,
+        fresh: Callable[[Clock], Transport],
+        kind: str = "",
     ) -> None:
         self.clock = clock
         self.transport = transport
         self.node = make_node
+        self.fresh_transport = fresh
         self.prefix = prefix
         self._sender = sender
         self.ros = ros
+        self.kind = kind
+        """embedded, ros or ros2."""
 
     def run(self, coro: Awaitable[T]) -> T:
         async def main() -> T:
@@ -98,6 +103,10 @@ class Graph:
     async def wait(self, handle: ClientGoalHandle[Any, Any, Any], timeout: float = 5.0) -> GoalStatus:
         return await asyncio.wait_for(handle.wait(), self.timeout(timeout))
 
+    def node_name(self, name: str) -> str:
+        """This test's own version of a node name (for a transport of its own)."""
+        return f"{self.prefix}_{name}"
+
     def busy(self) -> None:
         """Keep the event loop from running while the transport receives (real time under ROS)."""
         if self.ros:
@@ -122,9 +131,21 @@ def graph(request: pytest.FixtureRequest) -> Iterator[Graph]:
             made2.append(node)
             return node
 
+        def fresh2(clock: Clock) -> Transport:
+            from cyborg.transport.ros2 import Ros2Transport
+
+            return Ros2Transport(clock)
+
         try:
             yield Graph(
-                session2.clock, session2.transport, make2, prefix=prefix, sender=lambda node: node, ros=True
+                session2.clock,
+                session2.transport,
+                make2,
+                prefix=prefix,
+                sender=lambda node: node,
+                ros=True,
+                kind=request.param,
+                fresh=fresh2,
             )
         finally:
             for node in made2:
@@ -134,7 +155,16 @@ def graph(request: pytest.FixtureRequest) -> Iterator[Graph]:
         clock = VirtualClock()
         embedded = EmbeddedTransport(clock)
         try:
-            yield Graph(clock, embedded, embedded.node, prefix=prefix, sender=lambda node: node, ros=False)
+            yield Graph(
+                clock,
+                embedded,
+                embedded.node,
+                prefix=prefix,
+                sender=lambda node: node,
+                ros=False,
+                kind=request.param,
+                fresh=EmbeddedTransport,
+            )
         finally:
             embedded.shutdown()
             clock.close()
@@ -148,9 +178,25 @@ def graph(request: pytest.FixtureRequest) -> Iterator[Graph]:
         made.append(node)
         return node
 
+    def fresh(clock: Clock) -> Transport:
+        import rospy  # type: ignore[import-not-found]
+
+        from cyborg.transport.ros import RosTransport
+
+        # This process's one rospy node serves the session: a closing transport must not end it.
+        request.getfixturevalue("monkeypatch").setattr(rospy, "signal_shutdown", lambda reason: None)
+        return RosTransport(clock)
+
     try:
         yield Graph(
-            session.clock, transport, make, prefix=prefix, sender=lambda node: transport.ros_name, ros=True
+            session.clock,
+            transport,
+            make,
+            prefix=prefix,
+            sender=lambda node: transport.ros_name,
+            ros=True,
+            kind=request.param,
+            fresh=fresh,
         )
     finally:
         for node in made:
@@ -465,3 +511,103 @@ def test_wait_for_missing_server_times_out(graph: Graph) -> None:
     start = graph.clock.monotonic()
     assert graph.run(client.wait_for_server(2.0)) is False
     assert graph.clock.monotonic() - start == pytest.approx(2.0, abs=0.25 if graph.ros else 0.06)
+
+
+def test_waiting_for_a_server_counts_the_clocks_seconds(graph: Graph) -> None:
+    """In process and on ROS 2 the timeout is in the clock's seconds. ROS 1 is the exception: rospy
+    and actionlib find a server on their own threads in real time, so a virtual clock's seconds
+    (1/25 of a second each at speed 25) would end a state as aborted before the server is seen."""
+    clock = VirtualClock()  # as fast as possible: a minute of waiting passes at once
+    try:
+        with graph.fresh_transport(clock) as transport:
+            node = transport.node(graph.node_name("waiter"))
+            client = node.action_client(graph.name("/nobody"), StateMachineAction)
+            started, real_start = clock.monotonic(), time.monotonic()
+            if graph.kind == "ros":
+                assert clock.run(client.wait_for_server(1.0)) is False
+                assert time.monotonic() - real_start == pytest.approx(1.0, abs=0.5)
+                return
+            assert clock.run(client.wait_for_server(60.0)) is False
+            assert clock.monotonic() - started == pytest.approx(60.0, abs=0.1)
+            assert time.monotonic() - real_start < 30.0
+    finally:
+        clock.close()
+
+
+def test_on_shutdown_closes_run_once_newest_first(graph: Graph) -> None:
+    node = graph.node("closing")
+    ran: list[str] = []
+
+    def failing() -> None:
+        ran.append("failing")
+        raise RuntimeError("a closer's bug")
+
+    node.on_shutdown(lambda: ran.append("first"))
+    node.on_shutdown(failing)
+    node.on_shutdown(lambda: ran.append("last"))
+    assert ran == [] and not node.is_shut_down
+    node.shutdown()
+    assert ran == ["last", "failing", "first"] and node.is_shut_down
+    node.shutdown()
+    assert ran == ["last", "failing", "first"], "a second shutdown runs nothing"
+    node.on_shutdown(lambda: ran.append("late"))
+    assert ran[-1] == "late", "a close given after the shutdown runs at once"
+    assert graph.node("closing").name == "closing", "the name is free again"
+
+
+def test_stats_count_what_the_transport_did(graph: Graph) -> None:
+    a, b = graph.node("a"), graph.node("b")
+    stats = graph.transport.stats
+    start = dataclasses.replace(stats)
+    got: list[str] = []
+
+    async def later(message: String) -> None:
+        got.append(message.data)
+        raise RuntimeError("a task's bug")
+
+    def callback(message: String, info: MessageInfo) -> Awaitable[None] | None:
+        if message.data == "boom":
+            raise RuntimeError("a callback's bug")
+        if message.data == "task":
+            return later(message)  # run as a task
+        got.append(message.data)
+        return None
+
+    b.subscribe(graph.name("/counted"), String, callback, queue_size=2)
+    pub = a.publisher(graph.name("/counted"), String)
+
+    async def failures() -> None:
+        await graph.connected(pub)
+        pub.publish(String("boom"))
+        pub.publish(String("task"))
+        await graph.until(lambda: stats.callback_errors - start.callback_errors >= 2, "both failures")
+
+    graph.run(failures())
+    for n in range(5):
+        pub.publish(String(str(n)))
+    graph.busy()  # all five arrive before the loop drains the queue of two
+    graph.run(graph.clock.sleep(0.1))
+    assert got == ["task", "3", "4"]
+    assert graph.transport.stats is stats
+    assert dataclasses.asdict(stats) == {
+        "callback_errors": start.callback_errors + 2,
+        "dropped_messages": start.dropped_messages + 3,
+        "published": start.published + 7,
+    }
+
+
+def test_close_shuts_every_node_down_and_refuses_new_ones(graph: Graph) -> None:
+    clock = VirtualClock()
+    ran: list[str] = []
+    try:
+        with graph.fresh_transport(clock) as transport:
+            name = graph.node_name("closing")
+            transport.node(name).on_shutdown(lambda: ran.append("closed"))
+            assert transport.node_names() == [name] and ran == []
+        assert ran == ["closed"] and transport.node_names() == []
+        with pytest.raises(TransportError, match="the transport is closed"):
+            transport.node(graph.node_name("late"))
+        transport.close()
+        assert ran == ["closed"], "a second close does nothing"
+    finally:
+        clock.close()

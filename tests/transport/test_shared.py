@@ -1,4 +1,4 @@
-"""The pieces every transport shares (cyborg.transport._queue, cyborg.transport._goals), on their own,
+"""The pieces every transport shares (cyborg.transport._queue, _callbacks, _goals), on their own,
 and the ROS 1 transport's import: it patches nothing and loads only what the transport needs."""
 
 from __future__ import annotations
@@ -12,9 +12,10 @@ from typing import Any
 import pytest
 
 from cyborg.errors import TransportError
+from cyborg.transport._callbacks import CallbackRunner
 from cyborg.transport._goals import ClientGoal
-from cyborg.transport._queue import CallbackRunner, SubscriptionQueue
-from cyborg.transport.base import GoalStatus, MessageInfo
+from cyborg.transport._queue import SubscriptionQueue
+from cyborg.transport.base import GoalStatus, MessageInfo, TransportStats
 from cyborg.transport.clock import VirtualClock
 from cyborg.transport.messages import StateMachineFeedback, StateMachineGoal, StateMachineResult, String
 
@@ -32,9 +33,9 @@ class Errors:
 
 def test_queue_delivers_on_a_later_turn_and_drops_the_oldest(clock: VirtualClock) -> None:
     got: list[str] = []
-    drops = Errors()
+    stats = TransportStats()
     queue: SubscriptionQueue[String] = SubscriptionQueue(
-        clock, lambda m, i: got.append(m.data), 3, CallbackRunner(log, Errors()), drops
+        clock, lambda m, i: got.append(m.data), 3, CallbackRunner(log, Errors()), stats
     )
 
     async def main() -> None:
@@ -45,7 +46,7 @@ def test_queue_delivers_on_a_later_turn_and_drops_the_oldest(clock: VirtualClock
 
     clock.run(main())
     assert got == ["2", "3", "4"]
-    assert queue.dropped == 2 and drops.count == 2
+    assert queue.dropped == 2 and stats.dropped_messages == 2
 
 
 def test_a_failing_callback_is_counted_and_delivery_goes_on(clock: VirtualClock) -> None:
@@ -61,9 +62,8 @@ def test_a_failing_callback_is_counted_and_delivery_goes_on(clock: VirtualClock)
         raise RuntimeError("boom later")
 
     runner = CallbackRunner(log, errors)
-    queue: SubscriptionQueue[String] = SubscriptionQueue(clock, callback, 10, runner)
-    # An async callback is run as a task; SubscriptionQueue types its callback as returning None only.
-    later: SubscriptionQueue[String] = SubscriptionQueue(clock, failing_task, 10, runner)  # type: ignore[arg-type]
+    queue: SubscriptionQueue[String] = SubscriptionQueue(clock, callback, 10, runner, TransportStats())
+    later: SubscriptionQueue[String] = SubscriptionQueue(clock, failing_task, 10, runner, TransportStats())
 
     async def main() -> None:
         for data in ("a", "bad", "b"):
@@ -79,7 +79,7 @@ def test_a_failing_callback_is_counted_and_delivery_goes_on(clock: VirtualClock)
 def test_a_closed_queue_delivers_nothing_more(clock: VirtualClock) -> None:
     got: list[str] = []
     queue: SubscriptionQueue[String] = SubscriptionQueue(
-        clock, lambda m, i: got.append(m.data), 10, CallbackRunner(log, Errors())
+        clock, lambda m, i: got.append(m.data), 10, CallbackRunner(log, Errors()), TransportStats()
     )
 
     async def main() -> None:
@@ -94,7 +94,7 @@ def test_a_closed_queue_delivers_nothing_more(clock: VirtualClock) -> None:
 
 def test_a_queue_holds_at_least_one_message(clock: VirtualClock) -> None:
     with pytest.raises(TransportError, match="queue_size must be at least 1"):
-        SubscriptionQueue(clock, lambda m, i: None, 0, CallbackRunner(log, Errors()))
+        SubscriptionQueue(clock, lambda m, i: None, 0, CallbackRunner(log, Errors()), TransportStats())
 
 
 class _Goal(ClientGoal[StateMachineGoal, StateMachineResult, StateMachineFeedback]):

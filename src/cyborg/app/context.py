@@ -14,7 +14,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from cyborg.modules.kind import CalendarEntry, KeepsCalendar, Listening, listening_of
+from cyborg.modules.kind import Listening, listening_of
+from cyborg.navigation.calendar import CalendarEntry, KeepsCalendar
 from cyborg.transport.topics import BaseApi
 
 if TYPE_CHECKING:

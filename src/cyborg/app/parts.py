@@ -18,7 +18,8 @@ from cyborg.app.config import LoadedConfig
 from cyborg.app.context import BuildContext, calendar_of, heard_by
 from cyborg.app.registry import KindRegistry, module_kinds
 from cyborg.errors import ConfigError
-from cyborg.modules.kind import CalendarEntry, Component
+from cyborg.modules.kind import Component
+from cyborg.navigation.calendar import CalendarEntry
 from cyborg.transport.base import Transport
 
 if TYPE_CHECKING:

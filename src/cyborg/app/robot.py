@@ -25,9 +25,10 @@ from cyborg.app.view import BaseView
 from cyborg.controller.runtime import Controller, Phase
 from cyborg.emotion.system import EmotionSystem
 from cyborg.modules.gatekeeper import Gatekeeper
-from cyborg.modules.kind import CalendarEntry, Component, Listening, ServesStates
+from cyborg.modules.kind import Component, Listening, ServesStates
 from cyborg.motivator.component import Motivator
 from cyborg.motivator.store import COMMIT_WINDOW, ControllerStore
+from cyborg.navigation.calendar import CalendarEntry
 from cyborg.storage import SaveStatus
 from cyborg.transport.base import Transport
 

@@ -4,6 +4,8 @@
 emotion, status), ``listen``, ``new`` and ``db``. Top of the import chain: it may use every layer
 below it, but a command imports only what it needs, so that ``cyborg --help`` loads click
 alone, the command tool (``cyborg say``) click and urllib, and ``cyborg node`` only its own part.
+:mod:`~cyborg.cli.common` holds what the commands share (loading a configuration, failing with a
+readable message, checking options).
 """
 
 from __future__ import annotations

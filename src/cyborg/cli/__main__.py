@@ -2,5 +2,5 @@
 
 from cyborg.cli import main
 
-if __name__ == "__main__":  # not on import (tests/test_errors.py imports every module)
+if __name__ == "__main__":
     main()

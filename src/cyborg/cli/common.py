@@ -101,6 +101,41 @@ def check_data_folder(ctx: click.Context, param: click.Parameter, value: Path | 
     return value
 
 
+config_option = click.option(
+    "--config",
+    "config_path",
+    type=click.Path(path_type=Path),
+    help="state machine YAML (default: the packaged Cyborg)",
+)
+"""``--config FILE``: the robot's configuration (the command receives ``config_path``)."""
+
+map_option = click.option(
+    "--map",
+    "map_path",
+    type=click.Path(path_type=Path),
+    help="map for the simulated base: ARNL .map or map_server .yaml",
+)
+"""``--map FILE``: the world's map (the command receives ``map_path``)."""
+
+
+def data_dir_option(
+    help: str = "folder of the databases", *, checked: bool = True
+) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """``--db``/``--data-dir FOLDER``: where the robot keeps its databases (``data_dir``).
+
+    ``checked``: a file given as the folder is a usage error (exit 2); else the command finds out
+    when it opens the folder."""
+    return click.option(
+        "--db",
+        "--data-dir",
+        "data_dir",
+        type=click.Path(path_type=Path),
+        default=None,
+        callback=check_data_folder if checked else None,
+        help=help,
+    )
+
+
 duration_option = click.option(
     "--duration",
     type=float,

@@ -2,7 +2,7 @@
 
 Part of the navigation module, a thin command-line layer over
 :class:`~cyborg.navigation.database.NavigationDatabase` and
-:func:`~cyborg.navigation.calendar.import_ics`. Subcommands list, add and remove
+:func:`~cyborg.navigation.ics.import_ics`. Subcommands list, add and remove
 locations, calendar events and responses, import an .ics calendar and import the
 named goals of a map as locations. Bad input prints what is wrong and how to fix
 it and exits with code 2, writing nothing.
@@ -21,8 +21,8 @@ from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 import click
 
 from cyborg.errors import CyborgError
-from cyborg.navigation.calendar import DEFAULT_TIMEZONE, import_ics
 from cyborg.navigation.database import NavigationDatabase
+from cyborg.navigation.ics import DEFAULT_TIMEZONE, import_ics
 from cyborg.navigation.models import CalendarEvent, Location, Response, ResponseType
 
 DB_FILE = "navigation.db"

@@ -17,13 +17,15 @@ import click
 
 from cyborg.cli.common import (
     access_options,
-    check_data_folder,
     check_factor,
     check_modules,
     check_port,
+    config_option,
+    data_dir_option,
     duration_option,
     fail,
     load_or_default,
+    map_option,
 )
 from cyborg.errors import CyborgError
 from cyborg.web.access import Access
@@ -36,22 +38,9 @@ _speed_help = "virtual time at this factor of real time (all nodes share one clo
 
 @click.command("node")
 @click.argument("name")
-@click.option(
-    "--config",
-    "config_path",
-    type=click.Path(path_type=Path),
-    help="state machine YAML (default: the packaged Cyborg)",
-)
-@click.option(
-    "--db",
-    "--data-dir",
-    "data_dir",
-    type=click.Path(path_type=Path),
-    default=None,
-    callback=check_data_folder,
-    help="folder of the databases",
-)
-@click.option("--map", "map_path", type=click.Path(path_type=Path), help="map for the simulated base")
+@config_option
+@data_dir_option()
+@map_option
 @click.option("--host", default="127.0.0.1", show_default=True, help="address of the API (cyborg_api only)")
 @click.option(
     "--port",
@@ -153,22 +142,9 @@ def node(
 
 
 @click.command("launch")
-@click.option(
-    "--config",
-    "config_path",
-    type=click.Path(path_type=Path),
-    help="state machine YAML (default: the packaged Cyborg)",
-)
-@click.option(
-    "--db",
-    "--data-dir",
-    "data_dir",
-    type=click.Path(path_type=Path),
-    default=None,
-    callback=check_data_folder,
-    help="folder of the databases",
-)
-@click.option("--map", "map_path", type=click.Path(path_type=Path), help="map for the simulated base")
+@config_option
+@data_dir_option()
+@map_option
 @click.option(
     "--port", default=8642, show_default=True, type=int, callback=check_port, help="port of the API node"
 )

@@ -11,9 +11,12 @@ from cyborg.cli.common import (
     access_options,
     check_modules,
     check_port,
+    config_option,
+    data_dir_option,
     duration_option,
     fail,
     load_or_default,
+    map_option,
     os_problem,
     parse_speed,
 )
@@ -26,18 +29,8 @@ if TYPE_CHECKING:
 
 
 @click.command()
-@click.option(
-    "--config",
-    "config_path",
-    type=click.Path(path_type=Path),
-    help="state machine YAML (default: the packaged Cyborg)",
-)
-@click.option(
-    "--map",
-    "map_path",
-    type=click.Path(path_type=Path),
-    help="map for the simulated base: ARNL .map or map_server .yaml",
-)
+@config_option
+@map_option
 @click.option("--speed", default=None, help="virtual time: a factor (10) or 'max'; default real time")
 @duration_option
 @click.option("--host", default="127.0.0.1", show_default=True, help="address the API and dashboard bind to")
@@ -49,13 +42,9 @@ if TYPE_CHECKING:
     callback=check_port,
     help="port of the API and dashboard (0: any free port)",
 )
-@click.option(
-    "--db",
-    "--data-dir",
-    "data_dir",
-    type=click.Path(path_type=Path),
-    default=None,
-    help="folder of the databases (default: $CYBORG_DATA_DIR or ~/.local/share/cyborg; scripts: a temporary one)",
+@data_dir_option(
+    "folder of the databases (default: $CYBORG_DATA_DIR or ~/.local/share/cyborg; scripts: a temporary one)",
+    checked=False,
 )
 @click.option(
     "--script", "script_path", type=click.Path(path_type=Path), help="scenario script to run (YAML)"

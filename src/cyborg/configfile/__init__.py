@@ -9,6 +9,7 @@ and pydantic), so every layer can read its files the same way:
 * :func:`describe_errors` turns a pydantic ``ValidationError`` of any model into lines
   ``where: what is wrong (what was given); fix: how``.
 
+Reading is :mod:`~cyborg.configfile.reader`'s, wording :mod:`~cyborg.configfile.errors`'.
 Every problem is raised as :class:`cyborg.errors.ConfigError`.
 """
 

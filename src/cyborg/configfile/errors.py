@@ -17,6 +17,7 @@ import datetime
 import difflib
 import enum
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from types import UnionType
 from typing import Any, TypeGuard, Union, get_args, get_origin
 
@@ -121,68 +122,18 @@ class _Context:
         return f"{self.where} > {named}" if named else self.where
 
     def describe(self, error: ErrorDetails) -> str:
+        """The line a user reads for ``error`` (``where: what is wrong; fix: how``), worded by its type."""
         types, loc = _annotations(self.model, error["loc"])
-        kind = error["type"]
-        value = error.get("input")
         if loc and loc[-1] == "[key]":  # the key of a mapping entry, not its value
             return (
                 f"{self.locate(loc[:-2])}: the key {loc[-2]!r} is not text; fix: put the name in quotes so "
                 "YAML reads it as text (unquoted numbers, yes, no, on, off, true, false, null and ~ are "
                 "not names)"
             )
-        where = self.locate(loc)
         info = _field(types, loc)
         description = f" ({info.description})" if info is not None and info.description else ""
-        if kind == "extra_forbidden":
-            parent = types[-2] if len(types) >= 2 else None
-            known = [k for k, f in parent.model_fields.items() if not f.exclude] if _is_model(parent) else []
-            listed = f"; the keys here are: {', '.join(known)}" if known else ""
-            return (
-                f"{where}: unknown key {loc[-1]!r}{suggest(str(loc[-1]), known)}; "
-                f"fix: remove it or correct its spelling{listed}"
-            )
-        container = types[-2] if len(types) >= 2 else None
-        if kind == "missing" and get_origin(container) is tuple:
-            fix = self.fix(loc[:-1], types[:-1])
-            return f"{self.locate(loc[:-1])}: has too few {_items(container)}; fix: {fix}"
-        if kind == "too_long" and get_origin(types[-1]) is tuple:
-            return f"{where}: has too many {_items(types[-1])}; fix: {self.fix(loc, types)}"
-        if kind == "missing":
-            fix = self.known_fix(loc, types) or f"add it (e.g. {_example(loc, info, types[-1])})"
-            return f"{where}: missing {loc[-1]!r}{description}; fix: {fix}"
-        if kind in ("value_error", "assertion_error"):  # a validator's own 'what: fix' message
-            text = error["msg"].removeprefix("Value error, ").removeprefix("Assertion failed, ")
-            what, _, fix = text.partition("; fix: ") if "; fix: " in text else text.partition(": ")
-            return f"{where}: {what}; fix: {fix or 'see ' + self.doc}"
-        if kind.startswith(("datetime", "date_", "time_")) and kind not in _WRONG_TYPE:
-            example = (
-                _render(info.examples[0]) if info is not None and info.examples else "2026-11-23T15:00:00"
-            )
-            return f"{where}: {value!r} is not a date-time; fix: write it as {example}"
-        if kind in _WRONG_TYPE:
-            expected = _WRONG_TYPE[kind]
-            fix = self.known_fix(loc, types) or (
-                f"write it as {expected}, e.g. {_example(loc, info, types[-1])}{description}"
-            )
-            return f"{where}: must be {expected}, not {yaml_kind(value)}; fix: {fix}"
-        if kind == "string_too_long":
-            limit = error.get("ctx", {}).get("max_length")
-            return f"{where}: is {len(str(value))} characters, over the limit of {limit}; fix: shorten it{description}"
-        ctx = error.get("ctx", {})
-        limits = {
-            "greater_than": f"use a number greater than {ctx.get('gt')}",
-            "greater_than_equal": f"use a number of at least {ctx.get('ge')}",
-            "less_than": f"use a number less than {ctx.get('lt')}",
-            "less_than_equal": f"use a number of at most {ctx.get('le')}",
-            "string_too_short": "write a name; it must not be empty",
-            "too_short": f"list at least {ctx.get('min_length')} entries",
-            "too_long": f"list at most {ctx.get('max_length')} entries",
-            "enum": f"use one of {ctx.get('expected')}",
-            "literal_error": f"use one of {ctx.get('expected')}",
-        }
-        fix = self.known_fix(loc, types) or limits.get(kind, f"see {self.doc} for what this key accepts")
-        what = error["msg"].replace("Input should be", "must be").replace("String should", "must")
-        return f"{where}: {what}, not {yaml_kind(value)}; fix: {fix}{description}"
+        problem = _Problem(error, types, loc, self.locate(loc), info, description)
+        return _wording(error["type"])(self, problem)
 
     def fix(self, loc: Location, types: list[Any]) -> str:
         """The fix for a value of the wrong size or shape: the table's, else its expected form."""
@@ -200,6 +151,127 @@ class _Context:
             if pattern in self.fixes:
                 return self.fixes[pattern]
         return None
+
+
+@dataclass(frozen=True)
+class _Problem:
+    """One validation error with what its wording needs: where it is, the declared types, the field."""
+
+    error: ErrorDetails
+    types: list[Any]
+    """The declared type at each prefix of ``loc`` (see :func:`_annotations`)."""
+    loc: list[Any]
+    """The location without pydantic's union tags."""
+    where: str
+    """The location named for the reader."""
+    info: FieldInfo | None
+    description: str
+    """`` (the field's description)``, or nothing."""
+
+    @property
+    def kind(self) -> str:
+        return self.error["type"]
+
+    @property
+    def value(self) -> Any:
+        return self.error.get("input")
+
+    @property
+    def ctx(self) -> dict[str, Any]:
+        return self.error.get("ctx", {})
+
+
+Wording = Callable[[_Context, _Problem], str]
+"""Words one kind of problem: ``where: what is wrong; fix: how``."""
+
+
+def _unknown_key(context: _Context, p: _Problem) -> str:
+    parent = p.types[-2] if len(p.types) >= 2 else None
+    known = [k for k, f in parent.model_fields.items() if not f.exclude] if _is_model(parent) else []
+    listed = f"; the keys here are: {', '.join(known)}" if known else ""
+    return (
+        f"{p.where}: unknown key {p.loc[-1]!r}{suggest(str(p.loc[-1]), known)}; "
+        f"fix: remove it or correct its spelling{listed}"
+    )
+
+
+def _missing(context: _Context, p: _Problem) -> str:
+    container = p.types[-2] if len(p.types) >= 2 else None
+    if get_origin(container) is tuple:  # a list of fixed length, one item short
+        fix = context.fix(p.loc[:-1], p.types[:-1])
+        return f"{context.locate(p.loc[:-1])}: has too few {_items(container)}; fix: {fix}"
+    fix = context.known_fix(p.loc, p.types) or f"add it (e.g. {_example(p.loc, p.info, p.types[-1])})"
+    return f"{p.where}: missing {p.loc[-1]!r}{p.description}; fix: {fix}"
+
+
+def _too_long(context: _Context, p: _Problem) -> str:
+    if get_origin(p.types[-1]) is tuple:  # a list of fixed length
+        return f"{p.where}: has too many {_items(p.types[-1])}; fix: {context.fix(p.loc, p.types)}"
+    return _out_of_limits(context, p)
+
+
+def _validator_message(context: _Context, p: _Problem) -> str:
+    """A validator's own ``what: fix`` (or ``what; fix: how``) message."""
+    text = p.error["msg"].removeprefix("Value error, ").removeprefix("Assertion failed, ")
+    what, _, fix = text.partition("; fix: ") if "; fix: " in text else text.partition(": ")
+    return f"{p.where}: {what}; fix: {fix or 'see ' + context.doc}"
+
+
+def _not_a_date_time(context: _Context, p: _Problem) -> str:
+    info = p.info
+    example = _render(info.examples[0]) if info is not None and info.examples else "2026-11-23T15:00:00"
+    return f"{p.where}: {p.value!r} is not a date-time; fix: write it as {example}"
+
+
+def _wrong_type(context: _Context, p: _Problem) -> str:
+    expected = _WRONG_TYPE[p.kind]
+    fix = context.known_fix(p.loc, p.types) or (
+        f"write it as {expected}, e.g. {_example(p.loc, p.info, p.types[-1])}{p.description}"
+    )
+    return f"{p.where}: must be {expected}, not {yaml_kind(p.value)}; fix: {fix}"
+
+
+def _over_length(context: _Context, p: _Problem) -> str:
+    limit = p.ctx.get("max_length")
+    return (
+        f"{p.where}: is {len(str(p.value))} characters, over the limit of {limit}; "
+        f"fix: shorten it{p.description}"
+    )
+
+
+def _out_of_limits(context: _Context, p: _Problem) -> str:
+    """A value outside a field's limits (or any other problem): pydantic's words, and the fix."""
+    limit_fix = _LIMIT_FIXES.get(p.kind)
+    fix = context.known_fix(p.loc, p.types) or (
+        limit_fix(p.ctx) if limit_fix is not None else f"see {context.doc} for what this key accepts"
+    )
+    what = p.error["msg"].replace("Input should be", "must be").replace("String should", "must")
+    return f"{p.where}: {what}, not {yaml_kind(p.value)}; fix: {fix}{p.description}"
+
+
+def _wording(kind: str) -> Wording:
+    """The wording of pydantic's error type ``kind``; date and time errors share one."""
+    found = _WORDINGS.get(kind)
+    if found is not None:
+        return found
+    return _not_a_date_time if kind.startswith(_DATE_TIME_KINDS) else _out_of_limits
+
+
+_LIMIT_FIXES: dict[str, Callable[[dict[str, Any]], str]] = {
+    "greater_than": lambda ctx: f"use a number greater than {ctx.get('gt')}",
+    "greater_than_equal": lambda ctx: f"use a number of at least {ctx.get('ge')}",
+    "less_than": lambda ctx: f"use a number less than {ctx.get('lt')}",
+    "less_than_equal": lambda ctx: f"use a number of at most {ctx.get('le')}",
+    "string_too_short": lambda ctx: "write a name; it must not be empty",
+    "too_short": lambda ctx: f"list at least {ctx.get('min_length')} entries",
+    "too_long": lambda ctx: f"list at most {ctx.get('max_length')} entries",
+    "enum": lambda ctx: f"use one of {ctx.get('expected')}",
+    "literal_error": lambda ctx: f"use one of {ctx.get('expected')}",
+}
+"""The fix for a value outside a field's limits, by pydantic's error type (from the error's ``ctx``)."""
+
+_DATE_TIME_KINDS = ("datetime", "date_", "time_")
+"""Prefixes of pydantic's error types for a value that is no date, time or date-time."""
 
 
 # What a value of the wrong type should have been, by pydantic's error type.
@@ -220,6 +292,17 @@ _WRONG_TYPE = {
     "bool_type": "true or false",
     "bool_parsing": "true or false",
 }
+
+_WORDINGS: dict[str, Wording] = {
+    "extra_forbidden": _unknown_key,
+    "missing": _missing,
+    "too_long": _too_long,
+    "value_error": _validator_message,
+    "assertion_error": _validator_message,
+    "string_too_long": _over_length,
+    **dict.fromkeys(_WRONG_TYPE, _wrong_type),
+}
+"""How each of pydantic's error types is worded; the others: :func:`_wording`."""
 
 # A value to show when the field names none, by the expected type.
 _TYPE_EXAMPLES: dict[Any, str] = {

@@ -1,1 +1,7 @@
-"""Controller core: state machine configuration, transition logic and runtime."""
+"""The controller's state machine: its specification, its configuration and its runtime.
+
+:mod:`~cyborg.controller.machine` is the machine as data (states, superstates, transitions;
+pure), :mod:`~cyborg.controller.config` its YAML schema, and :mod:`~cyborg.controller.runtime`
+the controller that hands control from module to module over actions. Drawing it is
+:mod:`cyborg.drawing`'s.
+"""

@@ -2,7 +2,8 @@
 
 :mod:`~cyborg.hearing.grammar` builds what the robot can hear from what it understands (pure),
 :mod:`~cyborg.hearing.recogniser` decodes with pocketsphinx and rejects speech outside the
-grammar, :mod:`~cyborg.hearing.audio` reads WAV files and the microphone, and
+grammar, :mod:`~cyborg.hearing.audio` reads WAV files and the microphone,
+:mod:`~cyborg.hearing.synth` synthesises speech (espeak-ng, flite) for tests and benchmarks of the ears, and
 :mod:`~cyborg.hearing.module` is the ``speech_input`` module kind.
 """
 

@@ -2,8 +2,9 @@
 
 A module is a class on :class:`BehaviourModule` that serves one or more states; its kind
 (:class:`ModuleKind`: a :class:`ModuleSettings` model and a factory) lets the YAML's
-``modules:`` section start it. See ``docs/modules.md`` ("your first module") and test it with
-:mod:`cyborg.testing`::
+``modules:`` section start it. :mod:`~cyborg.modules.behaviour` holds the class, and
+:mod:`~cyborg.modules.kind` the kind and what a factory is given. See ``docs/modules.md``
+("your first module") and test it with :mod:`cyborg.testing`::
 
     from cyborg.modules import BehaviourModule, Field, GoalContext, ModuleKind, ModuleSettings
 
@@ -27,23 +28,22 @@ A module is a class on :class:`BehaviourModule` that serves one or more states; 
             await ctx.sleep(3)
 
     KIND = ModuleKind(GreeterSettings, lambda node, settings, context: Greeter(node, settings))
+
+The built-in modules live beside it: :mod:`~cyborg.modules.idle` and
+:mod:`~cyborg.modules.placeholder` (states with nothing to do, or not written yet),
+:mod:`~cyborg.modules.conversation` (conversation and question), :mod:`~cyborg.modules.music`,
+:mod:`~cyborg.modules.speech` (text-to-speech), :mod:`~cyborg.modules.event_script` (events on
+a timetable) and :mod:`~cyborg.modules.gatekeeper` (the relay in front of an output, which lets
+only the active state's module through).
 """
 
 from pydantic import Field
 
-from cyborg.modules.behaviour import (
-    HEARTBEAT_SECONDS,
-    Abort,
-    BehaviourModule,
-    GoalContext,
-    Outcome,
-    StateServer,
-)
+from cyborg.modules.behaviour import Abort, BehaviourModule, GoalContext, Outcome
 from cyborg.modules.kind import BuildContext, Component, ModuleKind, ModuleSettings
 from cyborg.transport.base import MessageInfo, Node
 
 __all__ = [
-    "HEARTBEAT_SECONDS",
     "Abort",
     "BehaviourModule",
     "BuildContext",
@@ -55,5 +55,4 @@ __all__ = [
     "ModuleSettings",
     "Node",
     "Outcome",
-    "StateServer",
 ]

@@ -58,8 +58,9 @@ class Abort(Exception):
     """Raise inside ``execute`` to end the goal ABORTED with a reason.
 
     Deliberately not a CyborgError: it is a control-flow signal, not an error of the package.
-    :class:`StateServer` catches it and reports the goal aborted; an ``except CyborgError`` in a
-    module's own code must not swallow it.
+    The state's action server catches it and reports the goal aborted (the controller then takes
+    the state's ``aborted`` transition); an ``except CyborgError`` in a module's own code must not
+    swallow it.
     """
 
 
@@ -67,8 +68,8 @@ class GoalContext:
     """What ``execute`` gets: the goal, the clock and feedback helpers."""
 
     def __init__(self, module: BehaviourModule, handle: _GoalHandle) -> None:
-        self.module = module
-        self.handle = handle
+        self._module = module
+        self._handle = handle
         self.goal: StateMachineGoal = handle.goal
 
     @property
@@ -89,11 +90,11 @@ class GoalContext:
     @property
     def preempt_requested(self) -> bool:
         """True once the controller asked to stop (modules that ignore cancel can poll it)."""
-        return self.handle.cancel_requested
+        return self._handle.cancel_requested
 
     async def sleep(self, seconds: float) -> None:
         """Wait ``seconds`` on the robot's clock (virtual in simulations); preemption ends it at once."""
-        await self.module.node.clock.sleep(seconds)
+        await self._module.node.clock.sleep(seconds)
 
     async def wait_forever(self) -> None:
         """Stay in control until the controller preempts."""
@@ -101,7 +102,7 @@ class GoalContext:
 
     def feedback(self, status: str, message: str = "") -> None:
         """Action feedback to the controller (the dashboard shows when a module last sent some)."""
-        self.handle.publish_feedback(StateMachineFeedback(status=status, message=message))
+        self._handle.publish_feedback(StateMachineFeedback(status=status, message=message))
 
 
 Execute = Callable[[GoalContext], Awaitable[Outcome | None]]
@@ -157,16 +158,16 @@ class StateServer:
         elif not handle.status.is_terminal:
             handle.canceled()
 
-    async def _heartbeat(self, ctx: GoalContext) -> None:
+    async def _heartbeat(self, ctx: GoalContext, handle: _GoalHandle) -> None:
         """Feedback while the goal runs, so the controller and the dashboard see the module alive."""
-        while not ctx.handle.status.is_terminal:
+        while not handle.status.is_terminal:
             ctx.feedback("active")
             await ctx.sleep(HEARTBEAT_SECONDS)
 
     async def _run(self, handle: _GoalHandle) -> None:
         ctx = GoalContext(self.module, handle)
         heartbeat = self.module.node.clock.loop.create_task(
-            self._heartbeat(ctx), name=f"{self.name} heartbeat"
+            self._heartbeat(ctx, handle), name=f"{self.name} heartbeat"
         )
         try:
             await self._execute_goal(ctx, handle)

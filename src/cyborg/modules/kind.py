@@ -13,7 +13,7 @@ import random
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Generic, Protocol, TypeVar, runtime_checkable
+from typing import TYPE_CHECKING, Generic, Protocol, TypeVar, runtime_checkable
 
 from pydantic import BaseModel, ConfigDict
 
@@ -25,9 +25,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "BuildContext",
-    "CalendarEntry",
     "Component",
-    "KeepsCalendar",
     "Listening",
     "ModuleKind",
     "ModuleSettings",
@@ -106,23 +104,6 @@ class ServesStates(Protocol):
 
     @property
     def servers(self) -> Mapping[str, object]: ...
-
-
-class CalendarEntry(Protocol):
-    """A calendar entry a scenario script adds (see :mod:`cyborg.sim.script`)."""
-
-    location: str
-    start: Any
-    end: Any
-    ignore: bool
-    recurrence: Any
-
-
-@runtime_checkable
-class KeepsCalendar(Protocol):
-    """A component with a calendar that scenario scripts can add entries to (the navigation module)."""
-
-    def add_calendar_entry(self, entry: CalendarEntry) -> None: ...
 
 
 class BuildContext(Protocol):

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import enum
 import random
-from collections.abc import Collection, Sequence
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass
 
 from cyborg.navigation.models import Location, Response, ResponseType
@@ -94,55 +94,112 @@ def plan(
     ``places`` are the places with a pose on the loaded map (the only possible
     targets); ``off_map`` names known places that are not on it and ``no_pose``
     those with no pose at all: asked for one, the robot says so instead of driving
-    to a pose that belongs to another map or to none.
+    to a pose that belongs to another map or to none. Each origin has its rule: a person's
+    request, the calendar, the motivator's choice by emotion; without one there is nothing to do.
     """
-    if origin in (Origin.COMMAND, Origin.GUIDE):
-        if requested is None:
-            return Plan(PlanKind.NOTHING, "a command without a known place")
-        if requested.name in no_pose:
-            return Plan(PlanKind.NO_POSE, f"{requested.name} has no pose", requested)
-        if requested.name in off_map:
-            return Plan(PlanKind.NOT_ON_MAP, f"{requested.name} is not on the loaded map", requested)
-        if origin is Origin.COMMAND and emotion == ANGRY:
-            return Plan(
-                PlanKind.REFUSE, f"angry: refuses to go to {requested.name}", requested, BOSSED_AROUND
-            )
-        return Plan(PlanKind.MOVE, f"asked to go to {requested.name}", requested, BOSSED_AROUND)
+    if origin is None:
+        return Plan(PlanKind.NOTHING, "no reason to move")
     others = [p for p in places if here is None or p.name != here.name]
-    if origin is Origin.SCHEDULE:
-        if emotion == ANGRY:
-            quiet = [p for p in others if not p.crowded]
-            if quiet:
-                target = rng.choice(quiet)
-                return Plan(
-                    PlanKind.MOVE,
-                    f"angry: ignores the schedule, wants to be alone at {target.name}",
-                    target,
-                    OWN_CHOICE,
-                )
-        if scheduled is None:
-            return Plan(PlanKind.NOTHING, "the scheduled event is over")
-        return Plan(PlanKind.MOVE, f"scheduled to be at {scheduled.name}", scheduled, SCHEDULED)
-    if origin is Origin.MOTIVATOR:
-        if emotion in HAPPY:
-            crowded = [p for p in others if p.crowded]
-            if crowded:
-                target = rng.choice(crowded)
-                return Plan(
-                    PlanKind.MOVE, f"{emotion}: looks for people at {target.name}", target, OWN_CHOICE
-                )
-        if emotion == ANGRY:
-            quiet = [p for p in others if not p.crowded]
-            if quiet:
-                target = rng.choice(quiet)
-                return Plan(PlanKind.MOVE, f"angry: wants to be alone at {target.name}", target, OWN_CHOICE)
-        if emotion == "inhibited" and others:
-            target = max(others, key=lambda p: p.pleasantness)
-            return Plan(
-                PlanKind.MOVE, f"inhibited: goes somewhere pleasant, {target.name}", target, OWN_CHOICE
-            )
-        return Plan(PlanKind.WANDER, f"{emotion}: wanders around", None, OWN_CHOICE)
-    return Plan(PlanKind.NOTHING, "no reason to move")
+    situation = _Situation(requested, scheduled, others, rng, off_map, no_pose)
+    return _RULES[origin](origin, emotion, situation)
+
+
+@dataclass(frozen=True)
+class _Situation:
+    """What a rule of :func:`plan` chooses from besides the origin and the emotion."""
+
+    requested: Location | None
+    scheduled: Location | None
+    others: Sequence[Location]
+    """The possible targets, less the place the robot is at."""
+    rng: random.Random
+    off_map: Collection[str]
+    no_pose: Collection[str]
+
+
+def _asked(origin: Origin, emotion: str, situation: _Situation) -> Plan:
+    """A person asked: go there, unless the place cannot be reached or, told to go while angry, refuse.
+
+    Guiding (the robot offered to show the way) is never refused.
+    """
+    requested = situation.requested
+    if requested is None:
+        return Plan(PlanKind.NOTHING, "a command without a known place")
+    if requested.name in situation.no_pose:
+        return Plan(PlanKind.NO_POSE, f"{requested.name} has no pose", requested)
+    if requested.name in situation.off_map:
+        return Plan(PlanKind.NOT_ON_MAP, f"{requested.name} is not on the loaded map", requested)
+    if origin is Origin.COMMAND and emotion == ANGRY:
+        return Plan(PlanKind.REFUSE, f"angry: refuses to go to {requested.name}", requested, BOSSED_AROUND)
+    return Plan(PlanKind.MOVE, f"asked to go to {requested.name}", requested, BOSSED_AROUND)
+
+
+def _scheduled(origin: Origin, emotion: str, situation: _Situation) -> Plan:
+    """The calendar says where to be: go there, unless angry and some quiet place is free to be alone at."""
+    if emotion == ANGRY:
+        alone = _somewhere_quiet(situation, "angry: ignores the schedule, wants to be alone at")
+        if alone is not None:
+            return alone
+    if situation.scheduled is None:
+        return Plan(PlanKind.NOTHING, "the scheduled event is over")
+    target = situation.scheduled
+    return Plan(PlanKind.MOVE, f"scheduled to be at {target.name}", target, SCHEDULED)
+
+
+def _own_choice(origin: Origin, emotion: str, situation: _Situation) -> Plan:
+    """The motivator sends the robot off: where depends on the emotion (``_MOODS``), else it wanders."""
+    choose = _MOODS.get(emotion)
+    chosen = choose(emotion, situation) if choose is not None else None
+    if chosen is not None:
+        return chosen
+    return Plan(PlanKind.WANDER, f"{emotion}: wanders around", None, OWN_CHOICE)
+
+
+def _somewhere_crowded(emotion: str, situation: _Situation) -> Plan | None:
+    """Happy: a random crowded place, to look for people (None if there is none)."""
+    crowded = [p for p in situation.others if p.crowded]
+    if not crowded:
+        return None
+    target = situation.rng.choice(crowded)
+    return Plan(PlanKind.MOVE, f"{emotion}: looks for people at {target.name}", target, OWN_CHOICE)
+
+
+def _somewhere_quiet(situation: _Situation, reason: str) -> Plan | None:
+    """A random quiet place, the ``reason`` followed by its name (None if there is none)."""
+    quiet = [p for p in situation.others if not p.crowded]
+    if not quiet:
+        return None
+    target = situation.rng.choice(quiet)
+    return Plan(PlanKind.MOVE, f"{reason} {target.name}", target, OWN_CHOICE)
+
+
+def _be_alone(emotion: str, situation: _Situation) -> Plan | None:
+    """Angry: a random quiet place, to be alone (None if there is none)."""
+    return _somewhere_quiet(situation, "angry: wants to be alone at")
+
+
+def _somewhere_pleasant(emotion: str, situation: _Situation) -> Plan | None:
+    """Inhibited: the most pleasant place (the first of equals; None if there is none)."""
+    if not situation.others:
+        return None
+    target = max(situation.others, key=lambda p: p.pleasantness)
+    return Plan(PlanKind.MOVE, f"inhibited: goes somewhere pleasant, {target.name}", target, OWN_CHOICE)
+
+
+_MOODS: dict[str, Callable[[str, _Situation], Plan | None]] = {
+    **dict.fromkeys(HAPPY, _somewhere_crowded),
+    ANGRY: _be_alone,
+    "inhibited": _somewhere_pleasant,
+}
+"""Where the motivator's trip goes, by emotion; an emotion not here (or no such place) wanders."""
+
+_RULES: dict[Origin, Callable[[Origin, str, _Situation], Plan]] = {
+    Origin.COMMAND: _asked,
+    Origin.GUIDE: _asked,
+    Origin.SCHEDULE: _scheduled,
+    Origin.MOTIVATOR: _own_choice,
+}
+"""How :func:`plan` chooses, by why the robot is going somewhere."""
 
 
 def should_stop_wandering(emotion: str) -> bool:

@@ -8,7 +8,8 @@ hold. It combines the record stores, each of one table group, on one SQLite file
   arrival tolerance, crowded, pleasantness) and the map in use (only places with a pose on
   it are targets);
 * :mod:`~cyborg.navigation.events`: calendar events at places, optionally recurring
-  (:mod:`~cyborg.navigation.calendar`), with a UID so an .ics import updates;
+  (:mod:`~cyborg.navigation.recurrence`), with a UID so an .ics import
+  (:mod:`~cyborg.navigation.ics`) updates;
 * :mod:`~cyborg.navigation.responses`: sentences with the placeholder ``LOCATION``, by
   response type and emotion (no emotion = fits any emotion);
 

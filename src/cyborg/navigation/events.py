@@ -2,7 +2,7 @@
 
 One of the record stores that :class:`~cyborg.navigation.database.NavigationDatabase`
 combines; it builds on :class:`~cyborg.navigation.locations.LocationStore` (an event is at
-a known place) and leaves recurrence to :mod:`~cyborg.navigation.calendar`. Times are
+a known place) and leaves recurrence to :mod:`~cyborg.navigation.recurrence`. Times are
 stored in UTC with the zone of the start (an IANA key, 'UTC' or a fixed offset), so a
 weekly event at 15:00 Europe/Oslo comes back in its own zone.
 """
@@ -18,9 +18,9 @@ from datetime import UTC, datetime, timedelta, timezone, tzinfo
 from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
 from cyborg.errors import CalendarError, DatabaseError
-from cyborg.navigation.calendar import normalise_recurrence, occurrences_between
 from cyborg.navigation.locations import LocationStore
 from cyborg.navigation.models import CalendarEvent, Occurrence
+from cyborg.navigation.recurrence import normalise_recurrence, occurrences_between
 
 log = logging.getLogger(__name__)
 

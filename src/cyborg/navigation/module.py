@@ -17,7 +17,6 @@ from datetime import UTC
 
 from cyborg.errors import CyborgError
 from cyborg.modules.behaviour import Abort, BehaviourModule, GoalContext
-from cyborg.modules.kind import CalendarEntry
 from cyborg.modules.speech import estimated_duration
 from cyborg.navigation.base_link import base_link
 from cyborg.navigation.behaviour import (
@@ -35,6 +34,7 @@ from cyborg.navigation.behaviour import (
     talk_kind,
     trip_goes_on,
 )
+from cyborg.navigation.calendar import CalendarEntry
 from cyborg.navigation.database import NavigationDatabase
 from cyborg.navigation.keywords import Intent, detect_answer, detect_navigation
 from cyborg.navigation.models import CalendarEvent, Location, ResponseType

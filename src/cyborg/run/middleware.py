@@ -142,6 +142,10 @@ class Middleware(ABC):
     def launch_graph(self, data_dir: Path, say: Callable[[str], None]) -> LaunchGraph:
         """The graph a launch of this middleware prepares (``data_dir``: where a master keeps its log)."""
 
+    def part_built(self, node_name: str) -> None:
+        """Node ``node_name``'s part is built (its nodes have joined the graph)."""
+        return None
+
     def python(self) -> str:
         """The interpreter that runs a node process."""
         return sys.executable
@@ -184,9 +188,11 @@ class Ros1(Middleware):
         self._check_master("start roscore, or use `cyborg launch`")
         from cyborg.transport.ros import RosTransport
 
-        transport = RosTransport(clock, process_name=node_name)
-        show_problems_on_stderr(node_name)  # rospy sends the rest to the node's log file
-        return transport
+        return RosTransport(clock, process_name=node_name)
+
+    def part_built(self, node_name: str) -> None:
+        # rospy set up its logging when the first node joined: the rest goes to the node's log file.
+        show_problems_on_stderr(node_name)
 
     def tool_transport(self, clock: Clock) -> Transport:
         self._check_master(

@@ -127,6 +127,7 @@ def build_node(name: str, options: NodeOptions, middleware: Middleware) -> Built
         node.part = Part(name, [node.scenario])
     else:
         node.part = build_part(name, options.config, transport, context)
+    middleware.part_built(name)
     publish = options.publish_clock
     if publish is None:
         publish = is_simulated_base(options.config, name)

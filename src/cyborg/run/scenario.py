@@ -61,10 +61,14 @@ class ScenarioNode:
         if files.transcript is not None:
             self._out = files.transcript.open("w", encoding="utf-8")
             self.driver.listeners.append(self._write)
-        # Before reporting ready: wait until the robot listens, so the first steps reach it.
-        # (Our own RecordStream is one of the listeners to what is "heard".)
+        # Before reporting ready: wait until the robot listens, so the first steps (and the
+        # script's starting emotion) reach it. (Our own RecordStream is one of the listeners to
+        # what is "heard".)
         deadline = time.monotonic() + READY_TIMEOUT
-        for publisher, listeners in ((self.driver.event, 1), (self.driver.say, 2)):
+        waits = [(self.driver.event, 1), (self.driver.say, 2)]
+        if self.script.emotion:
+            waits.append((self.driver.set_emotion, 1))
+        for publisher, listeners in waits:
             while publisher.subscriber_count() < listeners and time.monotonic() < deadline:
                 time.sleep(0.02)
 

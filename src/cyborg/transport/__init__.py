@@ -1,5 +1,16 @@
-"""Transport layer: the interface components are written against, its in-process
-implementation, the message types and the injected clock.
+"""Transport layer: the interface components are written against, and three implementations.
+
+- :mod:`~cyborg.transport.base`: the interface (:class:`Transport`, :class:`Node`, topics,
+  services, actions, parameters), its contract written on each member;
+- :mod:`~cyborg.transport.clock`: the injected clock (real, or virtual time that runs a day in
+  seconds); :mod:`~cyborg.transport.messages` and :mod:`~cyborg.transport.topics`: the thesis's
+  messages and names;
+- :mod:`~cyborg.transport.embedded`: the in-process graph (the default, also the test fake);
+  :mod:`~cyborg.transport.ros` (ROS 1) and :mod:`~cyborg.transport.ros2` (ROS 2);
+- what they share: :mod:`~cyborg.transport._queue` (subscription queues),
+  :mod:`~cyborg.transport._goals` (a client's goal handle), :mod:`~cyborg.transport._callbacks`
+  (running a component's callback), :mod:`~cyborg.transport._host` and
+  :mod:`~cyborg.transport._convert` (what the ROS transports share).
 
 :class:`EmbeddedTransport` is imported when first asked for, so that a process using only
 the ROS transport (``cyborg.transport.ros``) does not load it.
@@ -19,6 +30,7 @@ from cyborg.transport.base import (
     ServiceProxy,
     Subscription,
     Transport,
+    TransportStats,
 )
 from cyborg.transport.clock import Clock, RealClock, VirtualClock
 
@@ -40,6 +52,7 @@ __all__ = [
     "ServiceProxy",
     "Subscription",
     "Transport",
+    "TransportStats",
     "VirtualClock",
 ]
 

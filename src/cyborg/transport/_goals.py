@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import asyncio
 from abc import abstractmethod
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 
 from cyborg.transport.base import ClientGoalHandle, F, G, GoalStatus, R
 from cyborg.transport.clock import Clock
@@ -25,7 +25,7 @@ class ClientGoal(ClientGoalHandle[G, R, F]):
 
     A status reported twice is taken once; after a terminal status (which carries the result and
     its text) nothing changes any more. Callbacks run through ``run`` (the transport's
-    :class:`~cyborg.transport._queue.CallbackRunner`), so a failing one does not stop the others.
+    :class:`~cyborg.transport._callbacks.CallbackRunner`), so a failing one does not stop the others.
     """
 
     def __init__(
@@ -34,8 +34,8 @@ class ClientGoal(ClientGoalHandle[G, R, F]):
         *,
         clock: Clock,
         run: Callable[..., None],
-        on_feedback: Callable[[F], None] | None,
-        on_status: Callable[[GoalStatus], None] | None,
+        on_feedback: Callable[[F], Awaitable[None] | None] | None,
+        on_status: Callable[[GoalStatus], Awaitable[None] | None] | None,
     ) -> None:
         self.goal = goal
         self._clock = clock
@@ -86,6 +86,7 @@ class ClientGoal(ClientGoalHandle[G, R, F]):
 
     # what the server reports, on the loop
     def update_status(self, status: GoalStatus, result: R | None, text: str) -> None:
+        """Take the status the server reported; a repeated one, or any after a terminal one, is ignored."""
         if self._status.is_terminal or status is self._status:
             return
         self._status = status
@@ -105,5 +106,6 @@ class ClientGoal(ClientGoalHandle[G, R, F]):
             self._run(callback, self)
 
     def deliver_feedback(self, feedback: F) -> None:
+        """Hand the server's feedback to ``on_feedback``, until the goal is finished."""
         if self._on_feedback is not None and not self._status.is_terminal:
             self._run(self._on_feedback, feedback)

@@ -1,27 +1,25 @@
-"""Callback dispatch and the bounded subscription queue, shared by every transport.
+"""The bounded subscription queue, shared by every transport.
 
 A transport hands each received message to :class:`SubscriptionQueue` on the clock's event
 loop (the embedded transport directly, ROS from its receiving threads through
 ``call_soon_threadsafe``). The queue holds at most ``queue_size`` messages: when full, the
 oldest is dropped and counted. It is drained on a later loop turn, each message given to the
-subscriber's callback through a :class:`CallbackRunner`, so one failing callback never stops
+subscriber's callback through the transport's
+:class:`~cyborg.transport._callbacks.CallbackRunner`, so one failing callback never stops
 delivery. Nothing here knows of ROS: the embedded, ROS 1 and ROS 2 transports use it alike.
 """
 
 from __future__ import annotations
 
-import asyncio
-import inspect
-import logging
 from collections import deque
-from collections.abc import Callable
-from typing import Any, Generic
+from collections.abc import Awaitable, Callable
+from typing import Generic
 
 from cyborg.errors import TransportError
-from cyborg.transport.base import M, MessageInfo
+from cyborg.transport.base import M, MessageInfo, TransportStats
 from cyborg.transport.clock import Clock
 
-__all__ = ["CallbackRunner", "SubscriptionQueue", "check_queue_size"]
+__all__ = ["SubscriptionQueue", "check_queue_size"]
 
 
 def check_queue_size(queue_size: int) -> None:
@@ -30,45 +28,11 @@ def check_queue_size(queue_size: int) -> None:
         raise TransportError(f"queue_size must be at least 1, got {queue_size}")
 
 
-def _describe(callback: Callable[..., object]) -> str:
-    return getattr(callback, "__qualname__", repr(callback))
-
-
-class CallbackRunner:
-    """Runs a component's callback on the loop, never letting its failure reach the transport.
-
-    A callback that raises is logged (on ``log``) and counted by ``on_error``; one that returns an
-    awaitable has it run as a task, kept until it is done, whose failure is logged and counted too.
-    """
-
-    def __init__(self, log: logging.Logger, on_error: Callable[[], None]) -> None:
-        self._log = log
-        self._on_error = on_error
-        self._tasks: set[asyncio.Future[Any]] = set()
-
-    def __call__(self, callback: Callable[..., object], *args: Any) -> None:
-        try:
-            result = callback(*args)
-            if result is not None and inspect.isawaitable(result):  # most callbacks return None
-                task = asyncio.ensure_future(result)
-                self._tasks.add(task)
-                task.add_done_callback(self._task_done)
-        except Exception:
-            self._on_error()
-            self._log.exception("callback %s failed; the transport carries on", _describe(callback))
-
-    def _task_done(self, task: asyncio.Future[Any]) -> None:
-        self._tasks.discard(task)
-        if not task.cancelled() and task.exception() is not None:
-            self._on_error()
-            self._log.error("callback task failed; the transport carries on", exc_info=task.exception())
-
-
 class SubscriptionQueue(Generic[M]):
     """A subscription's bounded queue of received messages, drained on the loop into its callback.
 
     :meth:`put` (on the loop) appends a message; when ``queue_size`` messages wait already, the
-    oldest is dropped, counted in :attr:`dropped` and reported to ``on_drop``. The first message
+    oldest is dropped and counted, in :attr:`dropped` and in the transport's ``stats``. The first message
     of a batch schedules a drain on the next loop turn, which hands every waiting message, in
     order, to ``callback`` through ``run``. After :meth:`close` nothing more is delivered.
     """
@@ -76,30 +40,30 @@ class SubscriptionQueue(Generic[M]):
     def __init__(
         self,
         clock: Clock,
-        callback: Callable[[M, MessageInfo], None],
+        callback: Callable[[M, MessageInfo], Awaitable[None] | None],
         queue_size: int,
         run: Callable[..., None],
-        on_drop: Callable[[], None] | None = None,
+        stats: TransportStats,
     ) -> None:
         check_queue_size(queue_size)
         self._clock = clock
         self._callback = callback
         self._queue_size = queue_size
         self._run = run
-        self._on_drop = on_drop
+        self._stats = stats
         self._queue: deque[tuple[M, MessageInfo]] = deque()
         self._scheduled = False
         self._active = True
         self.dropped = 0
 
     def put(self, message: M, info: MessageInfo) -> None:
+        """Queue ``message`` for the callback (on the loop); nothing after :meth:`close`."""
         if not self._active:
             return
         if len(self._queue) >= self._queue_size:
             self._queue.popleft()
             self.dropped += 1
-            if self._on_drop is not None:
-                self._on_drop()
+            self._stats.dropped_messages += 1
         self._queue.append((message, info))
         if not self._scheduled:
             self._scheduled = True

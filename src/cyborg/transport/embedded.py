@@ -24,7 +24,7 @@ from typing import Any, Generic, TypeVar, cast
 
 from cyborg.errors import ServiceTimeoutError, ServiceUnavailableError, TransportError
 from cyborg.transport._goals import ClientGoal
-from cyborg.transport._queue import CallbackRunner, SubscriptionQueue, check_queue_size
+from cyborg.transport._queue import SubscriptionQueue, check_queue_size
 from cyborg.transport.base import (
     DEFAULT_QUEUE_SIZE,
     ActionClient,
@@ -45,21 +45,14 @@ from cyborg.transport.base import (
     ServiceServer,
     Subscription,
     Transport,
-    normalize_node_name,
+    TransportStats,
 )
 from cyborg.transport.clock import Clock, RealClock
 from cyborg.transport.messages import ActionType, Message, ServiceType, is_immutable
 
+__all__ = ["EmbeddedNode", "EmbeddedTransport", "TransportStats"]  # TransportStats lived here first
+
 log = logging.getLogger(__name__)
-
-
-@dataclass
-class TransportStats:
-    """Counters a user can read to see what the transport did."""
-
-    callback_errors: int = 0
-    dropped_messages: int = 0
-    published: int = 0
 
 
 T = TypeVar("T")
@@ -71,6 +64,8 @@ def _own(message: T) -> T:
 
 
 class _Topic:
+    """One topic: its type, its subscriptions and its latched message."""
+
     def __init__(self, name: str, msg_type: type[Message]) -> None:
         self.name = name
         self.msg_type = msg_type
@@ -80,26 +75,22 @@ class _Topic:
 
 
 class EmbeddedTransport(Transport):
-    """In-process graph of topics, services, actions and parameters."""
+    """In-process graph of topics, services, actions and parameters.
+
+    Everything it delivers goes through the clock's loop (``call_soon``), never synchronously.
+    It keeps no resources beyond its nodes: :meth:`close` only shuts them down.
+    """
 
     def __init__(self, clock: Clock | None = None) -> None:
-        self.clock = clock or RealClock()
-        self.stats = TransportStats()
+        """``clock``: a new RealClock when None."""
+        super().__init__(clock or RealClock())
         self._topics: dict[str, _Topic] = {}
         self._services: dict[str, _EmbeddedServiceServer[Any, Any]] = {}
         self._action_servers: dict[str, _EmbeddedActionServer[Any, Any, Any]] = {}
         self._action_clients: dict[str, list[_EmbeddedActionClient[Any, Any, Any]]] = {}
         self._params: dict[str, Any] = {}
-        self._nodes: dict[str, EmbeddedNode] = {}
         self._goal_ids = itertools.count(1)
         self._offer_waiters: set[asyncio.Future[None]] = set()  # woken when a service or action appears
-        self._run_callback = CallbackRunner(log, self._count_callback_error)
-
-    def _count_callback_error(self) -> None:
-        self.stats.callback_errors += 1
-
-    def _count_dropped(self) -> None:
-        self.stats.dropped_messages += 1
 
     async def _wait_for_offer(self, is_offered: Callable[[], bool], timeout: float) -> bool:
         """Wait until ``is_offered()`` or ``timeout`` clock seconds pass; no polling."""
@@ -125,26 +116,8 @@ class EmbeddedTransport(Transport):
     # --- nodes ---------------------------------------------------------------
 
     def node(self, name: str) -> EmbeddedNode:
-        name = normalize_node_name(name)
-        if not name:
-            raise TransportError("node name is empty: give every component a name, e.g. 'cyborg_idle'")
-        if name in self._nodes:
-            raise TransportError(
-                f"node name {name!r} is already in use: node names must be unique, pick another"
-            )
-        node = EmbeddedNode(self, name)
-        self._nodes[name] = node
-        return node
-
-    def node_names(self) -> list[str]:
-        return sorted(self._nodes)
-
-    def shutdown(self) -> None:
-        for node in list(self._nodes.values()):
-            node.shutdown()
-
-    def _forget_node(self, node: EmbeddedNode) -> None:
-        self._nodes.pop(node.name, None)
+        """A new in-process node (see :meth:`Transport.node`)."""
+        return self._add_node(name, lambda free: EmbeddedNode(self, free))
 
     # --- topics --------------------------------------------------------------
 
@@ -160,6 +133,7 @@ class EmbeddedTransport(Transport):
         return topic
 
     def topic_names(self) -> dict[str, str]:
+        """Every topic used so far, sorted, with its ROS type: ``{"/chat": "std_msgs/String"}``."""
         return {name: t.msg_type.ros_type for name, t in sorted(self._topics.items())}
 
     def _publish(self, topic: _Topic, message: Message, sender: str, latch: bool) -> None:
@@ -184,14 +158,11 @@ class EmbeddedTransport(Transport):
 
 
 class EmbeddedNode(Node):
+    """A node of the in-process graph; its sender name is its own."""
+
     def __init__(self, transport: EmbeddedTransport, name: str) -> None:
+        super().__init__(transport, name)
         self.transport = transport
-        self.name = name
-        self.clock = transport.clock
-        self._subscriptions: list[_EmbeddedSubscription[Any]] = []
-        self._services: list[_EmbeddedServiceServer[Any, Any]] = []
-        self._action_servers: list[_EmbeddedActionServer[Any, Any, Any]] = []
-        self._alive = True
 
     def publisher(
         self,
@@ -201,21 +172,23 @@ class EmbeddedNode(Node):
         queue_size: int = DEFAULT_QUEUE_SIZE,
         latch: bool = False,
     ) -> Publisher[M]:
+        """A publisher on the in-process topic (``queue_size`` unused: nothing waits to go out)."""
         return _EmbeddedPublisher(self, self.transport._topic(self.resolve(topic), msg_type), latch)
 
     def subscribe(
         self,
         topic: str,
         msg_type: type[M],
-        callback: Callable[[M, MessageInfo], None],
+        callback: Callable[[M, MessageInfo], Awaitable[None] | None],
         *,
         queue_size: int = DEFAULT_QUEUE_SIZE,
     ) -> Subscription[M]:
+        """Subscribe; a latched message waiting on the topic is queued first (see :meth:`Node.subscribe`)."""
         check_queue_size(queue_size)
         t = self.transport._topic(self.resolve(topic), msg_type)
         sub: _EmbeddedSubscription[M] = _EmbeddedSubscription(self.transport, t, callback, queue_size)
         t.subscriptions.append(sub)
-        self._subscriptions.append(sub)
+        self.on_shutdown(sub.unsubscribe)
         if t.latched is not None:
             latched, info = t.latched
             sub._enqueue(latched if t.immutable else copy.deepcopy(latched), info)
@@ -227,6 +200,7 @@ class EmbeddedNode(Node):
         srv_type: ServiceType[Req, Resp],
         handler: Callable[[Req, MessageInfo], Resp | Awaitable[Resp]],
     ) -> ServiceServer:
+        """Offer the service; TransportError if a node of this transport offers it already."""
         full = self.resolve(name)
         if full in self.transport._services:
             raise TransportError(
@@ -236,19 +210,21 @@ class EmbeddedNode(Node):
         server: _EmbeddedServiceServer[Req, Resp] = _EmbeddedServiceServer(self, full, srv_type, handler)
         self.transport._services[full] = server
         self.transport._offers_changed()
-        self._services.append(server)
+        self.on_shutdown(server.shutdown)
         return server
 
     def service_proxy(self, name: str, srv_type: ServiceType[Req, Resp]) -> ServiceProxy[Req, Resp]:
+        """A proxy that calls the in-process service ``name``."""
         return _EmbeddedServiceProxy(self, self.resolve(name), srv_type)
 
     def action_server(
         self,
         name: str,
         action_type: ActionType[G, R, F],
-        on_goal: Callable[[ServerGoalHandle[G, R, F]], None],
-        on_cancel: Callable[[ServerGoalHandle[G, R, F]], None],
+        on_goal: Callable[[ServerGoalHandle[G, R, F]], Awaitable[None] | None],
+        on_cancel: Callable[[ServerGoalHandle[G, R, F]], Awaitable[None] | None],
     ) -> ActionServer[G, R, F]:
+        """Offer the action; TransportError if a node of this transport offers it already."""
         full = self.resolve(name)
         existing = self.transport._action_servers.get(full)
         if existing is not None:
@@ -258,36 +234,29 @@ class EmbeddedNode(Node):
             )
         server = _EmbeddedActionServer(self, full, action_type, on_goal, on_cancel)
         self.transport._action_servers[full] = server
-        self._action_servers.append(server)
+        self.on_shutdown(server.shutdown)
         self.transport._offers_changed()
         return server
 
     def action_client(self, name: str, action_type: ActionType[G, R, F]) -> ActionClient[G, R, F]:
+        """A client of the in-process action ``name``."""
         full = self.resolve(name)
         client = _EmbeddedActionClient(self, full, action_type)
         self.transport._action_clients.setdefault(full, []).append(client)
         return client
 
     def get_param(self, name: str, default: Any = None) -> Any:
+        """A deep copy of the parameter's value, or ``default``."""
         return copy.deepcopy(self.transport._params.get(self.resolve(name), default))
 
     def set_param(self, name: str, value: Any) -> None:
+        """Keep a deep copy of ``value`` for every node of this transport."""
         self.transport._params[self.resolve(name)] = copy.deepcopy(value)
-
-    def shutdown(self) -> None:
-        if not self._alive:
-            return
-        self._alive = False
-        for sub in list(self._subscriptions):
-            sub.unsubscribe()
-        for service in list(self._services):
-            service.shutdown()
-        for server in list(self._action_servers):
-            server.shutdown()
-        self.transport._forget_node(self)
 
 
 class _EmbeddedPublisher(Publisher[M]):
+    """Publishes on an in-process topic."""
+
     def __init__(self, node: EmbeddedNode, topic: _Topic, latch: bool) -> None:
         self._node = node
         self._topic = topic
@@ -295,40 +264,48 @@ class _EmbeddedPublisher(Publisher[M]):
         self.topic = topic.name
 
     def publish(self, message: M) -> None:
+        """Queue ``message`` for each subscription (a copy each, if its type is mutable)."""
         self._node.transport._publish(self._topic, message, self._node.name, self._latch)
 
     def subscriber_count(self) -> int:
+        """Every subscription of the topic: in-process, all are connected."""
         return len(self._topic.subscriptions)
 
 
 class _EmbeddedSubscription(Subscription[M]):
+    """A subscription's bounded queue on an in-process topic."""
+
     def __init__(
         self,
         transport: EmbeddedTransport,
         topic: _Topic,
-        callback: Callable[[M, MessageInfo], None],
+        callback: Callable[[M, MessageInfo], Awaitable[None] | None],
         queue_size: int,
     ) -> None:
         self._topic = topic
         self.topic = topic.name
         self._queue = SubscriptionQueue(
-            transport.clock, callback, queue_size, transport._run_callback, transport._count_dropped
+            transport.clock, callback, queue_size, transport.run_callback, transport.stats
         )
 
     @property
     def dropped(self) -> int:
+        """Messages dropped because the bounded queue was full."""
         return self._queue.dropped
 
     def _enqueue(self, message: Message, info: MessageInfo) -> None:
         self._queue.put(cast(M, message), info)
 
     def unsubscribe(self) -> None:
+        """Deliver nothing more and leave the topic."""
         self._queue.close()
         if self in self._topic.subscriptions:
             self._topic.subscriptions.remove(self)
 
 
 class _EmbeddedServiceServer(ServiceServer, Generic[Req, Resp]):
+    """A service offered in-process: its handler answers every proxy of its name."""
+
     def __init__(
         self,
         node: EmbeddedNode,
@@ -342,12 +319,15 @@ class _EmbeddedServiceServer(ServiceServer, Generic[Req, Resp]):
         self.handler = handler
 
     def shutdown(self) -> None:
+        """Withdraw the service (if it is still this one)."""
         services = self.node.transport._services
         if services.get(self.name) is self:
             del services[self.name]
 
 
 class _EmbeddedServiceProxy(ServiceProxy[Req, Resp]):
+    """Calls an in-process service's handler on a later loop turn, as over a network."""
+
     def __init__(self, node: EmbeddedNode, name: str, srv_type: ServiceType[Req, Resp]) -> None:
         self._node = node
         self.name = name
@@ -357,12 +337,15 @@ class _EmbeddedServiceProxy(ServiceProxy[Req, Resp]):
         return self._node.transport._services.get(self.name)
 
     def available(self) -> bool:
+        """True if a node of this transport offers the service."""
         return self._server() is not None
 
     async def wait_for_service(self, timeout: float) -> bool:
+        """Wait for the service to be offered, woken when it is (no polling)."""
         return await self._node.transport._wait_for_offer(self.available, timeout)
 
     async def call(self, request: Req | None = None, *, timeout: float = 5.0) -> Resp:
+        """Call the handler with a copy of the request (see :meth:`ServiceProxy.call`)."""
         server = self._server()
         if server is None:
             raise ServiceUnavailableError(
@@ -396,6 +379,8 @@ class _EmbeddedServiceProxy(ServiceProxy[Req, Resp]):
 
 @dataclass
 class _Goal(Generic[G, R, F]):
+    """One goal's record, shared by its client and server handles."""
+
     goal_id: str
     goal: G
     sender: str
@@ -408,13 +393,15 @@ class _Goal(Generic[G, R, F]):
 
 
 class _EmbeddedActionServer(ActionServer[G, R, F]):
+    """An action offered in-process: it receives goals and cancels on the loop."""
+
     def __init__(
         self,
         node: EmbeddedNode,
         name: str,
         action_type: ActionType[G, R, F],
-        on_goal: Callable[[ServerGoalHandle[G, R, F]], None],
-        on_cancel: Callable[[ServerGoalHandle[G, R, F]], None],
+        on_goal: Callable[[ServerGoalHandle[G, R, F]], Awaitable[None] | None],
+        on_cancel: Callable[[ServerGoalHandle[G, R, F]], Awaitable[None] | None],
     ) -> None:
         self.node = node
         self.name = name
@@ -430,7 +417,7 @@ class _EmbeddedActionServer(ActionServer[G, R, F]):
         self._goals[goal.goal_id] = goal
         handle = _EmbeddedServerGoalHandle(self, goal)
         goal.server_handle = handle
-        self.node.transport._run_callback(self._on_goal, handle)
+        self.node.transport.run_callback(self._on_goal, handle)
 
     def _receive_cancel(self, goal_id: str) -> None:
         goal = self._goals.get(goal_id)
@@ -442,7 +429,7 @@ class _EmbeddedActionServer(ActionServer[G, R, F]):
             self._set_status(goal, GoalStatus.PREEMPTING)
         else:
             return
-        self.node.transport._run_callback(self._on_cancel, goal.server_handle)
+        self.node.transport.run_callback(self._on_cancel, goal.server_handle)
 
     def _set_status(
         self, goal: _Goal[G, R, F], status: GoalStatus, result: R | None = None, text: str = ""
@@ -467,6 +454,7 @@ class _EmbeddedActionServer(ActionServer[G, R, F]):
             self.node.clock.loop.call_soon(client.deliver_feedback, _own(feedback))
 
     def shutdown(self) -> None:
+        """Withdraw the action: the goals it holds end LOST at their clients."""
         if not self.alive:
             return
         self.alive = False
@@ -492,6 +480,8 @@ _ALLOWED: dict[str, frozenset[GoalStatus]] = {
 
 
 class _EmbeddedServerGoalHandle(ServerGoalHandle[G, R, F]):
+    """The server's side of one in-process goal; a call its status forbids is logged and ignored."""
+
     def __init__(self, server: _EmbeddedActionServer[G, R, F], goal: _Goal[G, R, F]) -> None:
         self._server = server
         self._goal = goal
@@ -501,6 +491,7 @@ class _EmbeddedServerGoalHandle(ServerGoalHandle[G, R, F]):
 
     @property
     def status(self) -> GoalStatus:
+        """The goal's status."""
         return self._goal.status
 
     def _transition(self, kind: str, status: GoalStatus, result: R | None, text: str) -> None:
@@ -516,41 +507,49 @@ class _EmbeddedServerGoalHandle(ServerGoalHandle[G, R, F]):
         self._server._set_status(self._goal, status, result, text)
 
     def accept(self) -> None:
+        """PENDING -> ACTIVE (RECALLING -> PREEMPTING: the cancel still stands)."""
         target = GoalStatus.PREEMPTING if self._goal.status is GoalStatus.RECALLING else GoalStatus.ACTIVE
         self._transition("accept", target, None, "")
 
     def reject(self, result: R | None = None, text: str = "") -> None:
+        """End a goal not yet accepted REJECTED."""
         self._transition("reject", GoalStatus.REJECTED, result, text)
 
     def publish_feedback(self, feedback: F) -> None:
+        """Send feedback to the client's ``on_feedback`` on a later loop turn."""
         if not self._goal.status.is_terminal:
             self._server._send_feedback(self._goal, feedback)
 
     def succeed(self, result: R | None = None, text: str = "") -> None:
+        """End an accepted goal SUCCEEDED."""
         self._transition("finish", GoalStatus.SUCCEEDED, result, text)
 
     def abort(self, result: R | None = None, text: str = "") -> None:
+        """End an accepted goal ABORTED."""
         self._transition("finish", GoalStatus.ABORTED, result, text)
 
     def canceled(self, result: R | None = None, text: str = "") -> None:
+        """Acknowledge a cancel: RECALLED if pending, PREEMPTED if active."""
         pending = self._goal.status in (GoalStatus.PENDING, GoalStatus.RECALLING)
         target = GoalStatus.RECALLED if pending else GoalStatus.PREEMPTED
         self._transition("canceled", target, result, text)
 
 
 class _EmbeddedClientGoalHandle(ClientGoal[G, R, F]):
+    """The client's side of one in-process goal: a cancel reaches the server on a later loop turn."""
+
     def __init__(
         self,
         client: _EmbeddedActionClient[G, R, F],
         goal: _Goal[G, R, F],
-        on_feedback: Callable[[F], None] | None,
-        on_status: Callable[[GoalStatus], None] | None,
+        on_feedback: Callable[[F], Awaitable[None] | None] | None,
+        on_status: Callable[[GoalStatus], Awaitable[None] | None] | None,
     ) -> None:
         transport = client._node.transport
         super().__init__(
             goal.goal,
             clock=client._node.clock,
-            run=transport._run_callback,
+            run=transport.run_callback,
             on_feedback=on_feedback,
             on_status=on_status,
         )
@@ -565,6 +564,8 @@ class _EmbeddedClientGoalHandle(ClientGoal[G, R, F]):
 
 
 class _EmbeddedActionClient(ActionClient[G, R, F]):
+    """Sends goals to the in-process action server of its name."""
+
     def __init__(self, node: EmbeddedNode, name: str, action_type: ActionType[G, R, F]) -> None:
         self._node = node
         self.name = name
@@ -582,18 +583,21 @@ class _EmbeddedActionClient(ActionClient[G, R, F]):
         return cast(_EmbeddedActionServer[G, R, F], server)
 
     def server_available(self) -> bool:
+        """True if a node offers the action; TransportError if with another action type."""
         return self._server() is not None
 
     async def wait_for_server(self, timeout: float) -> bool:
+        """Wait for the server to be offered, woken when it is (no polling)."""
         return await self._node.transport._wait_for_offer(self.server_available, timeout)
 
     def send_goal(
         self,
         goal: G,
         *,
-        on_feedback: Callable[[F], None] | None = None,
-        on_status: Callable[[GoalStatus], None] | None = None,
+        on_feedback: Callable[[F], Awaitable[None] | None] | None = None,
+        on_status: Callable[[GoalStatus], Awaitable[None] | None] | None = None,
     ) -> ClientGoalHandle[G, R, F]:
+        """Send a copy of ``goal``; it reaches the server on a later loop turn (see :meth:`ActionClient.send_goal`)."""
         transport = self._node.transport
         record: _Goal[G, R, F] = _Goal(
             goal_id=f"{self._node.name}-{next(transport._goal_ids)}",

@@ -49,6 +49,24 @@ class CommandError(CyborgError, web.HTTPBadRequest):
         super().__init__(text=json.dumps({"error": problem}), content_type="application/json")
 
 
+ROUTES = [
+    ("GET", "/api/status", "get_status"),
+    ("POST", "/api/event", "post_event"),
+    ("POST", "/api/say", "post_say"),
+    ("POST", "/api/emotion/set", "post_emotion_set"),
+    ("POST", "/api/emotion/values", "post_emotion_values"),
+    ("POST", "/api/emotion/switch", "post_emotion_switch"),
+    ("GET", "/api/records", "get_records"),
+    ("GET", "/api/openapi.json", "get_openapi"),
+    ("GET", "/api/ws", "websocket"),
+    ("GET", "/api/machine", "get_machine"),
+    ("GET", "/api/graph.svg", "get_graph"),
+    ("GET", "/api/graph.json", "get_graph_arrows"),
+    ("GET", "/api/emotions", "get_emotions"),
+]
+"""The API's routes: method, path and the :class:`RobotAPI` method that answers (the dashboard adds its own)."""
+
+
 class RobotAPI:
     """HTTP + websocket front of one robot."""
 
@@ -103,21 +121,7 @@ class RobotAPI:
             middlewares=[self.guard.middleware], client_max_size=self.guard.limits.max_body
         )
         self.app.add_routes(
-            [
-                web.get("/api/status", self.get_status),
-                web.post("/api/event", self.post_event),
-                web.post("/api/say", self.post_say),
-                web.post("/api/emotion/set", self.post_emotion_set),
-                web.post("/api/emotion/values", self.post_emotion_values),
-                web.post("/api/emotion/switch", self.post_emotion_switch),
-                web.get("/api/records", self.get_records),
-                web.get("/api/openapi.json", self.get_openapi),
-                web.get("/api/ws", self.websocket),
-                web.get("/api/machine", self.get_machine),
-                web.get("/api/graph.svg", self.get_graph),
-                web.get("/api/graph.json", self.get_graph_arrows),
-                web.get("/api/emotions", self.get_emotions),
-            ]
+            web.route(method, path, getattr(self, handler)) for method, path, handler in ROUTES
         )
         self._runner: web.AppRunner | None = None
         self._server: asyncio.Server | None = None

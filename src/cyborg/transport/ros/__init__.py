@@ -14,15 +14,16 @@ Its modules, one idea each:
 
 * :mod:`.transport`: :class:`RosTransport` and its nodes and parameters (start here);
 * :mod:`.topics`, :mod:`.services`, :mod:`.actions`: what a node hands out
-  (:mod:`.host`: what they need of the transport);
+  (:mod:`cyborg.transport._host`: what they need of the transport);
 * :mod:`.convert`: our messages to and from the generated ROS classes;
 * :mod:`.master`: calls to the master, and living through its outage or restart;
+  :mod:`.connections`: waiting until this process's topics are connected;
 * :mod:`.patches`: rospy's behaviour changed, installed when a RosTransport is made
   (importing changes nothing).
 
-The subscription queue and the client's goal handle are the ones every transport
-shares (:mod:`cyborg.transport._queue`, :mod:`cyborg.transport._goals`). This package
-is the only place that imports rospy.
+The subscription queue, the client's goal handle and the message walk are the ones every
+transport shares (:mod:`cyborg.transport._queue`, :mod:`cyborg.transport._goals`,
+:mod:`cyborg.transport._convert`). This package is the only place that imports rospy.
 """
 
 from cyborg.transport.ros.transport import RosNode, RosTransport

@@ -14,12 +14,13 @@ import dataclasses
 import logging
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 import actionlib  # type: ignore[import-not-found]
 
 from cyborg.transport._goals import ClientGoal
+from cyborg.transport._host import Host
 from cyborg.transport.base import (
     ActionClient,
     ActionServer,
@@ -32,7 +33,6 @@ from cyborg.transport.base import (
 )
 from cyborg.transport.messages import ActionType, Message
 from cyborg.transport.ros.convert import from_ros, ros_class, sender, to_ros
-from cyborg.transport.ros.host import Host
 from cyborg.transport.ros.master import UNREACHABLE, WATCH
 
 __all__ = [
@@ -126,8 +126,8 @@ class RosActionServer(ActionServer[G, R, F]):
         transport: Host,
         name: str,
         action_type: ActionType[G, R, F],
-        on_goal: Callable[[ServerGoalHandle[G, R, F]], None],
-        on_cancel: Callable[[ServerGoalHandle[G, R, F]], None],
+        on_goal: Callable[[ServerGoalHandle[G, R, F]], Awaitable[None] | None],
+        on_cancel: Callable[[ServerGoalHandle[G, R, F]], Awaitable[None] | None],
     ) -> None:
         self.name = name
         self.action_type = action_type
@@ -196,8 +196,8 @@ class _RosClientGoalHandle(ClientGoal[G, R, F]):
         self,
         client: RosActionClient[G, R, F],
         goal: G,
-        on_feedback: Callable[[F], None] | None,
-        on_status: Callable[[GoalStatus], None] | None,
+        on_feedback: Callable[[F], Awaitable[None] | None] | None,
+        on_status: Callable[[GoalStatus], Awaitable[None] | None] | None,
     ) -> None:
         transport = client.transport
         super().__init__(
@@ -271,6 +271,12 @@ class RosActionClient(ActionClient[G, R, F]):
         )
 
     async def wait_for_server(self, timeout: float) -> bool:
+        """Poll :meth:`server_available` until ``timeout`` *real* seconds pass.
+
+        rospy and actionlib find a server on their own threads, in real time, whatever speed the
+        clock runs at: a deadline on a virtual clock at speed 25 would give them 1/25 of it, and a
+        module's server found a moment late would end its state as aborted.
+        """
         deadline = time.monotonic() + timeout
         while not self.server_available():
             if time.monotonic() >= deadline:
@@ -282,8 +288,8 @@ class RosActionClient(ActionClient[G, R, F]):
         self,
         goal: G,
         *,
-        on_feedback: Callable[[F], None] | None = None,
-        on_status: Callable[[GoalStatus], None] | None = None,
+        on_feedback: Callable[[F], Awaitable[None] | None] | None = None,
+        on_status: Callable[[GoalStatus], Awaitable[None] | None] | None = None,
     ) -> ClientGoalHandle[G, R, F]:
         handle = _RosClientGoalHandle(self, goal, on_feedback, on_status)
         transport = self.transport

@@ -1,13 +1,13 @@
 """Conversion between our message dataclasses and the generated ROS 1 (genpy) classes.
 
 Part of the ROS 1 transport (:mod:`cyborg.transport.ros`): its topics, services and actions
-convert every message field by field on the way out (:func:`to_ros`) and in (:func:`from_ros`);
-the names are the same by design. :func:`sender` reads who sent a received message.
+convert every message field by field on the way out (:func:`to_ros`) and in (:func:`from_ros`),
+with the walk both ROS transports share (:mod:`cyborg.transport._convert`); the names are the
+same by design. :func:`sender` reads who sent a received message.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import importlib
 from typing import Any
 
@@ -15,6 +15,7 @@ import genpy  # type: ignore[import-not-found]
 import rospy  # type: ignore[import-not-found]
 
 from cyborg.errors import TransportError
+from cyborg.transport._convert import fields_from, fields_to
 from cyborg.transport.base import M, normalize_node_name
 from cyborg.transport.messages import Message
 
@@ -35,38 +36,26 @@ def ros_class(ros_type: str, kind: str = "msg") -> Any:
 
 def to_ros(message: Message, cls: Any) -> Any:
     """``message`` as an instance of the ROS class ``cls`` (fields ``cls`` lacks are left out)."""
-    out = cls()
-    for field in dataclasses.fields(message):
-        value = getattr(message, field.name)
-        if not hasattr(out, field.name):
-            continue
-        current = getattr(out, field.name)
-        if isinstance(value, Message):
-            setattr(out, field.name, to_ros(value, type(current)))
-        elif isinstance(current, genpy.Time):
-            setattr(out, field.name, rospy.Time.from_sec(max(0.0, float(value))))
-        else:
-            setattr(out, field.name, value)
-    return out
+    return fields_to(message, cls, _value_out)
+
+
+def _value_out(value: Any, current: Any) -> Any:
+    if isinstance(current, genpy.Time):
+        return rospy.Time.from_sec(max(0.0, float(value)))
+    return value
 
 
 def from_ros(ros_message: Any, cls: type[M]) -> M:
     """A ROS message as our dataclass ``cls`` (fields the ROS message lacks keep their defaults)."""
-    values: dict[str, Any] = {}
-    for field in dataclasses.fields(cls):
-        if not hasattr(ros_message, field.name):
-            continue
-        value = getattr(ros_message, field.name)
-        default = field.default_factory() if field.default_factory is not dataclasses.MISSING else None
-        if isinstance(default, Message):
-            values[field.name] = from_ros(value, type(default))
-        elif hasattr(value, "to_sec"):
-            values[field.name] = value.to_sec()
-        elif isinstance(value, tuple):
-            values[field.name] = tuple(value)  # messages are frozen: tuples, not lists
-        else:
-            values[field.name] = value
-    return cls(**values)
+    return fields_from(ros_message, cls, _value_in)
+
+
+def _value_in(value: Any) -> Any:
+    if hasattr(value, "to_sec"):
+        return value.to_sec()
+    if isinstance(value, tuple):
+        return tuple(value)  # messages are frozen: tuples, not lists
+    return value
 
 
 def sender(ros_message: Any) -> str:

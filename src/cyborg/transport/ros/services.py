@@ -16,10 +16,10 @@ from typing import Any, Generic
 import rospy  # type: ignore[import-not-found]
 
 from cyborg.errors import ServiceTimeoutError, ServiceUnavailableError, TransportError
+from cyborg.transport._host import Host
 from cyborg.transport.base import MessageInfo, Req, Resp, ServiceProxy, ServiceServer
 from cyborg.transport.messages import ServiceType
 from cyborg.transport.ros.convert import from_ros, ros_class, sender, to_ros
-from cyborg.transport.ros.host import Host
 
 __all__ = ["RosServiceProxy", "RosServiceServer"]
 

@@ -12,18 +12,18 @@ import logging
 import threading
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 import rosgraph  # type: ignore[import-not-found]
 import rospy  # type: ignore[import-not-found]
 
 from cyborg.errors import TransportError
+from cyborg.transport._host import Host
 from cyborg.transport._queue import SubscriptionQueue
 from cyborg.transport.base import M, MessageInfo, Publisher, Subscription
 from cyborg.transport.messages import Message
 from cyborg.transport.ros.convert import from_ros, ros_class, sender, to_ros
-from cyborg.transport.ros.host import Host
 from cyborg.transport.ros.master import listed_subscribers
 
 __all__ = ["FRESH_PUBLISHER_WAIT", "RosPublisher", "RosSubscription", "check_topic_type"]
@@ -75,8 +75,9 @@ class RosPublisher(Publisher[M]):
     later messages queue behind it, so the order holds.
     """
 
-    def __init__(self, topic: str, msg_type: type[M], queue_size: int, latch: bool) -> None:
+    def __init__(self, transport: Host, topic: str, msg_type: type[M], queue_size: int, latch: bool) -> None:
         self.topic = topic
+        self._stats = transport.stats
         self._cls = ros_class(msg_type.ros_type)
         self._pub = rospy.Publisher(topic, self._cls, queue_size=queue_size, latch=latch)
         self._fresh_until = time.monotonic() + FRESH_PUBLISHER_WAIT
@@ -85,7 +86,9 @@ class RosPublisher(Publisher[M]):
         self._lock = threading.Lock()
 
     def publish(self, message: M) -> None:
+        """Send ``message``; while the publisher is fresh, it may wait for known subscribers (above)."""
         ros_message = to_ros(message, self._cls)
+        self._stats.published += 1
         with self._lock:
             if self._pending is not None:
                 self._pending.append(ros_message)
@@ -111,9 +114,11 @@ class RosPublisher(Publisher[M]):
                 self._pub.publish(ros_message)
 
     def subscriber_count(self) -> int:
+        """The subscribers connected to this publisher now."""
         return int(self._pub.get_num_connections())
 
     def unregister(self) -> None:
+        """Leave the topic (its node's shutdown does this)."""
         self._pub.unregister()
 
 
@@ -125,17 +130,20 @@ class RosSubscription(Subscription[M]):
         transport: Host,
         topic: str,
         msg_type: type[M],
-        callback: Callable[[M, MessageInfo], None],
+        callback: Callable[[M, MessageInfo], Awaitable[None] | None],
         queue_size: int,
     ) -> None:
         self.topic = topic
         self._transport = transport
         self._type = msg_type
-        self._queue = SubscriptionQueue(transport.clock, callback, queue_size, transport.run_callback)
+        self._queue = SubscriptionQueue(
+            transport.clock, callback, queue_size, transport.run_callback, transport.stats
+        )
         self._sub = rospy.Subscriber(topic, ros_class(msg_type.ros_type), self._on_ros, queue_size=None)
 
     @property
     def dropped(self) -> int:
+        """Messages dropped because the bounded queue was full."""
         return self._queue.dropped
 
     def _on_ros(self, ros_message: Any) -> None:  # rospy thread
@@ -144,5 +152,6 @@ class RosSubscription(Subscription[M]):
         self._transport.to_loop(self._queue.put, message, info)
 
     def unsubscribe(self) -> None:
+        """Deliver nothing more and leave the topic."""
         self._queue.close()
         self._sub.unregister()

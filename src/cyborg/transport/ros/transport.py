@@ -19,7 +19,6 @@ import rosgraph  # type: ignore[import-not-found]
 import rospy  # type: ignore[import-not-found]
 
 from cyborg.errors import TransportError
-from cyborg.transport._queue import CallbackRunner
 from cyborg.transport.base import (
     DEFAULT_QUEUE_SIZE,
     ActionClient,
@@ -59,19 +58,14 @@ class RosTransport(Transport):
     """Nodes of this process on a running ROS master (``ROS_MASTER_URI``)."""
 
     def __init__(self, clock: Clock, *, process_name: str | None = None) -> None:
+        """``process_name``: this process's rospy node name (default: the first node's name)."""
         patches.install()
-        self.clock = clock
+        super().__init__(clock)
         self.process_name = process_name
-        self.callback_errors = 0
-        self.run_callback = CallbackRunner(log, self._count_callback_error)
-        self._nodes: dict[str, RosNode] = {}
         self._watched_params: set[str] = set()
         self._param_values: dict[str, Any] = {}
         self._params_lock = threading.Lock()
         self._chained_notifier: Callable[[str, Any], None] | None = None
-
-    def _count_callback_error(self) -> None:
-        self.callback_errors += 1
 
     def _ensure_init(self, first: str) -> None:
         if not rospy.core.is_initialized():
@@ -80,28 +74,21 @@ class RosTransport(Transport):
 
     @property
     def ros_name(self) -> str:
+        """This process's rospy node name: the sender of every message its nodes publish."""
         return normalize_node_name(rospy.get_name())
 
     def node(self, name: str) -> RosNode:
-        name = normalize_node_name(name)
-        if not name:
-            raise TransportError("node name is empty: give every component a name, e.g. 'cyborg_idle'")
-        if name in self._nodes:
-            raise TransportError(f"node name {name!r} is already in use in this process")
-        self._ensure_init(name)
-        node = RosNode(self, name)
-        self._nodes[name] = node
-        return node
+        """A logical node (see :meth:`Transport.node`); the first one initialises the rospy node."""
 
-    def shutdown(self) -> None:
-        for node in list(self._nodes.values()):
-            node.shutdown()
-        self._nodes.clear()
+        def make(free: str) -> RosNode:
+            self._ensure_init(free)
+            return RosNode(self, free)
 
-    def close(self, reason: str = "cyborg node stopped") -> None:
-        """Shut down every node of this process and leave the graph (rospy cannot rejoin it)."""
-        self.shutdown()
-        rospy.signal_shutdown(reason)
+        return self._add_node(name, make)
+
+    def _leave(self) -> None:
+        """Leave the graph: rospy shuts down, and cannot rejoin it in this process."""
+        rospy.signal_shutdown("cyborg node stopped")
 
     def wait_for_connections(self, timeout: float) -> list[str]:
         """See :meth:`Transport.wait_for_connections` and :mod:`.connections`."""
@@ -114,10 +101,6 @@ class RosTransport(Transport):
     def subscribers_of(self, topic: str) -> list[str]:
         """The nodes the master lists as subscribers of ``topic`` (empty if it does not answer)."""
         return listed_subscribers(topic)
-
-    def _forget_node(self, node: RosNode) -> None:
-        if self._nodes.get(node.name) is node:
-            del self._nodes[node.name]
 
     def set_param(self, key: str, value: Any) -> None:
         """Set a parameter on the master, skipping the round trip when it already holds ``value``.
@@ -168,41 +151,33 @@ class RosTransport(Transport):
         if self._chained_notifier is not None:
             self._chained_notifier(key, value)
 
-    def to_loop(self, callback: Callable[..., object], *args: Any) -> None:
-        """Run ``callback(*args)`` on the loop (from a rospy thread), as every callback runs."""
-        loop = self.clock.loop
-        if not loop.is_closed():
-            loop.call_soon_threadsafe(self.run_callback, callback, *args)
-
 
 class RosNode(Node):
     """One logical node: the components of a process share its one rospy node."""
 
     def __init__(self, transport: RosTransport, name: str) -> None:
+        super().__init__(transport, name)
         self.transport = transport
-        self.name = name
-        self.clock = transport.clock
-        self._closers: list[Callable[[], None]] = []
 
     def publisher(
         self, topic: str, msg_type: type[M], *, queue_size: int = DEFAULT_QUEUE_SIZE, latch: bool = False
     ) -> Publisher[M]:
         check_topic_type(self.resolve(topic), msg_type)
-        pub = RosPublisher[M](self.resolve(topic), msg_type, queue_size, latch)
-        self._closers.append(pub.unregister)
+        pub = RosPublisher[M](self.transport, self.resolve(topic), msg_type, queue_size, latch)
+        self.on_shutdown(pub.unregister)
         return pub
 
     def subscribe(
         self,
         topic: str,
         msg_type: type[M],
-        callback: Callable[[M, MessageInfo], None],
+        callback: Callable[[M, MessageInfo], Awaitable[None] | None],
         *,
         queue_size: int = DEFAULT_QUEUE_SIZE,
     ) -> Subscription[M]:
         check_topic_type(self.resolve(topic), msg_type)
         sub = RosSubscription(self.transport, self.resolve(topic), msg_type, callback, queue_size)
-        self._closers.append(sub.unsubscribe)
+        self.on_shutdown(sub.unsubscribe)
         return sub
 
     def advertise_service(
@@ -212,7 +187,7 @@ class RosNode(Node):
         handler: Callable[[Req, MessageInfo], Resp | Awaitable[Resp]],
     ) -> ServiceServer:
         server = RosServiceServer(self.transport, self.resolve(name), srv_type, handler)
-        self._closers.append(server.shutdown)
+        self.on_shutdown(server.shutdown)
         return server
 
     def service_proxy(self, name: str, srv_type: ServiceType[Req, Resp]) -> ServiceProxy[Req, Resp]:
@@ -222,16 +197,16 @@ class RosNode(Node):
         self,
         name: str,
         action_type: ActionType[G, R, F],
-        on_goal: Callable[[ServerGoalHandle[G, R, F]], None],
-        on_cancel: Callable[[ServerGoalHandle[G, R, F]], None],
+        on_goal: Callable[[ServerGoalHandle[G, R, F]], Awaitable[None] | None],
+        on_cancel: Callable[[ServerGoalHandle[G, R, F]], Awaitable[None] | None],
     ) -> ActionServer[G, R, F]:
         server = RosActionServer(self.transport, self.resolve(name), action_type, on_goal, on_cancel)
-        self._closers.append(server.shutdown)
+        self.on_shutdown(server.shutdown)
         return server
 
     def action_client(self, name: str, action_type: ActionType[G, R, F]) -> ActionClient[G, R, F]:
         client = RosActionClient(self.transport, self.resolve(name), action_type)
-        self._closers.append(client.close)
+        self.on_shutdown(client.close)
         return client
 
     def get_param(self, name: str, default: Any = None) -> Any:
@@ -246,12 +221,3 @@ class RosNode(Node):
 
     def set_param(self, name: str, value: Any) -> None:
         self.transport.set_param(self.resolve(name), value)
-
-    def shutdown(self) -> None:
-        for close in reversed(self._closers):
-            try:
-                close()
-            except Exception:
-                log.debug("closing failed", exc_info=True)
-        self._closers.clear()
-        self.transport._forget_node(self)  # the name is free again, as on the embedded transport

@@ -11,11 +11,12 @@ Its modules, one idea each:
 * :mod:`.transport`: :class:`Ros2Transport`, its nodes and parameters (start here);
 * :mod:`.topics`, :mod:`.services`, :mod:`.actions`: what a node hands out
   (:mod:`.host`: what they need of the transport);
-* :mod:`.convert`: our messages to and from the generated ROS 2 classes.
+* :mod:`.convert`: our messages to and from the generated ROS 2 classes;
+* :mod:`.executor`: the executor that spins the rclpy nodes and hands work over to the loop.
 
-The subscription queue and the client's goal handle are the ones every transport shares
-(:mod:`cyborg.transport._queue`, :mod:`cyborg.transport._goals`). This package is the only
-place that imports rclpy.
+The subscription queue, the client's goal handle and the message walk are the ones every
+transport shares (:mod:`cyborg.transport._queue`, :mod:`cyborg.transport._goals`,
+:mod:`cyborg.transport._convert`). This package is the only place that imports rclpy.
 """
 
 from cyborg.transport.ros2.transport import Ros2Node, Ros2Transport

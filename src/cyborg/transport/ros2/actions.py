@@ -22,7 +22,7 @@ from __future__ import annotations
 import logging
 import threading
 import uuid
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 from action_msgs.msg import GoalStatus as RosGoalStatus
@@ -35,6 +35,7 @@ from std_msgs.msg import String as RosString
 from unique_identifier_msgs.msg import UUID
 
 from cyborg.transport._goals import ClientGoal
+from cyborg.transport._host import poll_until
 from cyborg.transport.base import (
     ActionClient,
     ActionServer,
@@ -213,8 +214,8 @@ class Ros2ActionServer(ActionServer[G, R, F]):
         node: RclNode,
         name: str,
         action_type: ActionType[G, R, F],
-        on_goal: Callable[[ServerGoalHandle[G, R, F]], None],
-        on_cancel: Callable[[ServerGoalHandle[G, R, F]], None],
+        on_goal: Callable[[ServerGoalHandle[G, R, F]], Awaitable[None] | None],
+        on_cancel: Callable[[ServerGoalHandle[G, R, F]], Awaitable[None] | None],
         callback_group: Any,
     ) -> None:
         self.name = name
@@ -387,8 +388,8 @@ class _Ros2ClientGoalHandle(ClientGoal[G, R, F]):
         client: Ros2ActionClient[G, R, F],
         goal: G,
         goal_id: bytes,
-        on_feedback: Callable[[F], None] | None,
-        on_status: Callable[[GoalStatus], None] | None,
+        on_feedback: Callable[[F], Awaitable[None] | None] | None,
+        on_status: Callable[[GoalStatus], Awaitable[None] | None] | None,
     ) -> None:
         transport = client.transport
         super().__init__(
@@ -441,20 +442,15 @@ class Ros2ActionClient(ActionClient[G, R, F]):
         return not self._closed and bool(self._client.server_is_ready())
 
     async def wait_for_server(self, timeout: float) -> bool:
-        clock = self.transport.clock
-        deadline = clock.monotonic() + timeout
-        while not self.server_available():
-            if clock.monotonic() >= deadline:
-                return False
-            await clock.sleep(0.01)
-        return True
+        """Poll :meth:`server_available` on the clock (:func:`~cyborg.transport._host.poll_until`)."""
+        return await poll_until(self.server_available, self.transport.clock, timeout)
 
     def send_goal(
         self,
         goal: G,
         *,
-        on_feedback: Callable[[F], None] | None = None,
-        on_status: Callable[[GoalStatus], None] | None = None,
+        on_feedback: Callable[[F], Awaitable[None] | None] | None = None,
+        on_status: Callable[[GoalStatus], Awaitable[None] | None] | None = None,
     ) -> ClientGoalHandle[G, R, F]:
         goal_id = uuid.uuid4().bytes
         handle = _Ros2ClientGoalHandle(self, goal, goal_id, on_feedback, on_status)

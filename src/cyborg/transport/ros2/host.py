@@ -1,26 +1,18 @@
 """What the topics, services and actions of the ROS 2 transport need of the transport that made them.
 
-Part of :mod:`cyborg.transport.ros2`. :class:`~.transport.Ros2Transport` satisfies :class:`Host`.
+Part of :mod:`cyborg.transport.ros2`. :class:`~.transport.Ros2Transport` satisfies :class:`Host`:
+the shared :class:`cyborg.transport._host.Host`, and a way to wake its executor.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import Any, Protocol
+from typing import Protocol
 
-from cyborg.transport.clock import Clock
+from cyborg.transport import _host
 
 __all__ = ["Host"]
 
 
-class Host(Protocol):
-    clock: Clock
-
-    def to_loop(self, callback: Callable[..., object], *args: Any) -> None:
-        """Run ``callback(*args)`` on the clock's loop; called from the executor's threads."""
-
-    def run_callback(self, callback: Callable[..., object], *args: Any) -> None:
-        """Run a component's callback now, on the loop, counting and logging its failure."""
-
+class Host(_host.Host, Protocol):
     def wake(self) -> None:
         """Wake the executor (something was made or finished from another thread)."""

@@ -17,6 +17,7 @@ from typing import Any, Generic
 from rclpy.node import Node as RclNode
 
 from cyborg.errors import ServiceTimeoutError, ServiceUnavailableError, TransportError
+from cyborg.transport._host import poll_until
 from cyborg.transport.base import MessageInfo, Req, Resp, ServiceProxy, ServiceServer, normalize_node_name
 from cyborg.transport.messages import ServiceType
 from cyborg.transport.ros2.convert import from_ros2, ros2_class, to_ros2
@@ -94,13 +95,8 @@ class Ros2ServiceProxy(ServiceProxy[Req, Resp]):
         return bool(self._client.service_is_ready())
 
     async def wait_for_service(self, timeout: float) -> bool:
-        clock = self._transport.clock
-        deadline = clock.monotonic() + timeout
-        while not self.available():
-            if clock.monotonic() >= deadline:
-                return False
-            await clock.sleep(0.01)
-        return True
+        """Poll :meth:`available` on the clock (:func:`~cyborg.transport._host.poll_until`)."""
+        return await poll_until(self.available, self._transport.clock, timeout)
 
     async def call(self, request: Req | None = None, *, timeout: float = 5.0) -> Resp:
         req = request if request is not None else self._srv_type.request()

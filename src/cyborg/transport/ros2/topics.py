@@ -19,7 +19,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
@@ -94,8 +94,11 @@ class Senders:
 
 
 class Ros2Publisher(Publisher[M]):
-    def __init__(self, node: RclNode, topic: str, msg_type: type[M], queue_size: int, latch: bool) -> None:
+    def __init__(
+        self, transport: Host, node: RclNode, topic: str, msg_type: type[M], queue_size: int, latch: bool
+    ) -> None:
         self.topic = topic
+        self._stats = transport.stats
         self._cls = ros2_class(msg_type.ros_type)
         qos = latched_qos() if latch else volatile_qos(queue_size)
         self._node = node
@@ -109,14 +112,18 @@ class Ros2Publisher(Publisher[M]):
         )
 
     def publish(self, message: M) -> None:
+        """Send ``message`` (latched: transient-local); nothing once unregistered."""
         if self._pub is None:
             return  # unregistered (its node shut down): a late publish while a process stops goes nowhere
         self._pub.publish(to_ros2(message, self._cls))
+        self._stats.published += 1
 
     def subscriber_count(self) -> int:
+        """The subscriptions DDS has matched with this publisher so far."""
         return 0 if self._pub is None else int(self._pub.get_subscription_count())
 
     def unregister(self) -> None:
+        """Leave the topic (its node's shutdown does this); a second call does nothing."""
         publisher, self._pub = self._pub, None
         if publisher is not None:
             self._node.destroy_publisher(publisher)
@@ -131,7 +138,7 @@ class Ros2Subscription(Subscription[M]):
         node: RclNode,
         topic: str,
         msg_type: type[M],
-        callback: Callable[[M, MessageInfo], None],
+        callback: Callable[[M, MessageInfo], Awaitable[None] | None],
         queue_size: int,
         callback_group: Any,  # unused: each subscription has a mutually exclusive group of its own
     ) -> None:
@@ -139,7 +146,9 @@ class Ros2Subscription(Subscription[M]):
         self._transport = transport
         self._node = node
         self._type = msg_type
-        self._queue = SubscriptionQueue(transport.clock, callback, queue_size, transport.run_callback)
+        self._queue = SubscriptionQueue(
+            transport.clock, callback, queue_size, transport.run_callback, transport.stats
+        )
         self._senders = Senders(node, topic)
         self._last: dict[bytes, int] = {}
         self._lock = threading.Lock()
@@ -165,6 +174,7 @@ class Ros2Subscription(Subscription[M]):
 
     @property
     def dropped(self) -> int:
+        """Messages dropped because the bounded queue was full."""
         return self._queue.dropped
 
     def _on_ros(self, ros_message: Any, ros_info: Any) -> None:  # executor thread
@@ -189,6 +199,7 @@ class Ros2Subscription(Subscription[M]):
             self._transport.to_loop(self._queue.put, from_ros2(ros_message, self._type), info)
 
     def unsubscribe(self) -> None:
+        """Deliver nothing more and destroy both rclpy subscriptions."""
         self._queue.close()
         for sub in self._subs:
             self._node.destroy_subscription(sub)

@@ -43,7 +43,6 @@ from rclpy.parameter import Parameter as RclParameter
 from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
 
 from cyborg.errors import TransportError
-from cyborg.transport._queue import CallbackRunner
 from cyborg.transport.base import (
     DEFAULT_QUEUE_SIZE,
     ActionClient,
@@ -62,7 +61,6 @@ from cyborg.transport.base import (
     ServiceServer,
     Subscription,
     Transport,
-    normalize_node_name,
 )
 from cyborg.transport.clock import Clock
 from cyborg.transport.messages import ActionType, ServiceType
@@ -154,10 +152,8 @@ class Ros2Transport(Transport):
     def __init__(self, clock: Clock, *, args: list[str] | None = None, use_sim_time: bool = False) -> None:
         """``use_sim_time``: every rclpy node follows ``/clock`` (its parameter ``use_sim_time``), so
         what rclpy stamps and times runs in the simulated time our clock publishes there."""
-        self.clock = clock
+        super().__init__(clock)
         self.use_sim_time = use_sim_time
-        self.callback_errors = 0
-        self.run_callback = CallbackRunner(log, self._count_callback_error)
         self.context = Context()
         with _participant_profile():  # Fast DDS makes its participant with this process's first node
             rclpy.init(args=args, context=self.context)
@@ -165,7 +161,6 @@ class Ros2Transport(Transport):
                 f"_cyborg_graph_{os.getpid()}_{id(self):x}", context=self.context
             )
         self.executor = HandOffExecutor(EXECUTOR_THREADS, context=self.context)
-        self._nodes: dict[str, Ros2Node] = {}
         self._types: dict[str, str] = {}  # topic -> our ROS type, of this process's endpoints
         self._home: RclNode | None = None
         self._params: dict[str, Any] = {}
@@ -195,20 +190,18 @@ class Ros2Transport(Transport):
                     exc_info=log.isEnabledFor(logging.DEBUG),
                 )
 
-    def _count_callback_error(self) -> None:
-        self.callback_errors += 1
-
     def node(self, name: str) -> Ros2Node:
-        name = normalize_node_name(name)
-        if not name:
-            raise TransportError("node name is empty: give every component a name, e.g. 'cyborg_idle'")
-        if name in self._nodes:
-            raise TransportError(f"node name {name!r} is already in use in this process")
-        node = Ros2Node(self, name)
-        self._nodes[name] = node
-        return node
+        """A logical node, one rclpy node (see :meth:`Transport.node`).
+
+        Raises TransportError also when rclpy refuses the name.
+        """
+        return self._add_node(name, lambda free: Ros2Node(self, free))
+
+    def _ros2_nodes(self) -> list[Ros2Node]:
+        return [node for node in self._nodes.values() if isinstance(node, Ros2Node)]
 
     def make_rcl_node(self, name: str) -> RclNode:
+        """A new rclpy node of this context, spun by the executor; TransportError for a bad name."""
         try:
             rcl = RclNode(
                 name,
@@ -255,10 +248,6 @@ class Ros2Transport(Transport):
     def _count_nodes(probe: RclNode, name: str, namespace: str) -> int:
         return sum(1 for n, ns in probe.get_node_names_and_namespaces() if (n, ns) == (name, namespace))
 
-    def _forget_node(self, node: Ros2Node) -> None:
-        if self._nodes.get(node.name) is node:
-            del self._nodes[node.name]
-
     def check_topic_type(self, topic: str, ros_type: str, probe: RclNode) -> None:
         """A topic carries one type: refuse a publisher or subscriber of another (this process,
         then the graph)."""
@@ -276,18 +265,13 @@ class Ros2Transport(Transport):
             )
         self._types[topic] = ros_type
 
-    def to_loop(self, callback: Callable[..., object], *args: Any) -> None:
-        """Run ``callback(*args)`` on the loop (from an executor thread), as every callback runs."""
-        loop = self.clock.loop
-        if not loop.is_closed():
-            loop.call_soon_threadsafe(self.run_callback, callback, *args)
-
     def wake(self) -> None:
+        """Wake the executor, so that it takes up what another thread made or finished."""
         self.executor.wake()
 
     def subscribers_of(self, topic: str) -> list[str]:
         """The nodes the graph knows as subscribers of ``topic`` (discovery may lag a moment)."""
-        probe = self._param_node or next((node.rcl for node in self._nodes.values()), None)
+        probe = self._param_node or next((node.rcl for node in self._ros2_nodes()), None)
         if probe is None:
             return []
         return sorted({info.node_name for info in probe.get_subscriptions_info_by_topic(topic)})
@@ -297,7 +281,7 @@ class Ros2Transport(Transport):
     def parameter_home_visible(self) -> bool:
         """True once this process hosts the parameter home or the graph shows it (a fresh process
         learns other nodes' names a moment after their topics and services)."""
-        probe = self._param_node or next((node.rcl for node in self._nodes.values()), None)
+        probe = self._param_node or next((node.rcl for node in self._ros2_nodes()), None)
         return self._home is not None or (probe is not None and self._home_elsewhere(probe))
 
     def _home_elsewhere(self, probe: RclNode) -> bool:
@@ -307,6 +291,7 @@ class Ros2Transport(Transport):
         )
 
     def set_param(self, key: str, value: Any, probe: RclNode) -> None:
+        """Set ``key`` at the parameter home (here, or through its services); see the module docstring."""
         text = json.dumps(value, sort_keys=True)
         if self._home is None and not self._home_elsewhere(probe):
             self._home = RclNode(PARAM_HOME, context=self.context, allow_undeclared_parameters=True)
@@ -328,6 +313,7 @@ class Ros2Transport(Transport):
             raise TransportError(f"the parameter home refused {key}: {response.results}")
 
     def get_param(self, key: str, default: Any, probe: RclNode) -> Any:
+        """``key``'s value at the parameter home, or ``default``; see the module docstring."""
         if self._home is not None:
             with self._params_lock:
                 return self._params.get(key, default)
@@ -380,7 +366,7 @@ class Ros2Transport(Transport):
 
     def _unmatched(self) -> list[str]:
         missing: list[str] = []
-        for node in list(self._nodes.values()):
+        for node in self._ros2_nodes():
             rcl = node.rcl
             for pub in [p for p in rcl.publishers if p.topic_name not in _RCL_OWN_TOPICS]:
                 infos = rcl.get_subscriptions_info_by_topic(pub.topic_name)
@@ -396,14 +382,8 @@ class Ros2Transport(Transport):
                     missing.append(f"{short} publisher(s) -> {node.name} on {sub.topic_name}")
         return missing
 
-    def shutdown(self) -> None:
-        for node in list(self._nodes.values()):
-            node.shutdown()
-        self._nodes.clear()
-
-    def close(self) -> None:
-        """Shut down every node of this process and leave the graph."""
-        self.shutdown()
+    def _leave(self) -> None:
+        """Leave the graph: the parameter home and the hidden nodes go, then the executor and the context."""
         for extra in (self._home, self._param_node):
             if extra is not None:
                 self.drop_rcl_node(extra)
@@ -421,27 +401,26 @@ class Ros2Node(Node):
     """One logical node: one rclpy node."""
 
     def __init__(self, transport: Ros2Transport, name: str) -> None:
+        super().__init__(transport, name)
         self.transport = transport
-        self.name = name
-        self.clock = transport.clock
         self.rcl = transport.make_rcl_node(name)
+        self.on_shutdown(self._drop_rcl)  # the last to close
         self._group = ReentrantCallbackGroup()
-        self._closers: list[Callable[[], None]] = []
 
     def publisher(
         self, topic: str, msg_type: type[M], *, queue_size: int = DEFAULT_QUEUE_SIZE, latch: bool = False
     ) -> Publisher[M]:
         resolved = self.resolve(topic)
         self.transport.check_topic_type(resolved, msg_type.ros_type, self.rcl)
-        pub = Ros2Publisher[M](self.rcl, resolved, msg_type, queue_size, latch)
-        self._closers.append(pub.unregister)
+        pub = Ros2Publisher[M](self.transport, self.rcl, resolved, msg_type, queue_size, latch)
+        self.on_shutdown(pub.unregister)
         return pub
 
     def subscribe(
         self,
         topic: str,
         msg_type: type[M],
-        callback: Callable[[M, MessageInfo], None],
+        callback: Callable[[M, MessageInfo], Awaitable[None] | None],
         *,
         queue_size: int = DEFAULT_QUEUE_SIZE,
     ) -> Subscription[M]:
@@ -450,7 +429,7 @@ class Ros2Node(Node):
         sub = Ros2Subscription(
             self.transport, self.rcl, resolved, msg_type, callback, queue_size, self._group
         )
-        self._closers.append(sub.unsubscribe)
+        self.on_shutdown(sub.unsubscribe)
         return sub
 
     def advertise_service(
@@ -462,30 +441,30 @@ class Ros2Node(Node):
         server = Ros2ServiceServer(
             self.transport, self.rcl, self.resolve(name), srv_type, handler, self._group
         )
-        self._closers.append(server.shutdown)
+        self.on_shutdown(server.shutdown)
         return server
 
     def service_proxy(self, name: str, srv_type: ServiceType[Req, Resp]) -> ServiceProxy[Req, Resp]:
         proxy = Ros2ServiceProxy(self.transport, self.rcl, self.resolve(name), srv_type, self._group)
-        self._closers.append(proxy.close)
+        self.on_shutdown(proxy.close)
         return proxy
 
     def action_server(
         self,
         name: str,
         action_type: ActionType[G, R, F],
-        on_goal: Callable[[ServerGoalHandle[G, R, F]], None],
-        on_cancel: Callable[[ServerGoalHandle[G, R, F]], None],
+        on_goal: Callable[[ServerGoalHandle[G, R, F]], Awaitable[None] | None],
+        on_cancel: Callable[[ServerGoalHandle[G, R, F]], Awaitable[None] | None],
     ) -> ActionServer[G, R, F]:
         server = Ros2ActionServer(
             self.transport, self.rcl, self.resolve(name), action_type, on_goal, on_cancel, self._group
         )
-        self._closers.append(server.shutdown)
+        self.on_shutdown(server.shutdown)
         return server
 
     def action_client(self, name: str, action_type: ActionType[G, R, F]) -> ActionClient[G, R, F]:
         client = Ros2ActionClient(self.transport, self.rcl, self.resolve(name), action_type, self._group)
-        self._closers.append(client.close)
+        self.on_shutdown(client.close)
         return client
 
     def get_param(self, name: str, default: Any = None) -> Any:
@@ -495,18 +474,13 @@ class Ros2Node(Node):
         self.transport.set_param(self.resolve(name), value, self.rcl)
 
     def shutdown(self) -> None:
-        # Out of the executor first: an action server or client destroyed while the executor
-        # still gathers this node's entities left a dead one in its wait set, and every later
-        # turn of the executor failed on it ("action server pointer is invalid").
-        self.transport.executor.remove_node(self.rcl)
-        for close in reversed(self._closers):
-            try:
-                close()
-            except Exception:
-                log.debug("closing failed", exc_info=True)
-        self._closers.clear()
-        try:
-            self.transport.drop_rcl_node(self.rcl)
-        except Exception:
-            log.debug("dropping the rclpy node failed", exc_info=True)
-        self.transport._forget_node(self)
+        """See :meth:`Node.shutdown`; the rclpy node leaves the graph last."""
+        if not self.is_shut_down:
+            # Out of the executor first: an action server or client destroyed while the executor
+            # still gathers this node's entities left a dead one in its wait set, and every later
+            # turn of the executor failed on it ("action server pointer is invalid").
+            self.transport.executor.remove_node(self.rcl)
+        super().shutdown()
+
+    def _drop_rcl(self) -> None:
+        self.transport.drop_rcl_node(self.rcl)

@@ -1,0 +1,46 @@
+"""What the topics, services and actions of a ROS transport need of the transport that made them.
+
+rospy and rclpy call back on threads of their own; the parts of :mod:`cyborg.transport.ros`
+and :mod:`cyborg.transport.ros2` hand each callback to the clock's loop through their
+:class:`Host`, which both transports satisfy with :class:`~cyborg.transport.base.Transport`'s
+members. Naming the protocol below the transports keeps their packages free of import cycles.
+Both wait for a server or service the same way: :func:`poll_until`, on the injected clock.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, Protocol
+
+from cyborg.transport.base import TransportStats
+from cyborg.transport.clock import Clock
+
+__all__ = ["POLL_PERIOD", "Host", "poll_until"]
+
+POLL_PERIOD = 0.01  # clock seconds between two looks for a server
+
+
+class Host(Protocol):
+    """The transport, as its topics, services and actions see it."""
+
+    clock: Clock
+
+    @property
+    def stats(self) -> TransportStats:
+        """The transport's counters: a publisher counts what it sends, a queue what it drops."""
+
+    def to_loop(self, callback: Callable[..., object], *args: Any) -> None:
+        """Run ``callback(*args)`` on the clock's loop; called from the middleware's threads."""
+
+    def run_callback(self, callback: Callable[..., object], *args: Any) -> None:
+        """Run a component's callback now, on the loop, counting and logging its failure."""
+
+
+async def poll_until(found: Callable[[], bool], clock: Clock, timeout: float) -> bool:
+    """Call ``found()`` every POLL_PERIOD until it is true (True) or ``timeout`` clock seconds pass (False)."""
+    deadline = clock.monotonic() + timeout
+    while not found():
+        if clock.monotonic() >= deadline:
+            return False
+        await clock.sleep(POLL_PERIOD)
+    return True
