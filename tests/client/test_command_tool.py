@@ -73,6 +73,13 @@ def test_event_say_emotion_and_status(running_sim: str) -> None:
     status = wait_for_state(url, "music")
     assert status["previous_state"] == "idle" and status["event"] == "music_play"
     assert tool(url, "say", "hello", "there").stdout.strip() == "heard: hello there"
+    heard: list[str] = []
+    deadline = time.monotonic() + 5
+    while "hello there" not in heard and time.monotonic() < deadline:  # the robot heard it, not only the tool
+        with urllib.request.urlopen(url + "/api/records?type=heard") as answer:
+            heard = [record["text"] for record in json.loads(answer.read())]
+        time.sleep(0.05)
+    assert "hello there" in heard
     assert tool(url, "emotion", "set", "angry").returncode == 0
     time.sleep(0.3)
     shown = tool(url, "status").stdout
