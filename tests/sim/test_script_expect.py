@@ -70,7 +70,8 @@ steps:
     # It wandered the whole minute: the motivator says why it moved the robot on no further.
     assert "navigation_moving" in problem
     assert (
-        "(the motivator's last decision: t=60 no motivational events in state 'navigation_moving')" in problem
+        "(the motivator's last decision, at t=60: no motivational events in state 'navigation_moving')"
+        in problem
     )
 
 
@@ -104,3 +105,17 @@ def test_a_run_that_ends_while_the_robot_wanders_ends_without_a_warning(
     assert states[-1]["to"] == "navigation_moving", "it was wandering at the end"
     problems = [r.getMessage() for r in caplog.records if r.levelno >= logging.WARNING]
     assert problems == [], problems
+
+
+def test_records_of_the_same_loop_turn_after_a_match_are_seen_by_the_next_step() -> None:
+    # At t=5 the robot hears 'hello' and enters conversation in one loop turn: the state record
+    # comes right after the heard record that met step 2, and step 3 must see it.
+    text = """
+until: 20
+steps:
+  - {at: 5, say: hello}
+  - {expect: {type: heard, text: hello}, within: 1}
+  - {expect: {type: state, to: conversation}, within: 1}
+"""
+    records = run(text)
+    assert records[-1]["t"] >= 19, "the run went on to its end"

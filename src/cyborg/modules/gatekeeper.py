@@ -21,6 +21,7 @@ from __future__ import annotations
 import asyncio
 import logging
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from cyborg.transport import topics
@@ -58,6 +59,8 @@ class Gatekeeper:
         self.allowed: str | None = None
         self.known = False
         self.stats = GatekeeperStats()
+        self.drop_listeners: list[Callable[[Message, MessageInfo], None]] = []
+        """Called with each message dropped (in process: a scenario names the drop when a step fails)."""
         self._warned: set[str] = set()  # senders already logged at INFO in this state
         self._read_for: set[str] = set()  # senders whose message made it read the resources again
         self._retry: asyncio.TimerHandle | None = None  # the next read while reading fails
@@ -135,6 +138,8 @@ class Gatekeeper:
             return
         self.stats.dropped += 1
         self.stats.dropped_by_sender[info.sender] += 1
+        for listener in self.drop_listeners:
+            listener(message, info)
         first_in_state = info.sender not in self._warned
         self._warned.add(info.sender)
         log.log(

@@ -27,6 +27,7 @@ from cyborg.app.robot import Robot, build_robot
 from cyborg.errors import ConfigError, CyborgError, ScenarioFailed
 from cyborg.observe.records import Record, RecordStream
 from cyborg.sim.script import CalendarEntry, Match, Script, Step, check_against
+from cyborg.sim.witness import Witness
 from cyborg.storage import lock_data_dir
 from cyborg.transport import topics
 from cyborg.transport.base import Node
@@ -38,6 +39,8 @@ log = logging.getLogger(__name__)
 
 RECENT_KEPT = 200
 """Records kept while a step waits, to say what came instead of what it waited for."""
+NOTES_TOLD = 5
+"""What dropped or broke in a failed step's window: the last this many notes are told."""
 
 
 def _brief(record: Record) -> str:
@@ -61,6 +64,11 @@ class ScenarioDriver:
     time (``at: 300`` fires when it reads 300), so every process must share the clock's origin.
     ``records`` keeps every record unless ``keep_records`` is false (then memory stays flat
     however long the script runs: listeners, e.g. a transcript file, see each record once).
+
+    A step is armed (it sees the records from then on) when the previous one is done: at the
+    start for the first step, right after the matching record for an ``expect`` (so the next
+    step sees the records that follow it in the same loop turn), when its action was taken for
+    an action step, and at the end of its window for an ``expect_not``.
     """
 
     def __init__(self, node: Node, script: Script, *, origin: float = 0.0, keep_records: bool = True) -> None:
@@ -71,69 +79,100 @@ class ScenarioDriver:
         self.keep_records = keep_records
         self.count = 0
         self.listeners: list[Callable[[Record], None]] = []
-        self._waiting_for: Match | None = None  # the 'when' or 'expect' of the step being waited for
-        self._matched = asyncio.Event()
+        self.expectations = sum(1 for s in script.steps if s.expect is not None or s.expect_not is not None)
+        """The script's ``expect`` and ``expect_not`` steps."""
+        self.met = 0
+        """Expectations met so far."""
+        self._armed: int | None = None  # the index of the step that sees the records
+        self._armed_at = self.clock.monotonic()
+        self._waiting_for: Match | None = None  # its 'when', 'expect' or 'expect_not'
+        self._hit: Record | None = None  # the record that matched it
+        self._progress = asyncio.Event()
         self._since: deque[Record] = deque(maxlen=RECENT_KEPT)  # records since that step was armed
         self._step: tuple[int, Step, float] | None = None  # the step under way, and since when
         self.failures: list[str] = []
         """Expectations that failed and ``when`` steps that never fired, one line each."""
         self.stream = RecordStream(node, origin=origin)
+        self.witness = Witness(node, origin=self.stream.origin)
         self.stream.listeners.append(self._on_record)
         self.say = node.publisher(topics.TEXT_FROM_SPEECH, String)
         self.event = node.publisher(topics.REGISTER_EVENT, String)
         self.set_emotion = node.publisher(topics.SET_EMOTIONAL_STATE, String)
+        self._arm(0)
+
+    def summary(self) -> str:
+        """E.g. "6 of 6 expectations met"."""
+        return f"{self.met} of {self.expectations} expectation{'' if self.expectations == 1 else 's'} met"
 
     def _on_record(self, record: Record) -> None:
         self.count += 1
         if self.keep_records:
             self.records.append(record)
-        if self._waiting_for is not None:
+        self.witness.on_record(record)
+        if self._waiting_for is not None and self._armed is not None:
             self._since.append(record)
-            if self._waiting_for.matches(record):
-                self._matched.set()
+            if self._hit is None and self._waiting_for.matches(record):
+                self._hit = record
+                if self.script.steps[self._armed].expect is not None:
+                    self.met += 1
+                    self._arm(self._armed + 1)  # the records after this one are the next step's
+                self._progress.set()
         for listener in self.listeners:
             listener(record)
 
-    def _watch(self, step: Step | None) -> None:
-        """From now on, look for records matching ``step.when`` (if it waits for one)."""
-        self._waiting_for = (step.when or step.expect) if step is not None else None
-        self._matched.clear()
+    def _arm(self, index: int | None) -> None:
+        """From now on, step ``index`` sees the records (None: no step does)."""
+        steps = self.script.steps
+        step = steps[index] if index is not None and index < len(steps) else None
+        self._armed = index if step is not None else None
+        self._armed_at = self.clock.monotonic()
+        self._waiting_for = (step.when or step.expect or step.expect_not) if step is not None else None
+        self._hit = None
         self._since.clear()
 
-    async def _wait_for(self, within: float | None = None) -> bool:
-        """Wait until a record since the previous step's action matched; False at the end of the run
-        (or after ``within`` seconds)."""
-        if self._matched.is_set():
-            return True
-        end = self.script.until if within is None else min(self.script.until, self.clock.monotonic() + within)
-        remaining = end - self.clock.monotonic()
-        if remaining <= 0:
-            return False
-        try:
-            await asyncio.wait_for(self._matched.wait(), remaining)
-        except TimeoutError:
-            return False
+    def _done(self, index: int) -> bool:
+        """Step ``index`` is met: a later step is armed, or it is armed and its record came."""
+        return self._armed is None or self._armed > index or (self._armed == index and self._hit is not None)
+
+    async def _wait_for(self, index: int, within: float | None = None) -> bool:
+        """Wait until step ``index``'s record came; False at the end of the run (or after ``within``
+        seconds from when the step was armed)."""
+        end = self.script.until if within is None else min(self.script.until, self._armed_at + within)
+        while not self._done(index):
+            remaining = end - self.clock.monotonic()
+            if remaining <= 0:
+                return False
+            self._progress.clear()
+            try:
+                await asyncio.wait_for(self._progress.wait(), remaining)
+            except TimeoutError:
+                return self._done(index)
         return True
 
     async def drive(self) -> None:
         """Play the steps in order (returns after the last one, or when one cannot happen)."""
         steps = self.script.steps
-        self._watch(steps[0] if steps else None)
         for index, step in enumerate(steps):
-            self._step = (index, step, self.clock.monotonic())
+            self._step = (index, step, self._armed_at if self._armed == index else self.clock.monotonic())
             if step.expect is not None:
-                if not await self._wait_for(step.within):
+                if not await self._wait_for(index, step.within):
                     self._fail_step()
                     return
-                self._watch(steps[index + 1] if index + 1 < len(steps) else None)
+                continue
+            if step.expect_not is not None:
+                if await self._wait_for(index, step.within):
+                    self._fail_step()
+                    return
+                self.met += 1
+                self._arm(index + 1)
                 continue
             if step.at is not None:
                 await self.clock.sleep(step.at - self.clock.monotonic())
-            elif not await self._wait_for():
+            elif not await self._wait_for(index):
                 self._fail_step()
                 return
             self._step = None
-            self._watch(None)
+            self._arm(None)
             await self.clock.sleep(step.delay)
             if step.say is not None:
                 self.say.publish(String(step.say))
@@ -141,7 +180,7 @@ class ScenarioDriver:
                 self.event.publish(String(step.event))
             elif step.emotion is not None:
                 self.set_emotion.publish(String(step.emotion))
-            self._watch(steps[index + 1] if index + 1 < len(steps) else None)
+            self._arm(index + 1)
 
     def _fail_step(self) -> None:
         """The step being waited for did not come: record what it waited for and what came instead."""
@@ -149,31 +188,43 @@ class ScenarioDriver:
             return
         index, step, armed = self._step
         where = f"line {step.line or '?'}: step {index + 1}"
+        limit = f"within {step.within:g} s" if step.within is not None else "before the end"
         if step.expect is not None:
-            limit = f"within {step.within:g} s" if step.within is not None else "before the end"
             problem = (
                 f"{where} expected {step.expect.describe()} {limit} (from t={armed:.1f} s); "
-                f"instead: {self._instead(step.expect)}"
+                f"instead: {self._instead(step.expect, armed)}"
+            )
+        elif step.expect_not is not None:
+            if self._hit is None:
+                return  # the end came first: nothing matching came in its window
+            problem = (
+                f"{where} expected no {step.expect_not.describe()} {limit} (from t={armed:.1f} s); "
+                f"instead: {_brief(self._hit)}"
             )
         elif step.when is not None:
             problem = (
                 f"{where} waited for {step.when.describe()}, which never came before the end "
-                f"(until: {self.script.until:g} s); instead: {self._instead(step.when)}"
+                f"(until: {self.script.until:g} s); instead: {self._instead(step.when, armed)}"
             )
         else:
             return  # an 'at' step whose time is after the end: nothing was promised
         log.info("%s", problem)
         self.failures.append(problem)
 
-    def _instead(self, match: Match) -> str:
-        """What came instead of ``match``: the last records of its type since the step was armed."""
+    def _instead(self, match: Match, armed: float) -> str:
+        """What came instead of ``match``: the last records of its type since the step was armed,
+        and what the witness saw drop or break in that window."""
         same = [record for record in self._since if record.get("type") == match.type]
         came = "; ".join(_brief(record) for record in same[-3:]) if same else f"no {match.type} record at all"
-        if match.type == "state":  # what moves the robot on its own: why it did not
+        notes = self.witness.since(round(armed - self.stream.origin, 3))
+        if notes:
+            told = "; ".join(f"t={note.t:g} {note.text}" for note in notes[-NOTES_TOLD:])
+            return f"{came}; in that window: {told}"
+        if match.type == "state":  # nothing dropped or broke: what moves the robot on its own, and why not
             decisions = [record for record in self._since if record.get("type") == "motivator"]
             if decisions:
                 last = decisions[-1]
-                came += f" (the motivator's last decision: t={float(last['t']):g} {last.get('reason')})"  # type: ignore[arg-type]
+                came += f" (the motivator's last decision, at t={float(last['t']):g}: {last.get('reason')})"  # type: ignore[arg-type]
             else:
                 came += " (no decision of the motivator came)"
         return came
@@ -185,13 +236,23 @@ class ScenarioDriver:
         try:
             await asyncio.wait({driver, end}, return_when=asyncio.FIRST_COMPLETED)
             if not driver.done():
-                self._fail_step()  # the end came while a step still waited
+                self._end_of_run()  # the end came while a step still waited
             elif not self.failures and not end.done():
                 await end  # the steps are done; the run goes on to its end
         finally:
             driver.cancel()
             end.cancel()
+            self.witness.close()
         return self.records
+
+    def _end_of_run(self) -> None:
+        """The end came while a step waited: an ``expect_not`` whose window reached it is met,
+        anything else failed."""
+        if self._step is not None and self._step[1].expect_not is not None and self._hit is None:
+            self.met += 1
+            self._step = None
+            return
+        self._fail_step()
 
 
 class ScenarioRun:

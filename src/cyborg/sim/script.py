@@ -6,8 +6,10 @@ time, or ``when`` a transcript record matches, plus an optional ``delay``) and
 then acts (``say`` text as speech-to-text, publish an ``event``, or set the
 ``emotion``). An ``expect`` step checks instead: a matching record must come after the
 previous step (``within`` seconds, or before the end), else the run fails naming the step's
-line and what happened instead; so does a ``when`` that never matches. Errors name the line
-and the fix.
+line and what happened instead; so does a ``when`` that never matches. An ``expect_not`` step
+checks the other way: no matching record may come in its window (``within`` seconds after the
+previous step, or until the end), else the run fails naming the record that came. Errors name
+the line and the fix.
 """
 
 from __future__ import annotations
@@ -119,8 +121,12 @@ class Step(BaseModel):
     expect: Match | None = Field(
         None, description="a record that must come after the previous step, else the run fails"
     )
+    expect_not: Match | None = Field(
+        None, description="a record that must not come within the window after the previous step"
+    )
     within: float | None = Field(
-        None, description="with expect: seconds it may take (default: until the end)"
+        None,
+        description="with expect: seconds it may take; with expect_not: the window (default: until the end)",
     )
     line: int = Field(0, exclude=True)
 
@@ -132,19 +138,25 @@ class Step(BaseModel):
     @model_validator(mode="after")
     def _one_trigger_one_action(self) -> Step:
         actions = [a for a in ("say", "event", "emotion") if getattr(self, a) is not None]
-        if self.expect is not None:
+        if self.expect is not None and self.expect_not is not None:
+            raise InvalidValueError(
+                "a step takes 'expect' or 'expect_not', not both; fix: make them two steps"
+            )
+        check = "expect" if self.expect is not None else "expect_not" if self.expect_not is not None else None
+        if check is not None:
             extra = [k for k in ("at", "when", *actions) if getattr(self, k) is not None] + (
                 ["delay"] if self.delay else []
             )
             if extra:
                 raise InvalidValueError(
-                    f"an 'expect' step only checks, so it takes no {', '.join(repr(k) for k in extra)}; "
-                    "fix: put the action in a step of its own, e.g. - expect: {type: state, to: idle}"
+                    f"an {check!r} step only checks, so it takes no {', '.join(repr(k) for k in extra)}; "
+                    f"fix: put the action in a step of its own, e.g. - {check}: {{type: state, to: idle}}"
                 )
             return self
         if self.within is not None:
             raise InvalidValueError(
-                "'within' goes with 'expect'; fix: e.g. - {expect: {type: say, contains: cafeteria}, within: 30}"
+                "'within' goes with 'expect' or 'expect_not'; "
+                "fix: e.g. - {expect: {type: say, contains: cafeteria}, within: 30}"
             )
         if (self.at is None) == (self.when is None):
             raise InvalidValueError(
