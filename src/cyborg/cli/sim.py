@@ -274,7 +274,7 @@ def _run_script(
                 ) from exc
         # Each record is echoed and written as it happens; none is kept, so memory stays flat.
         try:
-            run_scenario(
+            result = run_scenario(
                 config,
                 script,
                 transcript=out,
@@ -291,3 +291,4 @@ def _run_script(
             return
     if transcript_path:
         click.secho(f"wrote {count} records to {transcript_path}", fg="green")
+    click.secho(result.summary, fg="green")

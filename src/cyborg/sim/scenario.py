@@ -25,6 +25,7 @@ from cyborg.app.config import LoadedConfig
 from cyborg.app.registry import KindRegistry
 from cyborg.app.robot import Robot, build_robot
 from cyborg.errors import ConfigError, CyborgError, ScenarioFailed
+from cyborg.modules.gatekeeper import Gatekeeper
 from cyborg.observe.records import Record, RecordStream
 from cyborg.sim.script import CalendarEntry, Match, Script, Step, check_against
 from cyborg.sim.witness import Witness
@@ -54,6 +55,15 @@ def _brief(record: Record) -> str:
         return f"{t} emotion {record.get('emotion')}"
     rest = ", ".join(f"{k}: {v}" for k, v in record.items() if k not in ("t", "type"))
     return f"{t} {kind} {{{rest}}}"
+
+
+class ScenarioRecords(list[Record]):
+    """A run's records (empty if it kept none), and its :attr:`summary`."""
+
+    def __init__(self, records: list[Record], summary: str) -> None:
+        super().__init__(records)
+        self.summary = summary
+        """E.g. "6 of 6 expectations met"."""
 
 
 class ScenarioDriver:
@@ -288,6 +298,10 @@ class ScenarioRun:
             self.driver = ScenarioDriver(
                 self.transport.node("cyborg_scenario"), script, keep_records=keep_records
             )
+            self.driver.witness.watch_gatekeepers(
+                c for c in self.robot.components.values() if isinstance(c, Gatekeeper)
+            )
+            self.driver.witness.watch_crashes()
             self.records = self.driver.records
             self.listeners = self.driver.listeners
             self.stream = self.driver.stream
@@ -296,6 +310,11 @@ class ScenarioRun:
             self.transport.shutdown()  # a refused script leaves no half-started robot behind
             self.clock.close()
             raise
+
+    @property
+    def summary(self) -> str:
+        """E.g. "6 of 6 expectations met" (after :meth:`run`)."""
+        return self.driver.summary()
 
     def _prepare(self) -> None:
         if self.script.emotion:
@@ -321,8 +340,8 @@ class ScenarioRun:
         if self._driving is not None:
             self._driving.cancel()
 
-    def run(self, *, stop_on_interrupt: bool = False) -> list[Record]:
-        """Run the script to its end; :class:`ScenarioFailed` if an expectation failed or a ``when``
+    def run(self, *, stop_on_interrupt: bool = False) -> ScenarioRecords:
+        """Run the script to its end (the records, with the summary of its expectations); :class:`ScenarioFailed` if an expectation failed or a ``when``
         never fired (the transcript holds every record up to the end either way).
 
         ``stop_on_interrupt`` (the command line): Ctrl-C ends the script where it is, the robot
@@ -346,7 +365,7 @@ class ScenarioRun:
             raise KeyboardInterrupt
         if self.driver.failures:
             raise ScenarioFailed(self.driver.failures, source=self.script.source)
-        return self.records
+        return ScenarioRecords(self.records, self.summary)
 
 
 def check_script(script: Script, config: LoadedConfig) -> None:
@@ -390,8 +409,9 @@ def run_scenario(
     on_record: Callable[[Record], None] | None = None,
     kinds: KindRegistry | None = None,
     stop_on_interrupt: bool = False,
-) -> list[Record]:
-    """Run ``script``; write each record to ``transcript`` as a JSON line; return the records.
+) -> ScenarioRecords:
+    """Run ``script``; write each record to ``transcript`` as a JSON line; return the records
+    (and the ``summary`` of its expectations: "6 of 6 expectations met").
 
     ``kinds`` defaults to every installed module kind. With ``keep_records=False`` the records go
     only to ``transcript`` and ``on_record`` as they happen and the returned list is empty, so a
