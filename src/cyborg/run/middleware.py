@@ -13,6 +13,7 @@ transports asks which ROS it is.
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import shutil
 import signal
@@ -200,6 +201,8 @@ class Ros1(Middleware):
         )
         from cyborg.transport.ros import RosTransport
 
+        # rospy's start-up INFO line ("topicmanager initialized") on every command: not news to a user
+        logging.getLogger("rospy.topics").setLevel(logging.WARNING)
         return RosTransport(clock, process_name=f"cyborg_tool_{os.getpid()}")
 
     def log_file(self, node_name: str) -> Path:
