@@ -196,13 +196,14 @@ class Ros1(Middleware):
         show_problems_on_stderr(node_name)
 
     def tool_transport(self, clock: Clock) -> Transport:
+        # rospy logs this INFO line when it is imported: not news to a user of every command (a
+        # filter: rospy's logging configuration at init_node resets the loggers' levels, not filters)
+        logging.getLogger("rospy.topics").addFilter(_not_topicmanager_initialized)
         self._check_master(
             "start the robot with `cyborg launch` (or `cyborg sim --ros`), or set ROS_MASTER_URI"
         )
         from cyborg.transport.ros import RosTransport
 
-        # rospy's start-up INFO line ("topicmanager initialized") on every command: not news to a user
-        logging.getLogger("rospy.topics").setLevel(logging.WARNING)
         return RosTransport(clock, process_name=f"cyborg_tool_{os.getpid()}")
 
     def log_file(self, node_name: str) -> Path:
@@ -267,6 +268,10 @@ class Ros2(Middleware):
         deadline = loop.time() + timeout
         while not transport.parameter_home_visible() and loop.time() < deadline:
             await asyncio.sleep(0.02)
+
+
+def _not_topicmanager_initialized(record: logging.LogRecord) -> bool:
+    return record.getMessage() != "topicmanager initialized"
 
 
 ROS1 = Ros1()
