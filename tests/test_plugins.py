@@ -146,6 +146,66 @@ def test_without_the_package_the_kind_is_unknown_and_the_error_says_how_to_get_i
     result = tools.cyborg("validate", config, cwd=tmp_path, script=True)
     assert result.returncode == 1
     assert "module 'greeter': unknown kind 'greeter'" in result.stderr and "pip install" in result.stderr
+    # where to install it: the main venv's Python, which every transport's commands see
+    assert "bin/python -m pip install -e PACKAGE_FOLDER" in result.stderr
+    assert "one install serves every transport, --ros2 too" in result.stderr
+
+
+@pytest.mark.e2e  # pip-installs a package
+def test_a_kind_installed_in_the_main_venv_is_known_to_the_ros2_venvs_python(
+    site: Path, tmp_path: Path
+) -> None:
+    """The hand-off to .venv-ros2 drops PYTHONPATH but passes the main venv's path in
+    $CYBORG_MAIN_PATH: a package installed once there is known on the ROS 2 side too."""
+    config = tmp_path / "greeter.yaml"
+    config.write_text(CONFIG)
+    result = tools.cyborg("kinds", cwd=tmp_path, env={"CYBORG_MAIN_PATH": str(site)})
+    assert result.returncode == 0, result.stderr
+    assert "greeter" in result.stdout
+    result = tools.cyborg("validate", config, cwd=tmp_path, env={"CYBORG_MAIN_PATH": str(site)})
+    assert result.returncode == 0, result.stderr + result.stdout
+
+
+def test_the_ros2_hand_off_passes_the_main_path_and_python(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    from cyborg.run import ros2_env
+
+    monkeypatch.setattr(ros2_env, "has_rclpy", lambda: False)
+    monkeypatch.setattr(sys, "path", [*sys.path, str(tmp_path)])
+    monkeypatch.setenv("PYTHONPATH", str(tmp_path))
+    env = ros2_env.ros2_environment()
+    assert "PYTHONPATH" not in env, "ROS 1's generated messages would shadow ROS 2's"
+    assert str(tmp_path) in env[ros2_env.MAIN_PATH_ENV].split(":")
+    assert env[ros2_env.MAIN_PYTHON_ENV] == sys.executable
+
+
+def test_an_editable_install_in_the_main_venv_is_imported_through_its_pth_file(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """What `pip install -e` leaves in the main venv's site-packages: a dist-info and a .pth naming
+    the source folder. A registry in another Python, given that path, finds and imports the kind."""
+    source = tmp_path / "src"
+    source.mkdir()
+    (source / "editable_greeter.py").write_text(GREETER)
+    main_site = tmp_path / "site-packages"
+    info = main_site / "cyborg_editable_greeter-0.1.0.dist-info"
+    info.mkdir(parents=True)
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: cyborg-editable-greeter\nVersion: 0.1.0\n")
+    (info / "entry_points.txt").write_text(
+        f"[{ENTRY_POINT_GROUP}]\neditable_greeter = editable_greeter:KIND\n"
+    )
+    pth = "__editable__.cyborg_editable_greeter-0.1.0.pth"
+    (info / "RECORD").write_text(f"{pth},,\ncyborg_editable_greeter-0.1.0.dist-info/METADATA,,\n")
+    (main_site / pth).write_text(f"{source}\n")
+    monkeypatch.setenv("CYBORG_MAIN_PATH", str(main_site))
+    monkeypatch.setattr(sys, "path", list(sys.path))
+    monkeypatch.setattr(sys, "modules", dict(sys.modules))
+    registry = KindRegistry()
+    assert "editable_greeter" in registry.names()
+    assert registry.origin("editable_greeter").startswith("cyborg-editable-greeter 0.1.0")
+    kind = registry.get("editable_greeter")
+    assert kind.settings.model_validate({}).action == "greeter/greet"  # type: ignore[attr-defined]
 
 
 @pytest.mark.e2e  # pip-installs a package

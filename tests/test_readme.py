@@ -59,3 +59,10 @@ def test_main_job_runs_from_a_clean_clone(tmp_path: Path) -> None:
     assert "dashboard and API: http://127.0.0.1:" in result.stdout
     assert "- --start--> idle" in result.stdout
     assert "--navigation_emotional--> navigation_planning" in result.stdout  # the motivator got it going
+
+
+def test_the_readme_names_every_helper_script_a_user_runs_and_each_exists() -> None:
+    readme = (ROOT / "README.md").read_text()
+    for script in ("scripts/run", "scripts/test", "scripts/screenshot"):
+        assert script in readme, f"README.md does not mention {script}"
+        assert os.access(ROOT / script, os.X_OK), f"{script} is named in README.md but is no executable file"

@@ -58,6 +58,7 @@ def test_command_tool_drives_a_robot_of_ros_nodes(
     result = tool("status")
     assert result.returncode == 0, result.stderr
     assert result.stdout.startswith("idle --work--> working")
+    assert "topicmanager initialized" not in result.stderr, "rospy's start-up chatter on every command"
     assert "emotion neutral" in result.stdout
 
     mark = emotions.mark()

@@ -10,8 +10,12 @@ from __future__ import annotations
 
 import difflib
 import logging
+import re
+import site
+import sys
 from collections.abc import Iterable, Mapping
-from importlib.metadata import EntryPoint, entry_points
+from importlib.metadata import Distribution, EntryPoint, distributions, entry_points
+from pathlib import Path
 from typing import Any
 
 from pydantic import ValidationError
@@ -19,6 +23,7 @@ from pydantic import ValidationError
 from cyborg.configfile import describe_errors
 from cyborg.errors import ConfigError
 from cyborg.modules.kind import ModuleKind, ModuleSettings
+from cyborg.run.ros2_env import main_path, main_python
 
 log = logging.getLogger(__name__)
 
@@ -31,6 +36,39 @@ def _origin(entry: EntryPoint) -> str:
     dist = entry.dist
     package = f"{dist.name} {dist.version}" if dist is not None else "an unknown package"
     return f"{package} ({entry.value})"
+
+
+def _normalized(name: str) -> str:
+    return re.sub(r"[-_.]+", "-", name).lower()
+
+
+def main_venv_entries() -> list[tuple[EntryPoint, Distribution]]:
+    """The kinds of module packages installed in the main venv only, when this Python is another
+    one (the ROS 2 venv; :func:`cyborg.run.ros2_env.main_path`): one install serves both."""
+    paths = main_path()
+    if not paths:
+        return []
+    here = {_normalized(dist.metadata["Name"] or "") for dist in distributions()}
+    found: list[tuple[EntryPoint, Distribution]] = []
+    for dist in distributions(path=paths):
+        name = _normalized(dist.metadata["Name"] or "")
+        if name in here:
+            continue  # installed here too (cyborg itself; a package installed in both): this one's wins
+        here.add(name)
+        found.extend((entry, dist) for entry in dist.entry_points if entry.group == ENTRY_POINT_GROUP)
+    return found
+
+
+def _make_importable(dist: Distribution) -> None:
+    """Put a main-venv distribution's code on this Python's path, after its own packages: the
+    folder it is installed in, and the paths and import hooks of its ``.pth`` files (``pip
+    install -e``)."""
+    folder = str(Path(str(dist.locate_file(""))))
+    if folder not in sys.path:
+        sys.path.append(folder)
+    for file in dist.files or []:
+        if file.suffix == ".pth" and len(file.parts) == 1:
+            site.addpackage(folder, file.name, None)
 
 
 class KindRegistry:
@@ -47,7 +85,12 @@ class KindRegistry:
     ) -> None:
         self._entries: dict[str, EntryPoint] = {}
         self._clashes: dict[str, list[str]] = {}
-        for entry in entries if entries is not None else entry_points(group=ENTRY_POINT_GROUP):
+        self._elsewhere: dict[str, Distribution] = {}
+        if entries is None:
+            shared = main_venv_entries()
+            entries = [*entry_points(group=ENTRY_POINT_GROUP), *(entry for entry, _ in shared)]
+            self._elsewhere = {entry.value: dist for entry, dist in shared}
+        for entry in entries:
             known = self._entries.get(entry.name)
             if known is None:
                 self._entries[entry.name] = entry
@@ -85,12 +128,16 @@ class KindRegistry:
             close = difflib.get_close_matches(name, self.names(), n=1)
             hint = f"did you mean {close[0]!r}? " if close else ""
             raise ConfigError(
-                f"unknown kind {name!r}; fix: {hint}use one of {', '.join(self.names())}, or pip install "
-                f"the package that offers it (it registers the kind in the entry-point group "
-                f"{ENTRY_POINT_GROUP!r})",
+                f"unknown kind {name!r}; fix: {hint}use one of {', '.join(self.names())}, or install "
+                f"the package that offers it with `{main_python()} -m pip install -e PACKAGE_FOLDER` "
+                f"(one install serves every transport, --ros2 too; the package registers the kind in "
+                f"the entry-point group {ENTRY_POINT_GROUP!r})",
                 source=source,
             )
         try:
+            dist = self._elsewhere.get(entry.value)
+            if dist is not None:
+                _make_importable(dist)
             loaded = entry.load()
         except Exception as exc:
             raise ConfigError(

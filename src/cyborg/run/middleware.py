@@ -13,6 +13,7 @@ transports asks which ROS it is.
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import shutil
 import signal
@@ -195,6 +196,9 @@ class Ros1(Middleware):
         show_problems_on_stderr(node_name)
 
     def tool_transport(self, clock: Clock) -> Transport:
+        # rospy logs this INFO line when it is imported: not news to a user of every command (a
+        # filter: rospy's logging configuration at init_node resets the loggers' levels, not filters)
+        logging.getLogger("rospy.topics").addFilter(_not_topicmanager_initialized)
         self._check_master(
             "start the robot with `cyborg launch` (or `cyborg sim --ros`), or set ROS_MASTER_URI"
         )
@@ -264,6 +268,10 @@ class Ros2(Middleware):
         deadline = loop.time() + timeout
         while not transport.parameter_home_visible() and loop.time() < deadline:
             await asyncio.sleep(0.02)
+
+
+def _not_topicmanager_initialized(record: logging.LogRecord) -> bool:
+    return record.getMessage() != "topicmanager initialized"
 
 
 ROS1 = Ros1()

@@ -15,10 +15,29 @@ from pathlib import Path
 
 from cyborg.errors import CyborgError
 
-__all__ = ["PYTHON_ENV", "has_rclpy", "ros2_environment", "ros2_python", "run_in_ros2_venv"]
+__all__ = [
+    "MAIN_PATH_ENV",
+    "MAIN_PYTHON_ENV",
+    "PYTHON_ENV",
+    "has_rclpy",
+    "main_path",
+    "main_python",
+    "ros2_environment",
+    "ros2_python",
+    "run_in_ros2_venv",
+]
 
 PYTHON_ENV = "CYBORG_ROS2_PYTHON"
 """Names the Python that has rclpy, when it is not this checkout's ``.venv-ros2/bin/python``."""
+
+MAIN_PATH_ENV = "CYBORG_MAIN_PATH"
+"""The main venv's import path (``os.pathsep``-separated), given to a process in the ROS 2 venv:
+the module packages installed there are known to ``--ros2`` commands too (see the registry)."""
+
+MAIN_PYTHON_ENV = "CYBORG_MAIN_PYTHON"
+"""The main venv's Python, given to a process in the ROS 2 venv: where to pip install a module."""
+
+CHECKOUT = Path(__file__).resolve().parents[3]
 
 
 def has_rclpy() -> bool:
@@ -32,7 +51,7 @@ def ros2_python() -> str:
         return sys.executable
     given = os.environ.get(PYTHON_ENV)
     candidates = [Path(given)] if given else []
-    candidates.append(Path(__file__).resolve().parents[3] / ".venv-ros2" / "bin" / "python")
+    candidates.append(CHECKOUT / ".venv-ros2" / "bin" / "python")
     for candidate in candidates:
         if candidate.is_file() and os.access(candidate, os.X_OK):
             return str(candidate)
@@ -44,12 +63,40 @@ def ros2_python() -> str:
 
 def ros2_environment() -> dict[str, str]:
     """The environment of a process in the ROS 2 venv: without this venv's PYTHONPATH (ROS 1's
-    generated ``cyborg_controller`` would shadow ROS 2's) unless this Python is the ROS 2 one."""
+    generated ``cyborg_controller`` would shadow ROS 2's) unless this Python is the ROS 2 one,
+    but with this Python's import path in ``$CYBORG_MAIN_PATH``: the module packages installed
+    here (pip, or a folder on PYTHONPATH) are found there after the ROS 2 venv's own packages."""
     env = dict(os.environ)
     if not has_rclpy():
         env.pop("PYTHONPATH", None)
         env.pop("VIRTUAL_ENV", None)
+        env[MAIN_PATH_ENV] = os.pathsep.join(p for p in sys.path if p and os.path.isdir(p))
+        env[MAIN_PYTHON_ENV] = sys.executable
     return env
+
+
+def main_path() -> list[str]:
+    """The main venv's import path when this Python is another one (the ROS 2 venv): the hand-off's
+    ``$CYBORG_MAIN_PATH``, else the site-packages of this checkout's ``.venv``; else nothing."""
+    given = os.environ.get(MAIN_PATH_ENV)
+    if given is not None:
+        return [p for p in given.split(os.pathsep) if p and p not in sys.path]
+    venv = CHECKOUT / ".venv"
+    if not has_rclpy() or Path(sys.prefix).resolve() == venv.resolve():
+        return []
+    return [str(p) for p in sorted(venv.glob("lib/python*/site-packages")) if str(p) not in sys.path]
+
+
+def main_python() -> str:
+    """The Python a student pip-installs module packages with: the main venv's (also seen by
+    ``--ros2`` commands), as the hand-off names it, else this checkout's ``.venv``, else this one."""
+    given = os.environ.get(MAIN_PYTHON_ENV)
+    if given:
+        return given
+    candidate = CHECKOUT / ".venv" / "bin" / "python"
+    if has_rclpy() and candidate.is_file():
+        return str(candidate)
+    return sys.executable
 
 
 def run_in_ros2_venv() -> None:
