@@ -9,6 +9,7 @@ checks as the embedded run (tests/scenarios/expectations.py).
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 from datetime import UTC
@@ -50,3 +51,4 @@ def test_scenario_over_ros(name: str, ros: RosSession, observe: Observers, tmp_p
     assert start <= stamps[0] < start + 60
     assert stamps[-1] - stamps[0] >= 0.8 * script.until
     assert "virtual time: " in result.stdout and f"wrote {len(records)} records" in result.stdout
+    assert re.search(r"cyborg_scenario: (\d+) of \1 expectations? met", result.stdout), result.stdout[-2000:]

@@ -15,6 +15,7 @@ import asyncio
 import contextlib
 import json
 import os
+import re
 import signal
 import socket
 import subprocess
@@ -70,6 +71,7 @@ def test_ros2_scenario(name: str, own_session: Ros2Session, tmp_path: Path) -> N
     check_transcript(name, records, transcript)
     assert records[-1]["t"] <= script.until + 1
     assert "virtual time: " in result.stdout and f"wrote {len(records)} records" in result.stdout
+    assert re.search(r"cyborg_scenario: (\d+) of \1 expectations? met", result.stdout), result.stdout[-2000:]
 
     # Simulated time on /clock, from the simulated base's process, starting at the script's start.
     assert heard, "nothing was published on /clock"

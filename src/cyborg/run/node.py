@@ -244,4 +244,5 @@ async def _play(scenario: ScenarioNode, stop: asyncio.Event, name: str) -> int:
         return 1
     run.result()
     click.echo(f"node {name}: script ended, {scenario.driver.count} records", err=True)
+    click.secho(f"{name}: {scenario.driver.summary()}", fg="green")  # in the launch's terminal
     return 0
