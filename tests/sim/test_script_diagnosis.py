@@ -3,7 +3,6 @@ summary of a passing script."""
 
 from __future__ import annotations
 
-import logging
 from pathlib import Path
 
 import pytest
@@ -12,13 +11,14 @@ from click.testing import CliRunner
 from cyborg.app.config import load_config, packaged_config
 from cyborg.cli import cli
 from cyborg.errors import ConfigError, ScenarioFailed
-from cyborg.modules import behaviour
+from cyborg.modules import BehaviourModule, GoalContext
 from cyborg.sim.scenario import ScenarioRecords, ScenarioRun, run_scenario
 from cyborg.sim.script import parse_script
-from cyborg.sim.witness import CRASH_LOGGER, Witness
+from cyborg.sim.witness import Witness
+from cyborg.transport.base import GoalStatus, Node
 from cyborg.transport.clock import VirtualClock
 from cyborg.transport.embedded import EmbeddedTransport
-from cyborg.transport.messages import String
+from cyborg.transport.messages import StateMachineAction, StateMachineGoal, String
 
 
 def run(text: str) -> ScenarioRecords:
@@ -126,22 +126,35 @@ def test_a_sentence_the_gatekeeper_dropped_is_named_with_the_grant_it_lacked(tmp
 
 
 def test_a_module_that_crashed_is_noted_with_its_exception() -> None:
-    assert behaviour.log.name == CRASH_LOGGER, "the witness listens to the action server's logger"
+    """A module goal that raises is reported on its diagnostic topic: the witness hears it over
+    any transport (here the embedded one), not only in the robot's own process."""
+
+    class TimeTeller(BehaviourModule):
+        def __init__(self, node: Node) -> None:
+            super().__init__(node)
+            self.serve("time_teller/tell", self.tell)
+
+        async def tell(self, ctx: GoalContext) -> None:
+            print("It is " + 5)  # type: ignore[operator]  # the newcomer's mistake 3
+
     clock = VirtualClock(speed=None)
     transport = EmbeddedTransport(clock)
     witness = Witness(transport.node("cyborg_scenario"))
-    witness.watch_crashes()
+    TimeTeller(transport.node("time_teller"))
+    client = transport.node("controller").action_client("time_teller/tell", StateMachineAction)
+
+    async def main() -> GoalStatus:
+        handle = client.send_goal(StateMachineGoal("idle", "tell_time", "telling"))
+        await handle.wait()
+        await clock.sleep(0.1)  # the report arrives on the loop
+        return handle.status
+
     try:
-        try:
-            print("It is " + 5)  # type: ignore[operator]  # the newcomer's mistake 3
-        except TypeError:
-            behaviour.log.exception("%s crashed; reporting ABORTED to the controller", "time_teller/tell")
+        assert clock.run(main()) is GoalStatus.ABORTED
     finally:
-        witness.close()
         transport.shutdown()
         clock.close()
     assert [note.text for note in witness.notes] == [
-        'time_teller/tell crashed (TypeError: can only concatenate str (not "int") to str); '
-        "its state ended 'aborted'"
+        'time_teller crashed (TypeError: can only concatenate str (not "int") to str); '
+        "its state (time_teller/tell) ended 'aborted'"
     ]
-    assert logging.getLogger(CRASH_LOGGER).handlers == [], "closing removed its handler"

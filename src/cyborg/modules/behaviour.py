@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import asyncio
 import enum
+import json
 import logging
 from collections.abc import Awaitable, Callable
 from typing import Any
@@ -186,6 +187,7 @@ class StateServer:
             return
         except Exception as exc:
             log.exception("%s crashed; reporting ABORTED to the controller", self.name)
+            self.module._report_crash(self.name, exc)
             handle.abort(StateMachineResult(status="aborted", message=f"crashed: {exc!r}"), repr(exc))
             return
         if handle.status.is_terminal:
@@ -212,7 +214,13 @@ class BehaviourModule:
         self._speech = node.publisher(
             topics.TEXT_TO_SPEECH, String
         )  # early, so over ROS the first line is heard
+        self._crashes = node.publisher(topics.MODULE_CRASHED, String)
         node.subscribe(topics.EMOTIONAL_STATE, EmotionalState, self._on_emotion)
+
+    def _report_crash(self, action: str, error: BaseException) -> None:
+        """Tell observers that a goal of ``action`` raised (a scenario names it when a step fails)."""
+        report = {"module": self.node.name, "action": action, "error": f"{type(error).__name__}: {error}"}
+        self._crashes.publish(String(json.dumps(report)))
 
     def serve(self, name: str, execute: Execute, *, honour_cancel: bool = True) -> StateServer:
         """Offer the action server ``name`` (a state's ``action:`` in the YAML): each goal the

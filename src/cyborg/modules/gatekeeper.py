@@ -19,9 +19,9 @@ grants that sender the resource.
 from __future__ import annotations
 
 import asyncio
+import json
 import logging
 from collections import Counter
-from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from cyborg.transport import topics
@@ -59,12 +59,11 @@ class Gatekeeper:
         self.allowed: str | None = None
         self.known = False
         self.stats = GatekeeperStats()
-        self.drop_listeners: list[Callable[[Message, MessageInfo], None]] = []
-        """Called with each message dropped (in process: a scenario names the drop when a step fails)."""
         self._warned: set[str] = set()  # senders already logged at INFO in this state
         self._read_for: set[str] = set()  # senders whose message made it read the resources again
         self._retry: asyncio.TimerHandle | None = None  # the next read while reading fails
         self._output = node.publisher(output_topic, msg_type)
+        self._drops = node.publisher(topics.GATEKEEPER_DROPPED, String, queue_size=100)
         node.subscribe(topics.STATE_CHANGE, SystemState, self._on_state_change)
         node.subscribe(input_topic, msg_type, self._on_message, queue_size=100)
 
@@ -138,8 +137,9 @@ class Gatekeeper:
             return
         self.stats.dropped += 1
         self.stats.dropped_by_sender[info.sender] += 1
-        for listener in self.drop_listeners:
-            listener(message, info)
+        what = message.data if isinstance(message, String) else type(message).__name__
+        drop = {"gatekeeper": self.node.name, "resource": self.resource, "holder": self.allowed}
+        self._drops.publish(String(json.dumps({**drop, "sender": info.sender, "message": what})))
         first_in_state = info.sender not in self._warned
         self._warned.add(info.sender)
         log.log(

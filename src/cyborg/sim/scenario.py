@@ -25,7 +25,6 @@ from cyborg.app.config import LoadedConfig
 from cyborg.app.registry import KindRegistry
 from cyborg.app.robot import Robot, build_robot
 from cyborg.errors import ConfigError, CyborgError, ScenarioFailed
-from cyborg.modules.gatekeeper import Gatekeeper
 from cyborg.observe.records import Record, RecordStream
 from cyborg.sim.script import CalendarEntry, Match, Script, Step, check_against
 from cyborg.sim.witness import Witness
@@ -252,7 +251,6 @@ class ScenarioDriver:
         finally:
             driver.cancel()
             end.cancel()
-            self.witness.close()
         return self.records
 
     def _end_of_run(self) -> None:
@@ -298,10 +296,6 @@ class ScenarioRun:
             self.driver = ScenarioDriver(
                 self.transport.node("cyborg_scenario"), script, keep_records=keep_records
             )
-            self.driver.witness.watch_gatekeepers(
-                c for c in self.robot.components.values() if isinstance(c, Gatekeeper)
-            )
-            self.driver.witness.watch_crashes()
             self.records = self.driver.records
             self.listeners = self.driver.listeners
             self.stream = self.driver.stream
