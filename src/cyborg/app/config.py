@@ -81,6 +81,8 @@ class LoadedConfig:
     model: ConfigModel
     source: str
     warnings: list[str] = field(default_factory=list)
+    text: str = field(default="", repr=False)
+    """The file's text, for the line numbers of messages about its parts (``cyborg validate``)."""
 
 
 _PROTOTYPE_FIX = (
@@ -146,7 +148,7 @@ def parse_config(text: str, source: str = "<config>") -> LoadedConfig:
     machine, warnings = build_machine(
         model, source, lambda machine: check_motivational_events(machine, model.motivator)
     )
-    return LoadedConfig(machine=machine, model=model, source=source, warnings=warnings)
+    return LoadedConfig(machine=machine, model=model, source=source, warnings=warnings, text=text)
 
 
 def check_motivational_events(machine: MachineSpec, settings: MotivatorSettings) -> list[str]:
