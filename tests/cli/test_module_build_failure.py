@@ -48,7 +48,7 @@ def _build(node: Node, settings: TimeTellerSettings, context: object) -> Compone
 
 TIME_TELLER: ModuleKind[Any] = ModuleKind(TimeTellerSettings, _build)  # type: ignore[arg-type]
 EXPECTED = (
-    "robot.yaml: module 'time_teller' could not be built: ZoneInfoNotFoundError: "
+    "robot.yaml: line 7: module 'time_teller' could not be built: ZoneInfoNotFoundError: "
     "'No time zone found with key Europe/Olso'; fix: correct its settings under modules: time_teller"
 )
 
@@ -117,4 +117,4 @@ def test_cyborg_sim_says_it_in_one_line_and_exits_1(tmp_path: Path, monkeypatch:
     )
     assert result.exit_code == 1, result.output
     assert "Traceback" not in result.output
-    assert f"{path}: module 'time_teller' could not be built: ZoneInfoNotFoundError" in result.output
+    assert f"{path}: line 7: module 'time_teller' could not be built: ZoneInfoNotFoundError" in result.output

@@ -16,7 +16,7 @@ from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from cyborg.configfile import describe_errors, load_yaml, read_text_file, suggest, yaml_kind
+from cyborg.configfile import describe_errors, key_lines, load_yaml, read_text_file, suggest, yaml_kind
 from cyborg.controller.config import (
     MACHINE_FIXES,
     MACHINE_KEYS,
@@ -83,6 +83,11 @@ class LoadedConfig:
     warnings: list[str] = field(default_factory=list)
     text: str = field(default="", repr=False)
     """The file's text, for the line numbers of messages about its parts (``cyborg validate``)."""
+
+    def where(self, *path: str) -> str:
+        """``"line N: "`` for the key at ``path`` (e.g. ``"modules", "greeter"``), or "" if unknown."""
+        line = key_lines(self.text).get(path) if self.text else None
+        return f"line {line}: " if line is not None else ""
 
 
 _PROTOTYPE_FIX = (

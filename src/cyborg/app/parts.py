@@ -79,7 +79,15 @@ def build_part(
         kind, settings = registry.parse(name, model.modules[name], source=config.source)
         if context.heard is None:  # only a module that asks (speech input) imports the other kinds
             context.heard = heard_by(config, registry)
-        module = build_module(name, kind, transport.node(name), settings, context, source=config.source)
+        module = build_module(
+            name,
+            kind,
+            transport.node(name),
+            settings,
+            context,
+            source=config.source,
+            where=config.where("modules", name),
+        )
         return Part(name, [module])
     if any(gate.name == name for gate in model.gatekeepers):
         from cyborg.app.robot import build_gatekeeper

@@ -190,7 +190,13 @@ def build_robot(
         for name, raw in config.model.modules.items():
             kind, settings = registry.parse(name, raw, source=config.source)
             robot.components[name] = build_module(
-                name, kind, transport.node(name), settings, place, source=config.source
+                name,
+                kind,
+                transport.node(name),
+                settings,
+                place,
+                source=config.source,
+                where=config.where("modules", name),
             )
         for gate in config.model.gatekeepers:
             keeper = build_gatekeeper(config, transport, gate.name)
