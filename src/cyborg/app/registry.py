@@ -159,9 +159,11 @@ def build_module(
 ) -> Component:
     """Build module ``name`` with its kind's factory; a factory that raises becomes one
     :class:`ConfigError` line naming the module, the reason and the fix (the traceback goes to
-    the debug log). ``where`` (e.g. ``"line 12: "``) says where its block is."""
+    the debug log); an OSError (a full disk) passes through, for the command's own wording. ``where`` (e.g. ``"line 12: "``) says where its block is."""
     try:
         return kind.build(node, settings, context)
+    except OSError:
+        raise  # a disk or device problem: the commands word it with its own fix (os_problem)
     except Exception as exc:
         log.debug("module %r could not be built", name, exc_info=True)
         reason = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
