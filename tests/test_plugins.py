@@ -169,6 +169,7 @@ def test_a_kind_installed_in_the_main_venv_is_known_to_the_ros2_venvs_python(
 def test_the_ros2_hand_off_passes_the_main_path_and_python(
     monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
+    from cyborg.app import plugin_path
     from cyborg.run import ros2_env
 
     monkeypatch.setattr(ros2_env, "has_rclpy", lambda: False)
@@ -176,8 +177,8 @@ def test_the_ros2_hand_off_passes_the_main_path_and_python(
     monkeypatch.setenv("PYTHONPATH", str(tmp_path))
     env = ros2_env.ros2_environment()
     assert "PYTHONPATH" not in env, "ROS 1's generated messages would shadow ROS 2's"
-    assert str(tmp_path) in env[ros2_env.MAIN_PATH_ENV].split(":")
-    assert env[ros2_env.MAIN_PYTHON_ENV] == sys.executable
+    assert str(tmp_path) in env[plugin_path.MAIN_PATH_ENV].split(":")
+    assert env[plugin_path.MAIN_PYTHON_ENV] == sys.executable
 
 
 def test_an_editable_install_in_the_main_venv_is_imported_through_its_pth_file(

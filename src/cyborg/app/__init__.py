@@ -5,7 +5,8 @@ the controller trio (state machine, emotion system, motivator) with its store, t
 module kinds found through entry points, the gatekeepers and the base.
 
 - :mod:`~cyborg.app.config`: the whole configuration file (machine, emotion, motivator, modules).
-- :mod:`~cyborg.app.registry`: the module kinds, found through entry points and loaded lazily;
+- :mod:`~cyborg.app.registry`: the module kinds, found through entry points and loaded lazily
+  (from the main venv's packages too, in the ROS 2 venv: :mod:`~cyborg.app.plugin_path`);
   :mod:`~cyborg.app.kinds_doc` writes their settings as Markdown; :mod:`~cyborg.app.checks`
   warns about a robot whose modules and states do not fit together.
 - :mod:`~cyborg.app.context`: what a module's factory builds with (data folder, randomness, map).

@@ -16,7 +16,7 @@ from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from cyborg.configfile import describe_errors, load_yaml, read_text_file, suggest, yaml_kind
+from cyborg.configfile import describe_errors, key_lines, load_yaml, read_text_file, suggest, yaml_kind
 from cyborg.controller.config import (
     MACHINE_FIXES,
     MACHINE_KEYS,
@@ -81,6 +81,13 @@ class LoadedConfig:
     model: ConfigModel
     source: str
     warnings: list[str] = field(default_factory=list)
+    text: str = field(default="", repr=False)
+    """The file's text, for the line numbers of messages about its parts (``cyborg validate``)."""
+
+    def where(self, *path: str) -> str:
+        """``"line N: "`` for the key at ``path`` (e.g. ``"modules", "greeter"``), or "" if unknown."""
+        line = key_lines(self.text).get(path) if self.text else None
+        return f"line {line}: " if line is not None else ""
 
 
 _PROTOTYPE_FIX = (
@@ -146,7 +153,7 @@ def parse_config(text: str, source: str = "<config>") -> LoadedConfig:
     machine, warnings = build_machine(
         model, source, lambda machine: check_motivational_events(machine, model.motivator)
     )
-    return LoadedConfig(machine=machine, model=model, source=source, warnings=warnings)
+    return LoadedConfig(machine=machine, model=model, source=source, warnings=warnings, text=text)
 
 
 def check_motivational_events(machine: MachineSpec, settings: MotivatorSettings) -> list[str]:

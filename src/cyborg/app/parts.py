@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from cyborg.app.config import LoadedConfig
 from cyborg.app.context import BuildContext, calendar_of, heard_by
-from cyborg.app.registry import KindRegistry, module_kinds
+from cyborg.app.registry import KindRegistry, build_module, module_kinds
 from cyborg.errors import ConfigError
 from cyborg.modules.kind import Component
 from cyborg.navigation.calendar import CalendarEntry
@@ -79,7 +79,16 @@ def build_part(
         kind, settings = registry.parse(name, model.modules[name], source=config.source)
         if context.heard is None:  # only a module that asks (speech input) imports the other kinds
             context.heard = heard_by(config, registry)
-        return Part(name, [kind.build(transport.node(name), settings, context)])
+        module = build_module(
+            name,
+            kind,
+            transport.node(name),
+            settings,
+            context,
+            source=config.source,
+            where=config.where("modules", name),
+        )
+        return Part(name, [module])
     if any(gate.name == name for gate in model.gatekeepers):
         from cyborg.app.robot import build_gatekeeper
 

@@ -20,14 +20,15 @@ from typing import Any
 
 from pydantic import ValidationError
 
+from cyborg.app.plugin_path import main_path, main_python
 from cyborg.configfile import describe_errors
 from cyborg.errors import ConfigError
-from cyborg.modules.kind import ModuleKind, ModuleSettings
-from cyborg.run.ros2_env import main_path, main_python
+from cyborg.modules.kind import BuildContext, Component, ModuleKind, ModuleSettings
+from cyborg.transport.base import Node
 
 log = logging.getLogger(__name__)
 
-__all__ = ["ENTRY_POINT_GROUP", "KindRegistry", "module_kinds"]
+__all__ = ["ENTRY_POINT_GROUP", "KindRegistry", "build_module", "module_kinds"]
 
 ENTRY_POINT_GROUP = "cyborg.module_kinds"
 
@@ -44,7 +45,7 @@ def _normalized(name: str) -> str:
 
 def main_venv_entries() -> list[tuple[EntryPoint, Distribution]]:
     """The kinds of module packages installed in the main venv only, when this Python is another
-    one (the ROS 2 venv; :func:`cyborg.run.ros2_env.main_path`): one install serves both."""
+    one (the ROS 2 venv; :func:`cyborg.app.plugin_path.main_path`): one install serves both."""
     paths = main_path()
     if not paths:
         return []
@@ -191,3 +192,30 @@ class KindRegistry:
 def module_kinds(extra: Mapping[str, ModuleKind[Any]] | None = None) -> KindRegistry:
     """The kinds of every installed package (and ``extra``), read from the entry points now."""
     return KindRegistry(extra=extra)
+
+
+def build_module(
+    name: str,
+    kind: ModuleKind[Any],
+    node: Node,
+    settings: ModuleSettings,
+    context: BuildContext,
+    *,
+    source: str | None = None,
+    where: str = "",
+) -> Component:
+    """Build module ``name`` with its kind's factory; a factory that raises becomes one
+    :class:`ConfigError` line naming the module, the reason and the fix (the traceback goes to
+    the debug log); an OSError (a full disk) passes through, for the command's own wording. ``where`` (e.g. ``"line 12: "``) says where its block is."""
+    try:
+        return kind.build(node, settings, context)
+    except OSError:
+        raise  # a disk or device problem: the commands word it with its own fix (os_problem)
+    except Exception as exc:
+        log.debug("module %r could not be built", name, exc_info=True)
+        reason = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
+        raise ConfigError(
+            f"{where}module {name!r} could not be built: {reason}; fix: correct its settings under "
+            f"modules: {name} (or the kind's factory, if they are right); --log-level debug shows the traceback",
+            source=source,
+        ) from exc

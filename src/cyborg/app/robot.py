@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 
 from cyborg.app.config import LoadedConfig
 from cyborg.app.context import BuildContext, calendar_of, heard_by
-from cyborg.app.registry import KindRegistry, module_kinds
+from cyborg.app.registry import KindRegistry, build_module, module_kinds
 from cyborg.app.tuning import freeze_built, thaw
 from cyborg.app.view import BaseView
 from cyborg.controller.runtime import Controller, Phase
@@ -189,7 +189,15 @@ def build_robot(
     try:
         for name, raw in config.model.modules.items():
             kind, settings = registry.parse(name, raw, source=config.source)
-            robot.components[name] = kind.build(transport.node(name), settings, place)
+            robot.components[name] = build_module(
+                name,
+                kind,
+                transport.node(name),
+                settings,
+                place,
+                source=config.source,
+                where=config.where("modules", name),
+            )
         for gate in config.model.gatekeepers:
             keeper = build_gatekeeper(config, transport, gate.name)
             assert keeper is not None

@@ -95,6 +95,30 @@ def item_lines(text: str, key: str) -> list[int]:
     return []
 
 
+def key_lines(text: str) -> dict[tuple[str, ...], int]:
+    """The line (1-based) of every mapping key, by its path from the top, e.g.
+    ``("states", "idle", "transitions")``; {} when the text is no YAML.
+
+    For messages about a valid file's parts (``cyborg validate``'s warnings); call it on text
+    :func:`load_yaml` accepted.
+    """
+    try:
+        root = yaml.compose(text, Loader=yaml_loader(text))
+    except (yaml.YAMLError, RecursionError):
+        return {}
+    lines: dict[tuple[str, ...], int] = {}
+    pending: list[tuple[tuple[str, ...], yaml.Node]] = [((), root)] if root is not None else []
+    while pending:
+        path, node = pending.pop()
+        if isinstance(node, yaml.MappingNode):
+            for key, value in node.value:
+                if isinstance(key, yaml.ScalarNode):
+                    here = (*path, str(key.value))
+                    lines.setdefault(here, key.start_mark.line + 1)
+                    pending.append((here, value))
+    return lines
+
+
 Loader = yaml.SafeLoader | yaml.CSafeLoader
 
 

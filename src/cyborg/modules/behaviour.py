@@ -28,6 +28,7 @@ import enum
 import json
 import logging
 from collections.abc import Awaitable, Callable
+from datetime import datetime
 from typing import Any
 
 from cyborg.transport import topics
@@ -92,6 +93,11 @@ class GoalContext:
     def preempt_requested(self) -> bool:
         """True once the controller asked to stop (modules that ignore cancel can poll it)."""
         return self._handle.cancel_requested
+
+    def now(self) -> datetime:
+        """The robot's current date-time, an aware UTC datetime: virtual in simulations, scenarios
+        and the ModuleHarness. Convert it for people, e.g. ``ctx.now().astimezone(ZoneInfo("Europe/Oslo"))``."""
+        return self._module.now()
 
     async def sleep(self, seconds: float) -> None:
         """Wait ``seconds`` on the robot's clock (virtual in simulations); preemption ends it at once."""
@@ -234,6 +240,11 @@ class BehaviourModule:
         """Stop every goal this module runs and withdraw its action servers (see :class:`Component`)."""
         for server in self.servers.values():
             server.close()
+
+    def now(self) -> datetime:
+        """The robot's current date-time, an aware UTC datetime (the node's clock: virtual in
+        simulations, scenarios and the ModuleHarness); use it instead of ``datetime.now()``."""
+        return self.node.clock.datetime()
 
     def publish_event(self, event: str) -> None:
         """Ask the controller for a state change: published on ``/cyborg_controller/register_event``.

@@ -121,6 +121,9 @@ class ConversationSettings(ModuleSettings):
         """Greetings: a sentence starting with one of them asks for the conversation state."""
         return (*sorted(GREETINGS), *GREETING_PHRASES)
 
+    def publishes(self) -> tuple[str, ...]:
+        return (CONVERSATION_INTEREST,)
+
 
 class QuestionSettings(ModuleSettings):
     """Asks one question, waits for an answer, and tells the emotion system how it went."""
@@ -134,6 +137,9 @@ class QuestionSettings(ModuleSettings):
     answered_feedback: tuple[float, float, float] = Field(
         ANSWERED_FEEDBACK, description="PAD change when someone answers"
     )
+
+    def speaks_in(self) -> tuple[str, ...]:
+        return (self.action,)
 
 
 def _conversation(node: Node, settings: ConversationSettings, context: BuildContext) -> ConversationModule:

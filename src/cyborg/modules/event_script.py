@@ -23,6 +23,9 @@ class EventScriptSettings(ModuleSettings):
     events: list[str] = Field(min_length=1, description="events to publish, in this order, round and round")
     every: float = Field(10.0, gt=0, description="seconds between two events")
 
+    def publishes(self) -> tuple[str, ...]:
+        return tuple(dict.fromkeys(self.events))
+
 
 class EventScript:
     """Publishes ``events`` one after the other, ``every`` seconds apart, starting after ``every``."""

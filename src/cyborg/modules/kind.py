@@ -59,6 +59,23 @@ class ModuleSettings(BaseModel):
         """
         return ()
 
+    def publishes(self) -> tuple[str, ...]:
+        """The events this module publishes (``publish_event``), known without starting it.
+
+        Override it in a module that publishes events: ``cyborg validate`` warns about one that
+        is no transition of any state (the controller would drop it). The default: none.
+        """
+        return ()
+
+    def speaks_in(self) -> tuple[str, ...]:
+        """The action servers (of :meth:`serves`) in whose states this module says things (``say``).
+
+        Override it in a module that speaks: ``cyborg validate`` warns about such a state that
+        does not grant the speech gatekeeper's resource to this module's node (its sentences
+        would be dropped). The default: none.
+        """
+        return ()
+
     def serves(self) -> tuple[str, ...]:
         """The action servers this module offers (states' ``action:``), known without starting it.
 

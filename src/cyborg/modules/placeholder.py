@@ -74,6 +74,9 @@ class PlaceholderSettings(ModuleSettings):
 
     servers: list[PlaceholderServer] = Field(min_length=1, description="the states it serves, one entry each")
 
+    def speaks_in(self) -> tuple[str, ...]:
+        return tuple(server.action for server in self.servers if server.say)
+
     def serves(self) -> tuple[str, ...]:
         return tuple(server.action for server in self.servers)
 

@@ -12,7 +12,7 @@ from pydantic import Field
 
 from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
 from cyborg.navigation.database import NavigationDatabase
-from cyborg.navigation.keywords import NO_PHRASES, TRIGGERS, YES_PHRASES
+from cyborg.navigation.keywords import NO_PHRASES, TRIGGERS, YES_PHRASES, Intent
 from cyborg.navigation.module import MOVING_ACTION, PLANNING_ACTION, TALKING_ACTION, NavigationModule
 from cyborg.transport.base import Node
 from cyborg.transport.topics import BaseApi
@@ -37,6 +37,21 @@ class NavigationSettings(ModuleSettings):
 
     def serves(self) -> tuple[str, ...]:
         return (PLANNING_ACTION, MOVING_ACTION, TALKING_ACTION)
+
+    def publishes(self) -> tuple[str, ...]:
+        """What it hears asked (a place), what the calendar raises, and how its trips go on."""
+        heard = tuple(intent.value for intent in Intent if intent not in (Intent.YES, Intent.NO))
+        return (
+            *heard,
+            "navigation_scheduler",
+            "navigation_start_moving",
+            "navigation_start_wandering",
+            "navigation_wandering_completed",
+            "navigation_feedback_completed",
+        )
+
+    def speaks_in(self) -> tuple[str, ...]:
+        return self.serves()
 
     def listens_for(self) -> tuple[str, ...]:
         """The phrases that start a request for a place (the place follows them), and the answers."""

@@ -126,7 +126,11 @@ def build_node(name: str, options: NodeOptions, middleware: Middleware) -> Built
         node.scenario = ScenarioNode(transport.node(SCENARIO), options.scenario)
         node.part = Part(name, [node.scenario])
     else:
-        node.part = build_part(name, options.config, transport, context)
+        try:
+            node.part = build_part(name, options.config, transport, context)
+        except BaseException:
+            node.close()  # leave the graph: the error is the node's whole output
+            raise
     middleware.part_built(name)
     publish = options.publish_clock
     if publish is None:

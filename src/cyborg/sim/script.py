@@ -1,7 +1,7 @@
 """Scenario scripts: a timeline of inputs for the simulated robot, and its validation.
 
-A script (YAML) gives an optional start date-time, seed, initial emotion and
-calendar, an end time ``until`` and ``steps``. A step waits (``at`` a virtual
+A script (YAML) gives an optional start date-time (UTC unless it carries an offset such
+as ``+01:00``; by default 2026-11-23 09:00 UTC), seed, initial emotion and calendar, an end time ``until`` and ``steps``. A step waits (``at`` a virtual
 time, or ``when`` a transcript record matches, plus an optional ``delay``) and
 then acts (``say`` text as speech-to-text, publish an ``event``, or set the
 ``emotion``). An ``expect`` step checks instead: a matching record must come after the
@@ -199,7 +199,9 @@ class CalendarEntry(BaseModel):
 class Script(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
-    start: datetime | None = None
+    start: datetime | None = Field(
+        None, description="virtual date-time at t = 0; UTC unless it carries an offset (+01:00)"
+    )
     seed: int = 0
     emotion: str | None = None
     calendar: list[CalendarEntry] = Field(default_factory=list)

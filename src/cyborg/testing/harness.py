@@ -26,6 +26,7 @@ import random
 import tempfile
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from datetime import UTC, datetime
 from pathlib import Path
 from types import TracebackType
 from typing import Any
@@ -36,7 +37,7 @@ from cyborg.errors import ConfigError
 from cyborg.modules.kind import Component, ModuleKind, ModuleSettings, ServesStates
 from cyborg.transport import topics
 from cyborg.transport.base import ClientGoalHandle, GoalStatus, MessageInfo, Node
-from cyborg.transport.clock import VirtualClock
+from cyborg.transport.clock import DEFAULT_VIRTUAL_START, VirtualClock
 from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import (
     EmotionalFeedback,
@@ -90,6 +91,11 @@ class Goal:
         self._handle.cancel()
 
 
+def _utc(start: datetime) -> datetime:
+    """``start`` as an aware datetime: a naive one is read as UTC (as a scenario's ``start:``)."""
+    return start.replace(tzinfo=UTC) if start.tzinfo is None else start
+
+
 class ModuleHarness:
     """One module on its own node (``node_name``), in virtual time, with probes.
 
@@ -98,6 +104,9 @@ class ModuleHarness:
     ``build(node) -> component``. Probes: ``said`` (what it published on ``/text_to_speech``),
     ``events`` (``register_event``), ``feedback`` (:class:`Feedback`); ``hear()``,
     ``set_emotion()``, ``start()`` and ``run()`` drive it. Close it (or use ``with``).
+
+    The virtual clock starts at ``start`` (a datetime; a naive one is UTC), by default at
+    2026-11-23 09:00 UTC (a Monday); the module reads it with ``self.now()`` or ``ctx.now()``.
     """
 
     def __init__(
@@ -109,8 +118,9 @@ class ModuleHarness:
         data_dir: Path | None = None,
         map_path: Path | None = None,
         seed: int = 0,
+        start: datetime | None = None,
     ) -> None:
-        self.clock = VirtualClock()
+        self.clock = VirtualClock(DEFAULT_VIRTUAL_START if start is None else _utc(start))
         self.transport = EmbeddedTransport(self.clock)
         self._tmp = tempfile.TemporaryDirectory(prefix="cyborg-test-") if data_dir is None else None
         folder = data_dir if data_dir is not None else Path(self._tmp.name) if self._tmp else Path()
