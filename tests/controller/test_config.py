@@ -457,3 +457,36 @@ motivator:
     assert "motivator event 'dance' is no transition of state 'music'" in message
     assert "state 'nowhere' is not defined" in message
     assert "'music_play'" not in message.split("dance")[0]  # the valid one is not reported
+
+
+def test_every_machine_problem_and_warning_names_its_line(tmp_path: Path) -> None:
+    """An unknown target, a missing 'aborted' in a substate, a bad initial and an unreachable
+    state: each message starts with the line of the part it is about, nested states included."""
+    path = tmp_path / "robot.yaml"
+    path.write_text(
+        "initial: idle\n"  # 1
+        "states:\n"  # 2
+        "  idle:\n"  # 3
+        "    action: a/idle\n"  # 4
+        "    transitions:\n"  # 5
+        "      go: nowhere\n"  # 6
+        "      aborted: idle\n"  # 7
+        "  group:\n"  # 8
+        "    initial: missing\n"  # 9
+        "    states:\n"  # 10
+        "      inner:\n"  # 11
+        "        action: a/inner\n",  # 12
+        encoding="utf-8",
+    )
+    with pytest.raises(ConfigError) as caught:
+        load_config(path)
+    text = str(caught.value)
+    assert "line 6: state 'idle': transition 'go' leads to unknown state 'nowhere'" in text
+    assert "line 9: state 'group': initial substate 'missing'" in text
+    path.write_text(
+        "initial: idle\nstates:\n  idle:\n    action: a/idle\n    transitions: {aborted: idle}\n"
+        "  group:\n    transitions: {aborted: idle}\n    states:\n      inner:\n        action: a/inner\n",
+        encoding="utf-8",
+    )
+    warnings = load_config(path).warnings
+    assert any("line 9: state 'inner' is unreachable" in w for w in warnings), warnings

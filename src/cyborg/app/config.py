@@ -151,7 +151,7 @@ def parse_config(text: str, source: str = "<config>") -> LoadedConfig:
         )
         raise ConfigError(problems, source=source) from exc
     machine, warnings = build_machine(
-        model, source, lambda machine: check_motivational_events(machine, model.motivator)
+        model, source, lambda machine: check_motivational_events(machine, model.motivator), text=text
     )
     return LoadedConfig(machine=machine, model=model, source=source, warnings=warnings, text=text)
 

@@ -26,11 +26,12 @@ File layout::
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 from functools import partial
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
-from cyborg.configfile import Fixes, KeyRules, Location, name_location, suggest
+from cyborg.configfile import Fixes, KeyRules, Location, key_lines, name_location, suggest
 from cyborg.controller.machine import ABORTED, MachineSpec, StateSpec, Timeouts
 from cyborg.errors import ConfigError, InvalidValueError
 
@@ -158,13 +159,19 @@ MACHINE_KEYS = KeyRules(
 
 
 def build_machine(
-    model: MachineModel, source: str, check: Callable[[MachineSpec], list[str]] | None = None
+    model: MachineModel,
+    source: str,
+    check: Callable[[MachineSpec], list[str]] | None = None,
+    *,
+    text: str = "",
 ) -> tuple[MachineSpec, list[str]]:
     """Turn the schema model into a MachineSpec, checking the machine's semantics.
 
     ``check`` adds the problems other sections find with the machine (the motivator's events);
-    they are reported with the machine's own. Returns the machine and the warnings.
+    they are reported with the machine's own. ``text``: the file's text, so that each problem
+    and warning starts with the line of the part it is about. Returns the machine and the warnings.
     """
+    lines = key_lines(text) if text else {}
     problems: list[str] = []
     if not model.states:
         raise ConfigError(
@@ -173,24 +180,27 @@ def build_machine(
             source=source,
         )
     states: dict[str, StateSpec] = {}
-    _flatten(model.states, None, states, problems)
+    _flatten(model.states, None, states, problems, _Lines(lines, ()))
     names = sorted(states)
+    where = _Lines(lines, ()).of_state
     for state in states.values():
         for event, target in state.transitions.items():
             if target not in states:
                 problems.append(
-                    f"state {state.name!r}: transition {event!r} leads to unknown state {target!r}"
-                    f"{suggest(target, names)}; fix: use one of {', '.join(names)}"
+                    f"{where(states, state.name, 'transitions', event)}state {state.name!r}: transition "
+                    f"{event!r} leads to unknown state {target!r}{suggest(target, names)}; "
+                    f"fix: use one of {', '.join(names)}"
                 )
         if state.children and state.initial not in state.children:
             problems.append(
-                f"state {state.name!r}: initial substate {state.initial!r} is not one of its substates "
-                f"({', '.join(state.children)}); fix: name one of them"
+                f"{where(states, state.name, 'initial')}state {state.name!r}: initial substate "
+                f"{state.initial!r} is not one of its substates ({', '.join(state.children)}); "
+                "fix: name one of them"
             )
     if model.initial not in states:
         problems.append(
-            f"initial state {model.initial!r} is not defined{suggest(model.initial, names)}; "
-            f"fix: define it or set 'initial:' to one of {', '.join(names)}"
+            f"{_Lines(lines, ()).at('initial')}initial state {model.initial!r} is not defined"
+            f"{suggest(model.initial, names)}; fix: define it or set 'initial:' to one of {', '.join(names)}"
         )
     if problems:
         raise ConfigError(problems, source=source)
@@ -202,7 +212,7 @@ def build_machine(
     for leaf in machine.leaves():
         if machine.lookup(leaf.name, ABORTED) is None:
             problems.append(
-                f"state {leaf.name!r}: no 'aborted' transition (needed when its module fails or "
+                f"{where(states, leaf.name)}state {leaf.name!r}: no 'aborted' transition (needed when its module fails or "
                 "cannot be reached); fix: add 'aborted: idle' to its transitions or to a superstate's"
             )
     if check is not None:
@@ -211,11 +221,38 @@ def build_machine(
         raise ConfigError(problems, source=source)
     reachable = machine.reachable()
     warnings = [
-        f"{source}: state {name!r} is unreachable from {model.initial!r}: no transition leads to it"
+        f"{source}: {where(states, name)}state {name!r} is unreachable from {model.initial!r}: "
+        "no transition leads to it"
         for name in names
         if name not in reachable
     ]
     return machine, warnings
+
+
+@dataclass(frozen=True)
+class _Lines:
+    """``"line N: "`` for a part of the machine's file, from its keys' lines (empty when unknown)."""
+
+    lines: dict[tuple[str, ...], int]
+    prefix: tuple[str, ...]
+
+    def at(self, *path: str) -> str:
+        """The line of the deepest key of ``prefix + path`` that the file has."""
+        full = (*self.prefix, *path)
+        for end in range(len(full), 0, -1):
+            if (line := self.lines.get(full[:end])) is not None:
+                return f"line {line}: "
+        return ""
+
+    def of_state(self, states: dict[str, StateSpec], name: str, *rest: str) -> str:
+        """The line of ``rest`` inside state ``name`` (nested under its superstates)."""
+        chain: list[str] = []
+        current: str | None = name
+        while current is not None and current in states and current not in chain:
+            chain.append(current)
+            current = states[current].parent
+        path = [part for state in reversed(chain) for part in ("states", state)]
+        return self.at(*path, *rest)
 
 
 def _flatten(
@@ -223,31 +260,33 @@ def _flatten(
     parent: str | None,
     out: dict[str, StateSpec],
     problems: list[str],
+    lines: _Lines,
 ) -> None:
     for name, model in states.items():
+        at = _Lines(lines.lines, (*lines.prefix, "states", name)).at
         if name in out:
             first = out[name].parent
             places = [f"inside {p!r}" if p else "at the top level" for p in (first, parent)]
             problems.append(
-                f"state {name!r}: defined twice, {places[0]} and {places[1]}; "
+                f"{at()}state {name!r}: defined twice, {places[0]} and {places[1]}; "
                 "fix: state names must be unique across all levels, rename one"
             )
             continue
         children = tuple(model.states or ())
         if model.action is not None and children:
             problems.append(
-                f"state {name!r}: has both an action and substates; fix: a state is either served "
+                f"{at()}state {name!r}: has both an action and substates; fix: a state is either served "
                 "by a module (action) or groups substates (states), move the action into a substate"
             )
         if model.action is None and not children:
             problems.append(
-                f"state {name!r}: has no action; fix: add 'action: <module>/<server>' naming the "
+                f"{at()}state {name!r}: has no action; fix: add 'action: <module>/<server>' naming the "
                 "module's action server"
             )
         initial = model.initial
         if initial is not None and not children:
             problems.append(
-                f"state {name!r}: sets initial {initial!r} but has no substates; fix: remove 'initial:' "
+                f"{at()}state {name!r}: sets initial {initial!r} but has no substates; fix: remove 'initial:' "
                 "(only a superstate, one with 'states:', has an initial substate)"
             )
         if children and initial is None:
@@ -263,4 +302,4 @@ def _flatten(
             description=model.description,
         )
         if model.states:
-            _flatten(model.states, name, out, problems)
+            _flatten(model.states, name, out, problems, _Lines(lines.lines, (*lines.prefix, "states", name)))
