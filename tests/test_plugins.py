@@ -9,6 +9,7 @@ launch file `cyborg launch --write` all find it through its entry point.
 from __future__ import annotations
 
 import json
+import random
 import subprocess
 import sys
 from pathlib import Path
@@ -227,6 +228,43 @@ def test_a_scenario_runs_the_installed_module(site: Path, tmp_path: Path) -> Non
     assert ("greeting", "greeting_heard") in states and states[-1][0] == "idle"
     said = [r["text"] for r in records if r["type"] == "say"]
     assert said == ["Good morning, student!"], "the reply passed the speech gatekeeper"
+
+
+@pytest.mark.e2e  # pip-installs a package; runs a ROS 2 graph from .venv-ros2
+def test_a_scenario_over_ros2_runs_the_module_installed_once_in_the_main_venv(
+    site: Path, tmp_path: Path
+) -> None:
+    """One install for every transport: the student installs the greeter into the main venv only
+    (here: its folder on this venv's path) and runs the scenario over ROS 2 from the same shell;
+    the command hands over to .venv-ros2, whose nodes find the greeter there."""
+    config = tmp_path / "greeter.yaml"
+    config.write_text(CONFIG)
+    script = tmp_path / "morning.yaml"
+    script.write_text(SCRIPT)
+    transcript = tmp_path / "out.jsonl"
+    env = {
+        **tools.pythonpath(site),
+        "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
+        "ROS_DOMAIN_ID": str(random.randint(101, 200)),
+        "ROS_LOG_DIR": str(tmp_path / "log"),
+    }
+    args = ("sim", "--ros2", "--config", config, "--script", script, "--speed", "10")
+    result = tools.cyborg(
+        *args,
+        "--transcript",
+        transcript,
+        "--db",
+        tmp_path / "data",
+        env=env,
+        cwd=tmp_path,
+        timeout=300,
+        script=True,
+    )
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+    records = [json.loads(line) for line in transcript.read_text().splitlines()]
+    states = [(r["to"], r.get("event")) for r in records if r["type"] == "state"]
+    assert ("greeting", "greeting_heard") in states, states
+    assert "Good morning, student!" in [r["text"] for r in records if r["type"] == "say"]
 
 
 @pytest.mark.e2e  # pip-installs a package

@@ -184,7 +184,10 @@ class Ros2Transport(Transport):
                     return
                 # Also seen: rclpy building its wait set while an action client or server is
                 # destroyed ("action client pointer is invalid"); the next turn goes without it.
-                log.warning(
+                # While the process closes its nodes that is expected ("cannot use Destroyable
+                # because destruction was requested"): a debug line, not a warning on the terminal.
+                log.log(
+                    logging.DEBUG if self._closed else logging.WARNING,
                     "the ROS 2 executor raised (%s); it spins on",
                     exc,
                     exc_info=log.isEnabledFor(logging.DEBUG),
