@@ -61,6 +61,7 @@ def test_the_package_holds_what_a_student_needs(greeter: tuple[Path, Path]) -> N
         "scenario.yaml",
         "src/greeter/__init__.py",
         "src/greeter/module.py",
+        "src/greeter/rclpy_node.py",
         "src/greeter/rospy_node.py",
         "tests/test_module.py",
     ]
