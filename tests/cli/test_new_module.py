@@ -61,6 +61,7 @@ def test_the_package_holds_what_a_student_needs(greeter: tuple[Path, Path]) -> N
         "scenario.yaml",
         "src/greeter/__init__.py",
         "src/greeter/module.py",
+        "src/greeter/rclpy_node.py",
         "src/greeter/rospy_node.py",
         "tests/test_module.py",
     ]
@@ -74,6 +75,7 @@ def test_its_own_test_passes_and_every_command_knows_the_kind(greeter: tuple[Pat
     tests = run(site, sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "tests", cwd=folder)
     assert tests.returncode == 0, tests.stdout + tests.stderr
     assert "3 passed" in tests.stdout
+    assert "Warning" not in tests.stdout + tests.stderr, tests.stdout + tests.stderr  # e.g. pytest-asyncio's
     kinds = run(site, CYBORG_SCRIPT, "kinds", cwd=folder)
     assert "greeter" in kinds.stdout and "cyborg-greeter 0.1.0" in kinds.stdout
     valid = run(site, CYBORG_SCRIPT, "validate", "robot.yaml", cwd=folder)

@@ -2,8 +2,8 @@
 
 It writes, from the templates in ``cyborg/data/templates/module``: the module with its kind
 registered as an entry point, a test that uses :mod:`cyborg.testing` and passes, the same
-module as a plain rospy node, a small robot YAML with the block to add, and a scenario with
-``expect`` steps. ``pip install -e`` of the folder makes the kind known to every command.
+module as a plain rospy node and as a plain rclpy node, a small robot YAML with the block to
+add, and a scenario with ``expect`` steps. ``pip install -e`` of the folder makes the kind known to every command.
 """
 
 from __future__ import annotations

@@ -163,10 +163,13 @@ class RosActionServer(ActionServer[G, R, F]):
         self._transport.to_loop(self._on_cancel, self._wrap(ros_handle))
 
     def shutdown(self) -> None:
-        for attribute in ("status_pub", "result_pub", "feedback_pub"):
-            publisher = getattr(self._server, attribute, None)
-            if publisher is not None:
-                publisher.unregister()
+        """Leave the graph quietly: first stop hearing goals and cancels, then stop publishing.
+
+        A node going down with its client (Ctrl-C to a launch) still gets a cancel or two: rospy
+        may be running one on its threads while we unregister. actionlib would answer it with a
+        status on a closed topic ("publish() to a closed topic", a traceback in the terminal),
+        so from here on its server publishes nothing.
+        """
         for attribute in ("goal_sub", "cancel_sub"):
             subscriber = getattr(self._server, attribute, None)
             if subscriber is not None:
@@ -174,6 +177,16 @@ class RosActionServer(ActionServer[G, R, F]):
         timer = getattr(self._server, "status_timer", None)
         if timer is not None:
             timer.shutdown()
+        for method in ("publish_status", "publish_result", "publish_feedback"):
+            setattr(self._server, method, _publish_nothing)
+        for attribute in ("status_pub", "result_pub", "feedback_pub"):
+            publisher = getattr(self._server, attribute, None)
+            if publisher is not None:
+                publisher.unregister()
+
+
+def _publish_nothing(*args: object) -> None:
+    """What a shut-down actionlib server publishes (its publishers are closed)."""
 
 
 # --- the client side ----------------------------------------------------------------------

@@ -1,0 +1,72 @@
+"""A ROS 1 ``cyborg launch`` that is stopped normally says goodbye without a traceback.
+
+Ctrl-C in the launch's terminal sends SIGINT to the launch and to every node it started (one
+process group); a ``kill`` sends it to the launch alone, which stops its nodes. Either way what
+the terminal shows on the way down is the nodes stopping, not "Traceback" (rospy's "publish()
+to a closed topic", a motivator decision that failed while the node went down).
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from cyborg.transport.messages import StateMachineAction
+from tests.support.ros import Observers, Processes, RosSession, yaml_path
+
+CONFIG = yaml_path("quiet_stop.yaml")
+
+
+@pytest.mark.parametrize(
+    ("group", "signum"),
+    [(True, signal.SIGINT), (False, signal.SIGINT), (False, signal.SIGTERM)],
+    ids=["ctrl-c", "sigint-to-launch", "sigterm-to-launch"],
+)
+def test_a_launch_stopped_normally_prints_no_traceback(
+    processes: Processes, observe: Observers, tmp_path: Path, group: bool, signum: signal.Signals
+) -> None:
+    changes = observe.state_changes()
+    parts = ("cyborg_controller", "cyborg_idle")
+    only = [arg for part in parts for arg in ("--only", part)]
+    command = [sys.executable, "-m", "cyborg.cli", "launch", "--config", str(CONFIG), "--db", str(tmp_path)]
+    launch = processes.start(
+        "cyborg_launch",
+        [*command, *only],
+        "launched 2 nodes",
+        env={**os.environ, "ROS_HOME": str(tmp_path / "ros_home")},
+        new_session=True,
+    )
+    processes.wait_ready(launch, timeout=60)
+    changes.wait_state("idle", event="start", timeout=60)
+    time.sleep(2.0)  # the motivator decides and the idle goal runs: the robot is busy as usual
+    if group:
+        os.killpg(launch.pid, signum)
+    else:
+        launch.process.send_signal(signum)
+    assert launch.process.wait(timeout=30) == 0, launch.log()[-3000:]
+    log = launch.log()
+    assert "Traceback" not in log, log[-5000:]
+    assert "Exception" not in log, log[-5000:]
+
+
+def test_an_action_server_that_shut_down_answers_a_late_cancel_without_publishing(ros: RosSession) -> None:
+    """The race behind the launch's tracebacks, made certain: rospy runs a cancel (the stopping
+    controller's) on its thread after the server began to shut down; actionlib answers it with a
+    status. Before, that was "publish() to a closed topic" and a traceback in the terminal."""
+    node = ros.transport.node("cyborg_test_quiet_server")
+    server: Any = node.action_server(
+        "/cyborg_test_quiet_server/act", StateMachineAction, lambda handle: None, lambda handle: None
+    )
+    try:
+        server.shutdown()
+        server._server.publish_status()  # what actionlib's cancel callback and status timer do
+        server._server.publish_result(None, None)
+        server._server.publish_feedback(None, None)
+    finally:
+        node.shutdown()
