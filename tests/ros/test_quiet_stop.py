@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import signal
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -18,9 +19,11 @@ from typing import Any
 import pytest
 
 from cyborg.transport.messages import StateMachineAction
+from tests.support.paths import SCENARIOS
 from tests.support.ros import Observers, Processes, RosSession, yaml_path
 
 CONFIG = yaml_path("quiet_stop.yaml")
+SCENARIO_D = SCENARIOS / "scenario_d.yaml"
 
 
 @pytest.mark.parametrize(
@@ -53,6 +56,20 @@ def test_a_launch_stopped_normally_prints_no_traceback(
     log = launch.log()
     assert "Traceback" not in log, log[-5000:]
     assert "Exception" not in log, log[-5000:]
+
+
+def test_a_scripted_run_over_ros_in_simulated_time_ends_without_a_traceback(
+    ros: RosSession, tmp_path: Path
+) -> None:
+    """At the end of a script the launch stops every node; in simulated time the motivator ticks
+    often, and a tick that came after its node's publishers were gone printed "the motivator's
+    decision failed" with a traceback at every stop. A node now closes its part first."""
+    command = [sys.executable, "-m", "cyborg.cli", "sim", "--ros", "--script", str(SCENARIO_D)]
+    command += ["--speed", "25", "--db", str(tmp_path / "data")]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    output = done.stdout + done.stderr
+    assert done.returncode == 0, output[-3000:]
+    assert "Traceback" not in output and "failed" not in output, output[-5000:]
 
 
 def test_an_action_server_that_shut_down_answers_a_late_cancel_without_publishing(ros: RosSession) -> None:

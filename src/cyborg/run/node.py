@@ -89,9 +89,12 @@ class BuiltNode:
     stats_publisher: Publisher[String] | None = None
 
     def close(self) -> None:
-        """Leave the graph and stop the clock."""
-        self.transport.close()
-        self.clock.close()
+        """Close the part (its periodic work stops before its publishers go), leave the graph, stop the clock."""
+        try:
+            self.part.close()
+        finally:
+            self.transport.close()
+            self.clock.close()
 
 
 def run_node(name: str, options: NodeOptions, middleware: Middleware) -> int:
