@@ -85,7 +85,10 @@ def test_cyborg_validate_prints_the_warnings_and_still_says_valid(tmp_path: Path
     assert result.exit_code == 0, result.output
     assert "warning: line 12: state 'joke': no module in this file serves its action" in result.output
     assert "resource 'speech' goes to 'greeter', which is no module's node" in result.output
-    assert f"{path}: valid" in result.output
+    assert f"{path}: valid" in result.output and "warning(s) above" in result.output
+    strict = CliRunner().invoke(cli, ["validate", "--strict", str(path)])
+    assert strict.exit_code == 1, strict.output
+    assert "warning(s) with --strict" in strict.output and f"{path}: valid" not in strict.output
 
 
 TIME_TELLER_MACHINE = """

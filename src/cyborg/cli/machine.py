@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import click
@@ -14,11 +15,13 @@ __all__ = ["graph", "kinds", "validate"]
 
 @click.command()
 @click.argument("file", type=click.Path(path_type=Path))
-def validate(file: Path) -> None:
+@click.option("--strict", is_flag=True, help="warnings count as problems: exit 1 when there is one")
+def validate(file: Path, strict: bool) -> None:
     """Check a state machine YAML FILE; exit 0 if valid, 1 with the problems otherwise.
 
     With a modules: section it also warns about the robot as a whole: states no module serves,
-    resources granted to no module's node, and modules listening for the same phrase."""
+    resources granted to no module's node, events no state takes, speech without a grant, and
+    modules listening for the same phrase. Warnings leave the exit code 0 unless --strict."""
     from cyborg.app.checks import robot_warnings
     from cyborg.app.registry import module_kinds
 
@@ -32,7 +35,15 @@ def validate(file: Path) -> None:
     for warning in warnings:
         click.secho(f"warning: {warning}", fg="yellow", err=True)
     leaves = len(loaded.machine.leaves())
-    click.echo(f"{file}: valid ({leaves} states, initial {loaded.machine.initial!r})")
+    if strict and warnings:
+        click.secho(
+            f"{file}: {len(warnings)} warning(s) with --strict; fix: what each says, or drop --strict",
+            fg="red",
+            err=True,
+        )
+        sys.exit(1)
+    note = f", {len(warnings)} warning(s) above" if warnings else ""
+    click.echo(f"{file}: valid ({leaves} states, initial {loaded.machine.initial!r}{note})")
 
 
 @click.command()
