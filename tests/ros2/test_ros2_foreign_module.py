@@ -137,9 +137,30 @@ class World:
         return sum(1 for h in heard if h.text.startswith(prefix) and h.sender == sender and h.at >= since)
 
 
+FOREIGN_NODE = "cyborg_foreign"
+
+
+def wait_until_the_graph_lost(request: pytest.FixtureRequest, name: str) -> None:
+    """Wait (up to PATIENCE) until no node ``name`` is left in the graph from an earlier test.
+
+    A node that appears while the graph still holds a node of its name from a process just
+    stopped shares the name with it, and the old one's removal takes the new one's publishers
+    with it: the graph names their node _NODE_NAME_UNKNOWN_ for good, so their messages have no
+    sender and the gatekeeper drops them all (seen under load in a full run: "speech passes"
+    timed out). Our own nodes wait for this when they are dropped; a foreign process cannot.
+    """
+    transport = ros2_session(request.config).transport
+    probe = transport._graph_probe()
+    deadline = time.monotonic() + PATIENCE
+    while any(node == name for node, _ in probe.get_node_names_and_namespaces()):
+        assert time.monotonic() < deadline, f"node {name} still in the graph after {PATIENCE:g} s"
+        time.sleep(0.02)
+
+
 @pytest.fixture
-def foreign() -> Iterator[Process]:
+def foreign(request: pytest.FixtureRequest) -> Iterator[Process]:
     isolate()
+    wait_until_the_graph_lost(request, FOREIGN_NODE)
     module = Process([sys.executable, str(HERE / "foreign_module.py")])
     try:
         yield module
