@@ -22,6 +22,7 @@ from cyborg.web.access import TOKEN_ENV, Access, allowed_origins
 
 if TYPE_CHECKING:
     from cyborg.app.config import LoadedConfig
+    from cyborg.run.middleware import Middleware
 
 DEFAULT_CONFIG = "cyborg.yaml"
 
@@ -204,3 +205,21 @@ def access_options(command: Callable[..., None]) -> Callable[..., None]:
         command(*args, access=Access(token=token, allowed_origins=allow_origin), **kwargs)
 
     return wrapper
+
+
+def middleware_for(wants_ros2: bool) -> Middleware:
+    """The middleware a command's ``--ros2`` flag picks: ROS 2 with it, ROS 1 without."""
+    from cyborg.run.middleware import ROS1, ROS2
+
+    return ROS2 if wants_ros2 else ROS1
+
+
+def ros2_option(help: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """``--ros2``: the command receives ``middleware`` (:func:`middleware_for`) instead of a flag."""
+    return click.option(
+        "--ros2",
+        "middleware",
+        is_flag=True,
+        callback=lambda ctx, param, value: middleware_for(value),
+        help=help,
+    )

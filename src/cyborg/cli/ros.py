@@ -26,6 +26,7 @@ from cyborg.cli.common import (
     fail,
     load_or_default,
     map_option,
+    ros2_option,
 )
 from cyborg.errors import CyborgError
 from cyborg.web.access import Access
@@ -80,13 +81,7 @@ _speed_help = "virtual time at this factor of real time (all nodes share one clo
     "without it a controller restarted after a crash resumes an emotion stored within "
     "resume_within_seconds",
 )
-@click.option(
-    "--ros2",
-    "middleware",
-    is_flag=True,
-    callback=lambda ctx, param, value: _middleware(value),
-    help="a ROS 2 node (rclpy, .venv-ros2; no master), with use_sim_time under --speed",
-)
+@ros2_option("a ROS 2 node (rclpy, .venv-ros2; no master), with use_sim_time under --speed")
 @access_options
 def node(
     name: str,
@@ -159,12 +154,8 @@ def node(
     "--speed", type=float, default=None, callback=check_factor, help=_speed_help + "; sets /use_sim_time"
 )
 @click.option("--start", "start_at", default=None, help="with --speed: virtual start, ISO date-time (UTC)")
-@click.option(
-    "--ros2",
-    "middleware",
-    is_flag=True,
-    callback=lambda ctx, param, value: _middleware(value),
-    help="ROS 2 nodes (rclpy, .venv-ros2): no master is started; with --speed each node sets use_sim_time",
+@ros2_option(
+    "ROS 2 nodes (rclpy, .venv-ros2): no master is started; with --speed each node sets use_sim_time"
 )
 @duration_option
 def launch_command(
@@ -221,13 +212,6 @@ def launch_command(
         launch(robot, duration=duration)
     except CyborgError as exc:
         fail(exc)
-
-
-def _middleware(flag: bool) -> Middleware:
-    """``--ros2`` (``flag``) picks ROS 2; without it, ROS 1."""
-    from cyborg.run.middleware import ROS1, ROS2
-
-    return ROS2 if flag else ROS1
 
 
 def parse_epoch(value: str | None) -> float | str | None:

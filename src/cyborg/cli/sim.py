@@ -17,6 +17,7 @@ from cyborg.cli.common import (
     fail,
     load_or_default,
     map_option,
+    middleware_for,
     os_problem,
     parse_speed,
 )
@@ -121,7 +122,7 @@ def sim(
                 script_path,
                 transcript_path,
                 map_path,
-                middleware=_middleware(over_ros2),
+                middleware=middleware_for(over_ros2),
             )
             return
         if script_path is not None:
@@ -154,12 +155,6 @@ def sim(
 
 MIC_MODULE = "cyborg_speech_input"
 """The module ``cyborg sim --mic`` adds (unless the configuration has one of that name)."""
-
-
-def _middleware(over_ros2: bool) -> Middleware:
-    from cyborg.run.middleware import ROS1, ROS2
-
-    return ROS2 if over_ros2 else ROS1
 
 
 def _ros_speed(speed: str | None) -> float | None:

@@ -63,10 +63,10 @@ def link_options(command: Callable[..., None]) -> Callable[..., None]:
         if over_ros and over_ros2:
             raise click.UsageError("--ros and --ros2 exclude each other: the robot runs on one of them")
         if over_ros or over_ros2:
+            from cyborg.cli.common import middleware_for
             from cyborg.client.ros import RosLink
-            from cyborg.run.middleware import ROS1, ROS2
 
-            middleware = ROS2 if over_ros2 else ROS1
+            middleware = middleware_for(over_ros2)
             try:
                 middleware.enter()  # ROS 2 in the main venv: returns only in a Python that has rclpy
                 link = RosLink(middleware)

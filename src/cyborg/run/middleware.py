@@ -112,8 +112,6 @@ class Middleware(ABC):
 
     name: ClassVar[str]
     """``ROS 1`` or ``ROS 2``, for messages."""
-    option: ClassVar[str]
-    """The command-line flag that picks it: ``--ros`` or ``--ros2``."""
     graph_setting: ClassVar[str]
     """The environment variable that says which graph a process joins."""
     base_api: ClassVar[BaseApi]
@@ -171,7 +169,6 @@ class Ros1(Middleware):
     """ROS 1 (rospy from Debian's packages, ``scripts/install-ros``): a master, latched topics."""
 
     name = "ROS 1"
-    option = "--ros"
     graph_setting = "ROS_MASTER_URI"
     base_api = BaseApi.ROSARNL
     discovers_late = False
@@ -219,7 +216,6 @@ class Ros2(Middleware):
     """ROS 2 (rclpy from pinned wheels in ``.venv-ros2``, ``scripts/install-ros2``): no master."""
 
     name = "ROS 2"
-    option = "--ros2"
     graph_setting = "ROS_DOMAIN_ID"
     base_api = BaseApi.NAV2
     discovers_late = True

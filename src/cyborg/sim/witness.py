@@ -40,6 +40,8 @@ class Witness:
         self.notes: deque[Note] = deque(maxlen=NOTES_KEPT)
         self.state: str | None = None  # the active state, as the last state record told it
         self._transitions: dict[str, list[str]] | None = None
+        self._events: deque[tuple[float, str, str, str]] = deque(maxlen=NOTES_KEPT)
+        """(time, event, sender, the state it was sent in), judged only when a failure is told."""
         node.subscribe(topics.REGISTER_EVENT, String, self._on_event, queue_size=1000)
         node.subscribe(topics.GATEKEEPER_DROPPED, String, self._on_drop, queue_size=1000)
         node.subscribe(topics.MODULE_CRASHED, String, self._on_crash, queue_size=100)
@@ -51,23 +53,36 @@ class Witness:
         self.notes.append(Note(self.now(), text))
 
     def since(self, t: float) -> list[Note]:
-        """The notes from ``t`` on (seconds since the run started)."""
-        return [note for note in self.notes if note.t >= t]
+        """The notes from ``t`` on (seconds since the run started), the dropped events among them.
+
+        Only here, when a failure is told, are the controller's transitions read (a parameter,
+        a blocking call over ROS): while the run goes on, the witness only writes events down,
+        so it never holds up the loop that stamps the transcript's records."""
+        dropped = [
+            note
+            for t_, name, sender, state in self._events
+            if t_ >= t
+            if (note := self._dropped(t_, name, sender, state))
+        ]
+        return sorted([*(note for note in self.notes if note.t >= t), *dropped], key=lambda note: note.t)
 
     def on_record(self, record: Record) -> None:
         if record.get("type") == "state":
             self.state = str(record.get("to"))
 
     def _on_event(self, message: String, info: MessageInfo) -> None:
-        name, state = message.data.strip(), self.state
-        if state is None:
-            return
+        if self.state is not None:
+            self._events.append((self.now(), message.data.strip(), info.sender, self.state))
+
+    def _dropped(self, t: float, name: str, sender: str, state: str) -> Note | None:
         transitions = self._transitions_of(state)
-        if transitions is not None and name not in transitions:
-            self.note(
-                f"event {name!r} from {info.sender} was dropped by the controller: it is no "
-                f"transition of {state!r} (its events: {', '.join(transitions) or 'none'})"
-            )
+        if transitions is None or name in transitions:
+            return None
+        return Note(
+            t,
+            f"event {name!r} from {sender} was dropped by the controller: it is no transition of "
+            f"{state!r} (its events: {', '.join(transitions) or 'none'})",
+        )
 
     def _transitions_of(self, state: str) -> list[str] | None:
         if self._transitions is None:
