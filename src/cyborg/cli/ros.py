@@ -26,6 +26,7 @@ from cyborg.cli.common import (
     fail,
     load_or_default,
     map_option,
+    parse_speed,
     ros2_option,
 )
 from cyborg.errors import CyborgError
@@ -61,6 +62,13 @@ _speed_help = "virtual time at this factor of real time (all nodes share one clo
 )
 @click.option("--start", "start_at", default=None, help="with --speed: virtual start, ISO date-time (UTC)")
 @click.option(
+    "--lockstep",
+    "lockstep",
+    default=None,
+    metavar="HOST:PORT",
+    help="virtual time granted by the lockstep time server of `cyborg launch --speed max` (instead of --speed)",
+)
+@click.option(
     "--publish-clock/--no-publish-clock",
     default=None,
     help="with --speed: publish /clock (default: when NAME is a simulated base)",
@@ -94,6 +102,7 @@ def node(
     speed: float | None,
     epoch: str | None,
     start_at: str | None,
+    lockstep: str | None,
     publish_clock: bool | None,
     script_path: Path | None,
     transcript_path: Path | None,
@@ -114,7 +123,7 @@ def node(
 
     if speed is not None and speed <= 0:
         raise click.BadParameter(f"{speed!r} must be positive", param_hint="--speed")
-    sim_time = SimTime(speed=speed, epoch=parse_epoch(epoch), start=parse_start(start_at))
+    sim_time = SimTime(speed=speed, epoch=parse_epoch(epoch), start=parse_start(start_at), lockstep=lockstep)
     try:
         options = NodeOptions(
             # the part checks its own module's settings, loading only its kind
@@ -151,7 +160,9 @@ def node(
     help="write a roslaunch file instead of launching",
 )
 @click.option(
-    "--speed", type=float, default=None, callback=check_factor, help=_speed_help + "; sets /use_sim_time"
+    "--speed",
+    default=None,
+    help=_speed_help + ", or 'max': as fast as every node allows, in lockstep; sets /use_sim_time",
 )
 @click.option("--start", "start_at", default=None, help="with --speed: virtual start, ISO date-time (UTC)")
 @ros2_option(
@@ -165,7 +176,7 @@ def launch_command(
     port: int,
     only: tuple[str, ...],
     write_path: Path | None,
-    speed: float | None,
+    speed: str | None,
     start_at: str | None,
     middleware: Middleware,
     duration: float | None,
@@ -173,7 +184,9 @@ def launch_command(
     """Start the whole robot over ROS 1 (a master if none runs) or ROS 2 (--ros2), a process a part.
 
     With --speed N every node runs in virtual time at N times real time from one shared origin,
-    /use_sim_time is set and the simulated base publishes /clock. With --ros2 the parts are ROS 2
+    /use_sim_time is set and the simulated base publishes /clock. With --speed max the time moves
+    in lockstep: to the next timer of any node once every node is idle and every message sent has
+    arrived, so a run is as fast as its work and repeats exactly. With --ros2 the parts are ROS 2
     nodes (no master; each node's use_sim_time parameter is set instead).
     """
     from cyborg.run.local import default_data_dir
@@ -181,8 +194,9 @@ def launch_command(
     from cyborg.run.roslaunch import all_parts, roslaunch_xml
     from cyborg.run.supervisor import Launch, launch
 
-    if speed is not None and speed <= 0:
-        raise click.BadParameter(f"{speed!r} must be positive", param_hint="--speed")
+    parsed = parse_speed(speed)
+    lockstep = parsed is None
+    factor = None if parsed is None or parsed == "real" else float(parsed)
     start = parse_start(start_at)
 
     try:
@@ -207,7 +221,16 @@ def launch_command(
             click.echo(f"wrote {write_path}")
             return
         robot = Launch(
-            path, config, parts, folder, map_path, port, speed=speed, start=start, middleware=middleware
+            path,
+            config,
+            parts,
+            folder,
+            map_path,
+            port,
+            speed=factor,
+            lockstep=lockstep,
+            start=start,
+            middleware=middleware,
         )
         launch(robot, duration=duration)
     except CyborgError as exc:

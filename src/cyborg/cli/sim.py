@@ -157,16 +157,12 @@ MIC_MODULE = "cyborg_speech_input"
 """The module ``cyborg sim --mic`` adds (unless the configuration has one of that name)."""
 
 
-def _ros_speed(speed: str | None) -> float | None:
-    """--speed over ROS: real time (None) or a factor; 'max' has no meaning across processes."""
+def _ros_speed(speed: str | None) -> tuple[float | None, bool]:
+    """--speed over ROS: real time (None), a factor, or 'max' (lockstep: the second value)."""
     parsed = parse_speed(speed)
     if parsed is None:
-        raise click.BadParameter(
-            "'max' needs one process; over ROS the nodes share a clock running at a fixed speed: "
-            "use e.g. --speed 20",
-            param_hint="--speed",
-        )
-    return None if parsed == "real" else float(parsed)
+        return None, True
+    return (None if parsed == "real" else float(parsed)), False
 
 
 def _sim_over_ros(
@@ -186,7 +182,7 @@ def _sim_over_ros(
     from cyborg.run.scenario import run_scenario_ros
     from cyborg.run.supervisor import Launch, launch
 
-    factor = _ros_speed(speed)
+    factor, lockstep = _ros_speed(speed)
     config_path = Path(config.source).resolve()
     if script_path is None:
         if transcript_path is not None:
@@ -200,6 +196,7 @@ def _sim_over_ros(
             map_path,
             port,
             speed=factor,
+            lockstep=lockstep,
             middleware=middleware,
         )
         launch(robot, duration=duration)
@@ -209,7 +206,7 @@ def _sim_over_ros(
         config,
         script_path,
         transcript_path=transcript_path.resolve() if transcript_path else None,
-        speed=factor or 1.0,
+        speed=None if lockstep else factor or 1.0,
         data_dir=data_dir.resolve() if data_dir else None,
         map_path=map_path.resolve() if map_path else None,
         echo=True,

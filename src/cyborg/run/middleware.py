@@ -90,9 +90,10 @@ class LaunchGraph(ABC):
     """What a launch does to the graph around its nodes: prepare it, keep it up, put it back."""
 
     @abstractmethod
-    def open(self, speed: float | None) -> tuple[Rendezvous | None, str | None]:
-        """Prepare the graph for nodes in virtual time at ``speed`` (None: real time); return
-        where the nodes meet to agree on the origin, and the ``--epoch`` argument naming it."""
+    def open(self, speed: float | None, *, lockstep: bool = False) -> tuple[Rendezvous | None, str | None]:
+        """Prepare the graph for nodes in virtual time at ``speed`` (None: real time, unless
+        ``lockstep``: granted time, which needs no origin); return where the nodes meet to agree
+        on the origin, and the ``--epoch`` argument naming it."""
 
     def keep_up(self) -> None:
         """Start again what the launch started and what has stopped (called while it supervises)."""
@@ -283,18 +284,24 @@ class _Ros1Graph(LaunchGraph):
         self.master: subprocess.Popen[bytes] | None = None
         self.namespace: str | None = None
         self.speed: float | None = None
+        self.lockstep = False
         self.epoch: float | None = None
         self._saved_sim_time: Any = None
         self._touched_sim_time = False
 
-    def open(self, speed: float | None) -> tuple[Rendezvous | None, str | None]:
+    def open(self, speed: float | None, *, lockstep: bool = False) -> tuple[Rendezvous | None, str | None]:
         require_ros()
         self.speed = speed
+        self.lockstep = lockstep
         if not master_running():
             self.master = start_master(self._port(), self.data_dir / "ros")
             self.say(f"started roscore at {master_uri()}")
         master = Master()
         self._saved_sim_time = master.get(USE_SIM_TIME) if master.has(USE_SIM_TIME) else None
+        if lockstep:
+            master.set(USE_SIM_TIME, True)
+            self._touched_sim_time = True
+            return None, None
         if speed is not None:
             self.namespace = f"{SIM_PARAMS}/run_{uuid.uuid4().hex[:12]}"
             master.set(USE_SIM_TIME, True)
@@ -321,7 +328,7 @@ class _Ros1Graph(LaunchGraph):
         )
         self.master = start_master(self._port(), self.data_dir / "ros")
         master = Master()
-        if self.speed is not None:  # a new master holds no parameters: ours again, for nodes started later
+        if self.speed is not None or self.lockstep:  # a new master holds no parameters: ours again
             master.set(USE_SIM_TIME, True)
             if self.epoch is not None:
                 master.set(f"{self.namespace}/epoch", self.epoch)
@@ -353,7 +360,7 @@ class _Ros2Graph(LaunchGraph):
     def __init__(self) -> None:
         self.run_dir: Path | None = None
 
-    def open(self, speed: float | None) -> tuple[Rendezvous | None, str | None]:
+    def open(self, speed: float | None, *, lockstep: bool = False) -> tuple[Rendezvous | None, str | None]:
         ros2_python()  # says how to install ROS 2 when it is not
         if speed is None:
             return None, None

@@ -33,6 +33,7 @@ from cyborg.run.simtime import CLOCK_TOPIC, SimTime, is_simulated_base, publish_
 from cyborg.transport import topics
 from cyborg.transport.base import Publisher, Transport
 from cyborg.transport.clock import Clock, VirtualClock
+from cyborg.transport.lockstep import LockstepClock
 from cyborg.transport.messages import Clock as ClockMessage
 from cyborg.transport.messages import String
 from cyborg.web.access import DEFAULT_PORT, Access
@@ -163,6 +164,9 @@ def await_start(node: BuiltNode, sim_time: SimTime) -> bool:
         )
     clock = node.clock
     try:
+        if isinstance(clock, LockstepClock):
+            clock.join(node.name)  # returns once every node of the launch has joined
+            return True
         rendezvous = sim_time.rendezvous
         if rendezvous is not None:
             assert isinstance(clock, VirtualClock)
@@ -181,7 +185,11 @@ async def serve_node(node: BuiltNode, options: NodeOptions) -> int:
     for sig in (signal.SIGINT, signal.SIGTERM):
         loop.add_signal_handler(sig, stop.set)
     background: list[asyncio.Task[None]] = []
-    if node.clock_publisher is not None:
+    if node.clock_publisher is not None and isinstance(node.clock, LockstepClock):
+        clock, clock_publisher = node.clock, node.clock_publisher
+        clock.on_advance.append(lambda: clock_publisher.publish(ClockMessage(clock.now())))
+        clock_publisher.publish(ClockMessage(clock.now()))
+    elif node.clock_publisher is not None:
         assert isinstance(node.clock, VirtualClock)
         background.append(loop.create_task(publish_clock(node.clock_publisher, node.clock), name="clock"))
     controller = node.part.controller

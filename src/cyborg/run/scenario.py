@@ -26,6 +26,7 @@ from cyborg.errors import CyborgError
 from cyborg.run.middleware import ROS1, Middleware
 from cyborg.run.simtime import READY_TIMEOUT
 from cyborg.run.supervisor import Launch
+from cyborg.sim.transcript import TranscriptWriter
 from cyborg.transport.base import Node
 from cyborg.transport.clock import VirtualClock
 from cyborg.transport.messages import String
@@ -58,8 +59,10 @@ class ScenarioNode:
         # With a transcript file the records go there as they come and none is kept (flat memory).
         self.driver = ScenarioDriver(node, self.script, keep_records=files.transcript is None)
         self._out: IO[str] | None = None
+        self._writer: TranscriptWriter | None = None
         if files.transcript is not None:
             self._out = files.transcript.open("w", encoding="utf-8")
+            self._writer = TranscriptWriter(self._out)
             self.driver.listeners.append(self._write)
         # Before reporting ready: wait until the robot listens, so the first steps (and the
         # script's starting emotion) reach it. (Our own RecordStream is one of the listeners to
@@ -73,13 +76,16 @@ class ScenarioNode:
                 time.sleep(0.02)
 
     def _write(self, record: dict[str, Any]) -> None:
-        assert self._out is not None
-        self._out.write(json.dumps(record) + "\n")
-        self._out.flush()
+        assert self._out is not None and self._writer is not None
+        if self._out.closed:
+            return  # the script has ended: what still comes is after its end
+        self._writer.write(record)
 
     def close(self) -> None:
         """Close the transcript (what was written stays)."""
         if self._out is not None and not self._out.closed:
+            assert self._writer is not None
+            self._writer.close()
             self._out.close()
 
     async def play(self) -> None:
@@ -88,8 +94,7 @@ class ScenarioNode:
                 self.driver.set_emotion.publish(String(self.script.emotion))
             await self.driver.run()
         finally:
-            if self._out is not None:
-                self._out.close()
+            self.close()
         if self.driver.failures:
             from cyborg.errors import ScenarioFailed
 
@@ -126,7 +131,7 @@ def run_scenario_ros(
     script_path: Path,
     *,
     transcript_path: Path | None,
-    speed: float,
+    speed: float | None,
     data_dir: Path | None,
     map_path: Path | None,
     echo: bool = False,
@@ -134,7 +139,7 @@ def run_scenario_ros(
     middleware: Middleware = ROS1,
 ) -> list[dict[str, Any]]:
     """Run a scenario on ``middleware``'s graph: the robot's nodes (no API) plus ``cyborg_scenario``;
-    return the records."""
+    return the records. ``speed``: virtual time at that factor of real time; None: in lockstep."""
     from cyborg.sim.scenario import check_script, script_start
     from cyborg.sim.script import load_script
 
@@ -155,6 +160,7 @@ def run_scenario_ros(
             map_path,
             echo=echo,
             speed=speed,
+            lockstep=speed is None,
             start=script_start(script),
             seed=script.seed,
             extra_args={

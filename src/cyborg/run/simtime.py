@@ -26,6 +26,7 @@ from cyborg.errors import CyborgError
 from cyborg.run.master import Master
 from cyborg.transport.base import Publisher
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, Clock, RealClock, VirtualClock
+from cyborg.transport.lockstep import LockstepClock
 from cyborg.transport.messages import Clock as ClockMessage
 
 if TYPE_CHECKING:
@@ -122,10 +123,13 @@ class SimTime:
     speed: float | None = None
     epoch: float | str | None = None
     start: datetime = DEFAULT_VIRTUAL_START
+    lockstep: str | None = None
+    """``HOST:PORT`` of the launch's lockstep time server: virtual time as fast as the whole graph
+    allows, granted by it (:mod:`cyborg.run.lockstep`); excludes ``speed`` and ``epoch``."""
 
     @property
     def virtual(self) -> bool:
-        return self.speed is not None
+        return self.speed is not None or self.lockstep is not None
 
     @property
     def rendezvous(self) -> Rendezvous | None:
@@ -139,6 +143,13 @@ class SimTime:
         return None
 
     def make_clock(self) -> Clock:
+        if self.lockstep is not None:
+            if self.speed is not None or self.epoch is not None:
+                raise CyborgError(
+                    "--lockstep runs as fast as the graph allows, at no speed and with no origin; "
+                    "fix: drop --speed and --epoch"
+                )
+            return LockstepClock(self.lockstep, self.start)
         if self.speed is None:
             if self.epoch is not None:
                 raise CyborgError("--epoch goes with --speed: real time needs no shared origin")

@@ -31,9 +31,11 @@ import click
 from cyborg.app.config import LoadedConfig
 from cyborg.app.parts import API, CONTROLLER
 from cyborg.errors import CyborgError
+from cyborg.run.lockstep import TimeServer
 from cyborg.run.middleware import ROS1, LaunchGraph, Middleware, exit_description
 from cyborg.run.simtime import EPOCH_MARGIN, READY_TIMEOUT, Rendezvous, clock_owner_of
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START
+from cyborg.transport.lockstep import NS
 
 __all__ = ["Launch", "launch"]
 
@@ -59,6 +61,9 @@ class Launch:
     port: int = 8642
     echo: bool = True
     speed: float | None = None
+    lockstep: bool = False
+    """Virtual time as fast as the graph allows, granted by a time server the launch runs
+    (:mod:`cyborg.run.lockstep`): ``--speed max``. Excludes ``speed``."""
     start: datetime = DEFAULT_VIRTUAL_START
     seed: int = 0
     extra_args: dict[str, list[str]] = field(default_factory=dict)
@@ -70,6 +75,7 @@ class Launch:
     _rendezvous: Rendezvous | None = None
     _epoch_argument: str | None = None
     _clock_owner: str | None = None
+    _time_server: TimeServer | None = None
     _started_at: dict[str, float] = field(default_factory=dict)
     _respawn_delay: dict[str, float] = field(default_factory=dict)
     _respawn_at: dict[str, float] = field(default_factory=dict)
@@ -96,7 +102,15 @@ class Launch:
         if name == CONTROLLER and fresh:
             command += ["--fresh"]  # a launch is a fresh start: neutral, emotion system on
         command += self.middleware.node_arguments
-        if self.speed is not None:
+        if self._time_server is not None:
+            command += [
+                "--lockstep",
+                self._time_server.address,
+                "--start",
+                self.start.isoformat(),
+                "--publish-clock" if name == clock_owner else "--no-publish-clock",
+            ]
+        elif self.speed is not None:
             assert self._epoch_argument is not None
             command += [
                 "--speed",
@@ -111,9 +125,13 @@ class Launch:
 
     def start_all(self) -> None:
         """Prepare the graph, start every part, and with a speed fix the origin once all are ready."""
+        if self.lockstep and self.speed is not None:
+            raise CyborgError("lockstep time runs as fast as the graph allows: give no speed with it")
         self._graph = self.middleware.launch_graph(self.data_dir, self.say)
-        self._rendezvous, self._epoch_argument = self._graph.open(self.speed)
-        if self.speed is not None:
+        self._rendezvous, self._epoch_argument = self._graph.open(self.speed, lockstep=self.lockstep)
+        if self.lockstep:
+            self._time_server = TimeServer(set(self.parts)).start()
+        if self.speed is not None or self.lockstep:
             self._clock_owner = clock_owner_of(self.config, self.parts)
             self.parts.sort(
                 key=lambda name: name != self._clock_owner
@@ -127,6 +145,8 @@ class Launch:
         )
         if self.speed is not None:
             self._start_virtual_time()
+        elif self.lockstep:
+            self.say(f"virtual time: {self.start.isoformat()}, in lockstep (as fast as every node allows)")
 
     def _start_virtual_time(self) -> None:
         assert self._rendezvous is not None and self._graph is not None
@@ -194,13 +214,18 @@ class Launch:
         if failed:
             raise CyborgError(f"node(s) stopped: {', '.join(failed)}; the whole robot is stopped too")
 
-    def wait(self, *, until: str | None = None, timeout: float | None = None) -> int | None:
-        """Until node ``until`` ends (its exit code), ``timeout`` real seconds pass or (without
-        ``respawn``) another node stops (an error)."""
+    def wait(
+        self, *, until: str | None = None, timeout: float | None = None, virtual: float | None = None
+    ) -> int | None:
+        """Until node ``until`` ends (its exit code), ``timeout`` real seconds pass, ``virtual``
+        seconds of lockstep time pass, or (without ``respawn``) another node stops (an error)."""
         deadline = None if timeout is None else time.monotonic() + timeout
         while True:
             if until is not None and self.processes[until].poll() is not None:
                 return self.processes[until].returncode
+            server = self._time_server
+            if virtual is not None and server is not None and server.time_ns >= virtual * NS:
+                return None
             if self.respawn:
                 self.supervise(ignore=[until] if until else [])
             else:
@@ -222,6 +247,8 @@ class Launch:
                     process.kill()
                     process.wait(timeout=5)
         finally:
+            if self._time_server is not None:
+                self._time_server.close()
             if self._graph is not None:
                 self._graph.close()
 
@@ -240,8 +267,10 @@ def launch(robot: Launch, *, duration: float | None = None) -> None:
     robot.respawn = True
     try:
         robot.start_all()
-        real_duration = None if duration is None else duration / (robot.speed or 1.0)
-        robot.wait(timeout=real_duration)
+        if robot.lockstep:
+            robot.wait(virtual=duration)
+        else:
+            robot.wait(timeout=None if duration is None else duration / (robot.speed or 1.0))
     except KeyboardInterrupt:
         click.echo("stopping")
     finally:

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 import logging
 import random
 import signal
@@ -27,6 +26,7 @@ from cyborg.app.robot import Robot, build_robot
 from cyborg.errors import ConfigError, CyborgError, ScenarioFailed
 from cyborg.observe.records import Record, RecordStream
 from cyborg.sim.script import CalendarEntry, Match, Script, Step, check_against
+from cyborg.sim.transcript import TranscriptWriter
 from cyborg.sim.witness import Witness
 from cyborg.storage import lock_data_dir
 from cyborg.transport import topics
@@ -425,11 +425,9 @@ def run_scenario(
             kinds=kinds,
         )
         if transcript is not None:
-
-            def write(record: Record) -> None:
-                transcript.write(json.dumps(record) + "\n")
-
-            run.listeners.append(write)
+            writer = TranscriptWriter(transcript)
+            stack.callback(writer.close)
+            run.listeners.append(writer.write)
         if on_record is not None:
             run.listeners.append(on_record)
         return run.run(stop_on_interrupt=stop_on_interrupt)

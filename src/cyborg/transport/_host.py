@@ -9,13 +9,15 @@ Both wait for a server or service the same way: :func:`poll_until`, on the injec
 
 from __future__ import annotations
 
+import asyncio
+import time
 from collections.abc import Callable
 from typing import Any, Protocol
 
 from cyborg.transport.base import TransportStats
 from cyborg.transport.clock import Clock
 
-__all__ = ["POLL_PERIOD", "Host", "poll_until"]
+__all__ = ["POLL_PERIOD", "Host", "poll_real", "poll_until"]
 
 POLL_PERIOD = 0.01  # clock seconds between two looks for a server
 
@@ -37,10 +39,32 @@ class Host(Protocol):
 
 
 async def poll_until(found: Callable[[], bool], clock: Clock, timeout: float) -> bool:
-    """Call ``found()`` every POLL_PERIOD until it is true (True) or ``timeout`` clock seconds pass (False)."""
+    """Call ``found()`` every POLL_PERIOD until it is true (True) or ``timeout`` clock seconds pass (False).
+
+    With lockstep time, what is looked for (a server found by the middleware) comes in real
+    time: the time is held meanwhile and ``timeout`` counts real seconds, so that the wait costs
+    no virtual time and a run repeats exactly.
+    """
+    if clock.is_lockstep:
+        return await poll_real(found, clock, timeout)
     deadline = clock.monotonic() + timeout
     while not found():
         if clock.monotonic() >= deadline:
             return False
         await clock.sleep(POLL_PERIOD)
+    return True
+
+
+async def poll_real(found: Callable[[], bool], clock: Clock, timeout: float) -> bool:
+    """Call ``found()`` every POLL_PERIOD real seconds until it is true or ``timeout`` real seconds
+    pass; a lockstep clock's time is held meanwhile (:meth:`LockstepClock.hold`)."""
+    if found():
+        return True
+    with clock.hold():
+        loop = asyncio.get_running_loop()
+        deadline = time.monotonic() + timeout
+        while not found():
+            if time.monotonic() >= deadline:
+                return False
+            await loop.run_in_executor(None, time.sleep, POLL_PERIOD)
     return True

@@ -14,6 +14,7 @@ at a fixed multiple of real time instead (``--speed 10``).
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 import math
 import selectors
@@ -21,9 +22,12 @@ import time
 from abc import ABC, abstractmethod
 from collections.abc import Awaitable, Callable, Coroutine, Mapping
 from datetime import UTC, datetime
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from cyborg.errors import CyborgError, InvalidValueError
+
+if TYPE_CHECKING:
+    from cyborg.transport.lockstep import Ledger
 
 T = TypeVar("T")
 
@@ -34,6 +38,10 @@ DEFAULT_VIRTUAL_START = datetime(2026, 11, 23, 9, 0, tzinfo=UTC)
 
 class Clock(ABC):
     """Time source plus the event loop that all components run on."""
+
+    ledger: Ledger | None = None
+    """Where a transport counts what it sends and receives, when the time waits for every
+    message to arrive (:class:`~cyborg.transport.lockstep.LockstepClock`); None otherwise."""
 
     def __init__(self) -> None:
         self._loop: asyncio.AbstractEventLoop | None = None
@@ -55,6 +63,17 @@ class Clock(ABC):
     @property
     def is_virtual(self) -> bool:
         return False
+
+    @property
+    def is_lockstep(self) -> bool:
+        """True if the time is granted by a time server shared with other processes."""
+        return False
+
+    def hold(self) -> contextlib.AbstractContextManager[None]:
+        """Keep the time from moving on while the block waits for something only real time
+        brings (a middleware finding a server): it matters to lockstep time only
+        (:class:`~cyborg.transport.lockstep.LockstepClock`), which grants no new time meanwhile."""
+        return contextlib.nullcontext()
 
     @property
     def as_fast_as_possible(self) -> bool:
@@ -213,6 +232,9 @@ class RealClock(Clock):
         return time.time()
 
 
+NS = 1_000_000_000
+"""Nanoseconds in a second: virtual time at ``--speed max`` moves in whole nanoseconds."""
+
 POLL_INTERVAL = 0.001
 """Real seconds between looks for I/O (sockets, other threads) while virtual time runs as fast as it can."""
 
@@ -264,11 +286,29 @@ class _VirtualTimeSelector(selectors.BaseSelector):
         return []
 
 
+def on_grid(when: float) -> float:
+    """``when`` moved up to the next whole nanosecond.
+
+    Timers of virtual time at ``--speed max`` fire on this grid, in one process as across the
+    processes of a lockstep graph: the time jumps from timer to timer, and how a time was
+    reached (directly, or through other processes' timers) must not change it by a float's last
+    bit, or a comparison such as "10 s in this state" would come out differently.
+    """
+    return math.ceil(round(when * NS, 3)) / NS
+
+
 class _VirtualTimeLoop(asyncio.SelectorEventLoop):
     def __init__(self, clock: VirtualClock) -> None:
         self._virtual_clock = clock
         super().__init__(selector=_VirtualTimeSelector(clock))
         self._clock_resolution = 1e-9
+
+    def call_at(  # type: ignore[override]
+        self, when: float, callback: Callable[..., object], *args: Any, context: Any = None
+    ) -> asyncio.TimerHandle:
+        if self._virtual_clock.speed is None:
+            when = on_grid(when)
+        return super().call_at(when, callback, *args, context=context)
 
     def time(self) -> float:
         clock = self._virtual_clock
@@ -353,7 +393,9 @@ class VirtualClock(Clock):
     monotonic = _loop_time
 
     def _advance(self, seconds: float) -> None:
-        self._virtual_elapsed += seconds
+        # To the next timer, which is on the nanosecond grid (on_grid): rounding takes away
+        # the float error of elapsed + (when - elapsed).
+        self._virtual_elapsed = round((self._virtual_elapsed + seconds) * NS) / NS
 
     def now(self) -> float:
         return self._start_epoch + self._loop_time()

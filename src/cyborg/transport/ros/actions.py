@@ -20,7 +20,7 @@ from typing import Any
 import actionlib  # type: ignore[import-not-found]
 
 from cyborg.transport._goals import ClientGoal
-from cyborg.transport._host import Host
+from cyborg.transport._host import Host, poll_real
 from cyborg.transport.base import (
     ActionClient,
     ActionServer,
@@ -31,6 +31,7 @@ from cyborg.transport.base import (
     R,
     ServerGoalHandle,
 )
+from cyborg.transport.lockstep import Channel
 from cyborg.transport.messages import ActionType, Message
 from cyborg.transport.ros.convert import from_ros, ros_class, sender, to_ros
 from cyborg.transport.ros.master import UNREACHABLE, WATCH
@@ -110,13 +111,21 @@ class _RosServerGoalHandle(ServerGoalHandle[G, R, F]):
         self._guard(self._handle.set_canceled, self._result(result), text)
 
     def _guard(self, method: Callable[..., None], *args: Any) -> None:
+        before = self.status
         try:
             method(*args)
         except Exception:
             log.warning(
                 "action %s: %s failed in status %s", self._server.name, method.__name__, self.status.name
             )
-        if self.status.is_terminal:
+        after = self.status
+        ledger = self._server.ledger
+        if ledger is not None and after is not before:
+            if before in (GoalStatus.PENDING, GoalStatus.RECALLING):
+                ledger.sent(f"{self._server.name}#accept")  # the goal's first answer
+            if after.is_terminal:
+                ledger.sent(f"{self._server.name}#result")
+        if after.is_terminal:
             self._server.forget(self.goal_id)
 
 
@@ -138,10 +147,19 @@ class RosActionServer(ActionServer[G, R, F]):
         self.feedback_cls = ros_class(action_type.feedback.ros_type)
         self._handles: dict[str, _RosServerGoalHandle[G, R, F]] = {}
         self._lock = threading.Lock()
-        self._server = actionlib.ActionServer(
+        self.ledger = transport.clock.ledger
+        if self.ledger is not None:
+            self.ledger.listen(f"{name}#goal", Channel.UNICAST)
+            self.ledger.listen(f"{name}#cancel", Channel.UNICAST)
+        self._server = _CountingActionServer(
             name, _action_classes(action_type), self._goal_cb, self._cancel_cb, auto_start=False
         )
+        self._server.arrived = self._arrived
         self._server.start()
+
+    def _arrived(self, leg: str) -> None:  # rospy thread: a goal or cancel was handled by actionlib
+        if self.ledger is not None:
+            self._transport.to_loop(self.ledger.received, f"{self.name}#{leg}")
 
     def _wrap(self, ros_handle: Any) -> _RosServerGoalHandle[G, R, F]:
         key = str(ros_handle.get_goal_id().id)
@@ -185,6 +203,27 @@ class RosActionServer(ActionServer[G, R, F]):
                 publisher.unregister()
 
 
+class _CountingActionServer(actionlib.ActionServer):  # type: ignore[misc]
+    """actionlib's server, saying when it has handled each goal and cancel message (lockstep time
+    counts them as received after their callbacks are on the loop)."""
+
+    arrived: Callable[[str], None] | None = None
+
+    def internal_goal_callback(self, goal: Any) -> None:
+        try:
+            super().internal_goal_callback(goal)
+        finally:
+            if self.arrived is not None:
+                self.arrived("goal")
+
+    def internal_cancel_callback(self, goal_id: Any) -> None:
+        try:
+            super().internal_cancel_callback(goal_id)
+        finally:
+            if self.arrived is not None:
+                self.arrived("cancel")
+
+
 def _publish_nothing(*args: object) -> None:
     """What a shut-down actionlib server publishes (its publishers are closed)."""
 
@@ -196,10 +235,22 @@ class _WatchedActionClient(actionlib.ActionClient):  # type: ignore[misc]
     """actionlib's client, remembering when the server last reported its status."""
 
     last_status_time = 0.0
+    last_status_virtual = 0.0
+    lockstep_clock: Any = None  # with lockstep time: the clock, whose time moves only when granted
 
     def _status_cb(self, msg: Any) -> None:
         self.last_status_time = time.monotonic()
+        if self.lockstep_clock is not None:
+            self.last_status_virtual = self.lockstep_clock.monotonic()
         super()._status_cb(msg)
+
+    def silent(self) -> bool:
+        """No status for SERVER_SILENCE_LIMIT real seconds (with lockstep time: and virtual ones,
+        as the server's status timer runs on the granted time, which may stand still a while)."""
+        if time.monotonic() - self.last_status_time <= SERVER_SILENCE_LIMIT:
+            return False
+        clock = self.lockstep_clock
+        return clock is None or clock.monotonic() - self.last_status_virtual > SERVER_SILENCE_LIMIT
 
 
 class _RosClientGoalHandle(ClientGoal[G, R, F]):
@@ -225,6 +276,9 @@ class _RosClientGoalHandle(ClientGoal[G, R, F]):
 
     def _request_cancel(self) -> None:
         if self._ros is not None:
+            ledger = self._client.transport.clock.ledger
+            if ledger is not None:
+                ledger.sent(f"{self._client.name}#cancel")
             self._ros.cancel()
 
     def _finished(self) -> None:
@@ -242,6 +296,10 @@ class RosActionClient(ActionClient[G, R, F]):
         self._client: Any = None
         self._active: set[_RosClientGoalHandle[G, R, F]] = set()
         self._watchdog: asyncio.TimerHandle | None = None
+        self._ledger = transport.clock.ledger
+        if self._ledger is not None:
+            self._ledger.listen(f"{name}#accept", Channel.UNICAST)
+            self._ledger.listen(f"{name}#result", Channel.UNICAST)
         self._make_client()
 
     def _make_client(self) -> bool:
@@ -259,6 +317,8 @@ class RosActionClient(ActionClient[G, R, F]):
                     made.unregister()
             WATCH.missed(f"make the action client {self.name}", exc)
             return False
+        if self.transport.clock.is_lockstep:
+            client.lockstep_clock = self.transport.clock
         self._client = client
         return True
 
@@ -271,7 +331,7 @@ class RosActionClient(ActionClient[G, R, F]):
             return False
         client = self._client
         last = client.last_status_msg
-        if last is None or time.monotonic() - client.last_status_time > SERVER_SILENCE_LIMIT:
+        if last is None or client.silent():
             return False
         server = last._connection_header["callerid"]
         if not (
@@ -290,12 +350,7 @@ class RosActionClient(ActionClient[G, R, F]):
         clock runs at: a deadline on a virtual clock at speed 25 would give them 1/25 of it, and a
         module's server found a moment late would end its state as aborted.
         """
-        deadline = time.monotonic() + timeout
-        while not self.server_available():
-            if time.monotonic() >= deadline:
-                return False
-            await asyncio.sleep(0.01)
-        return True
+        return await poll_real(self.server_available, self.transport.clock, timeout)
 
     def send_goal(
         self,
@@ -319,7 +374,7 @@ class RosActionClient(ActionClient[G, R, F]):
                 text = str(ros_handle.get_goal_status_text())
             elif status.is_terminal:
                 return  # wait for DONE to carry the result
-            transport.to_loop(handle.update_status, status, result, text)
+            transport.to_loop(self._update, handle, status, result, text)
 
         def feedback(ros_handle: Any, ros_feedback: Any) -> None:  # rospy thread
             transport.to_loop(handle.deliver_feedback, from_ros(ros_feedback, self.action_type.feedback))
@@ -332,10 +387,25 @@ class RosActionClient(ActionClient[G, R, F]):
         ros_goal = to_ros(goal, self._goal_cls)
         if self._order is not None:
             setattr(ros_goal, ORDER_FIELD, self._order)
+        if self._ledger is not None:
+            self._ledger.sent(f"{self.name}#goal")
         handle._ros = self._client.send_goal(ros_goal, transition, feedback)
         self._active.add(handle)
         self._arm_watchdog()
         return handle
+
+    def _update(
+        self, handle: _RosClientGoalHandle[G, R, F], status: GoalStatus, result: R | None, text: str
+    ) -> None:
+        """The server's report, on the loop: counted (lockstep time) as the goal's answer and result."""
+        ledger = self._ledger
+        if ledger is not None and not handle.status.is_terminal and status is not handle.status:
+            answered = handle.status in (GoalStatus.PENDING, GoalStatus.RECALLING)
+            if answered and (status is GoalStatus.ACTIVE or status.is_terminal):
+                ledger.received(f"{self.name}#accept")
+            if status.is_terminal:
+                ledger.received(f"{self.name}#result")
+        handle.update_status(status, result, text)
 
     def forget(self, handle: _RosClientGoalHandle[G, R, F]) -> None:
         self._active.discard(handle)

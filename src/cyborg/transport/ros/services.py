@@ -18,6 +18,7 @@ import rospy  # type: ignore[import-not-found]
 from cyborg.errors import ServiceTimeoutError, ServiceUnavailableError, TransportError
 from cyborg.transport._host import Host
 from cyborg.transport.base import MessageInfo, Req, Resp, ServiceProxy, ServiceServer
+from cyborg.transport.lockstep import Channel
 from cyborg.transport.messages import ServiceType
 from cyborg.transport.ros.convert import from_ros, ros_class, sender, to_ros
 
@@ -37,17 +38,28 @@ class RosServiceServer(ServiceServer, Generic[Req, Resp]):
         self._srv_type = srv_type
         self._handler = handler
         self._srv_cls = ros_class(srv_type.ros_type, "srv")
+        self._ledger = transport.clock.ledger
+        if self._ledger is not None:
+            self._ledger.listen(f"{name}#request", Channel.UNICAST)
         self._service = rospy.Service(name, self._srv_cls, self._on_request)
 
     def _on_request(self, ros_request: Any) -> Any:  # rospy thread
         request = from_ros(ros_request, self._srv_type.request)
         info = MessageInfo(sender=sender(ros_request), stamp=time.time())
 
+        ledger = self._ledger
+
         async def answer() -> Resp:
-            result = self._handler(request, info)
-            if inspect.isawaitable(result):
-                result = await result
-            return result  # type: ignore[return-value]
+            if ledger is not None:
+                ledger.received(f"{self.name}#request")
+            try:
+                result = self._handler(request, info)
+                if inspect.isawaitable(result):
+                    result = await result
+                return result  # type: ignore[return-value]
+            finally:
+                if ledger is not None:
+                    ledger.sent(f"{self.name}#response")
 
         future = asyncio.run_coroutine_threadsafe(answer(), self._transport.clock.loop)
         response = future.result(timeout=60.0)
@@ -55,6 +67,8 @@ class RosServiceServer(ServiceServer, Generic[Req, Resp]):
 
     def shutdown(self) -> None:
         self._service.shutdown("node shutting down")
+        if self._ledger is not None:
+            self._ledger.unlisten(f"{self.name}#request")
 
 
 class RosServiceProxy(ServiceProxy[Req, Resp]):
@@ -64,6 +78,9 @@ class RosServiceProxy(ServiceProxy[Req, Resp]):
         self._srv_type = srv_type
         self._srv_cls = ros_class(srv_type.ros_type, "srv")
         self._proxy = rospy.ServiceProxy(name, self._srv_cls)
+        self._ledger = transport.clock.ledger
+        if self._ledger is not None:
+            self._ledger.listen(f"{name}#response", Channel.UNICAST)
 
     def available(self) -> bool:
         try:
@@ -75,9 +92,10 @@ class RosServiceProxy(ServiceProxy[Req, Resp]):
     async def wait_for_service(self, timeout: float) -> bool:
         loop = asyncio.get_running_loop()
         try:
-            await loop.run_in_executor(
-                None, lambda: rospy.wait_for_service(self.name, timeout=max(timeout, 0.01))
-            )
+            with self._transport.clock.hold():
+                await loop.run_in_executor(
+                    None, lambda: rospy.wait_for_service(self.name, timeout=max(timeout, 0.01))
+                )
         except rospy.ROSException:
             return False
         return True
@@ -85,15 +103,24 @@ class RosServiceProxy(ServiceProxy[Req, Resp]):
     async def call(self, request: Req | None = None, *, timeout: float = 5.0) -> Resp:
         loop = asyncio.get_running_loop()
         req = request if request is not None else self._srv_type.request()
-        if not await loop.run_in_executor(None, self.available):
+        with self._transport.clock.hold():  # finding the service takes real time, not virtual
+            available = await loop.run_in_executor(None, self.available)
+        if not available:
             raise ServiceUnavailableError(
                 f"service {self.name} is not offered by any node: start the component that offers it"
             )
         ros_request = to_ros(req, self._srv_cls._request_class)
+        ledger = self._ledger
+        if ledger is not None:
+            ledger.sent(f"{self.name}#request")
         try:
-            ros_response = await asyncio.wait_for(
-                loop.run_in_executor(None, self._proxy.call, ros_request), timeout
-            )
+            try:
+                ros_response = await asyncio.wait_for(
+                    loop.run_in_executor(None, self._proxy.call, ros_request), timeout
+                )
+            finally:
+                if ledger is not None:
+                    ledger.received(f"{self.name}#response")
         except TimeoutError as exc:
             raise ServiceTimeoutError(
                 f"service {self.name} gave no answer within {timeout} s: check that its node is running "

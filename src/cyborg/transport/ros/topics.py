@@ -78,6 +78,7 @@ class RosPublisher(Publisher[M]):
     def __init__(self, transport: Host, topic: str, msg_type: type[M], queue_size: int, latch: bool) -> None:
         self.topic = topic
         self._stats = transport.stats
+        self._ledger = transport.clock.ledger
         self._cls = ros_class(msg_type.ros_type)
         self._pub = rospy.Publisher(topic, self._cls, queue_size=queue_size, latch=latch)
         self._fresh_until = time.monotonic() + FRESH_PUBLISHER_WAIT
@@ -89,6 +90,8 @@ class RosPublisher(Publisher[M]):
         """Send ``message``; while the publisher is fresh, it may wait for known subscribers (above)."""
         ros_message = to_ros(message, self._cls)
         self._stats.published += 1
+        if self._ledger is not None:
+            self._ledger.sent(self.topic)
         with self._lock:
             if self._pending is not None:
                 self._pending.append(ros_message)
@@ -139,6 +142,9 @@ class RosSubscription(Subscription[M]):
         self._queue = SubscriptionQueue(
             transport.clock, callback, queue_size, transport.run_callback, transport.stats
         )
+        self._ledger = transport.clock.ledger
+        if self._ledger is not None:
+            self._ledger.listen(topic)
         self._sub = rospy.Subscriber(topic, ros_class(msg_type.ros_type), self._on_ros, queue_size=None)
 
     @property
@@ -149,9 +155,16 @@ class RosSubscription(Subscription[M]):
     def _on_ros(self, ros_message: Any) -> None:  # rospy thread
         info = MessageInfo(sender=sender(ros_message), stamp=time.time())
         message = from_ros(ros_message, self._type)
-        self._transport.to_loop(self._queue.put, message, info)
+        self._transport.to_loop(self._deliver, message, info)
+
+    def _deliver(self, message: M, info: MessageInfo) -> None:  # on the loop
+        if self._ledger is not None:
+            self._ledger.received(self.topic)
+        self._queue.put(message, info)
 
     def unsubscribe(self) -> None:
         """Deliver nothing more and leave the topic."""
         self._queue.close()
         self._sub.unregister()
+        if self._ledger is not None:
+            self._ledger.unlisten(self.topic)

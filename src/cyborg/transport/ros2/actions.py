@@ -46,6 +46,7 @@ from cyborg.transport.base import (
     R,
     ServerGoalHandle,
 )
+from cyborg.transport.lockstep import Channel
 from cyborg.transport.messages import ActionType
 from cyborg.transport.ros2.convert import from_ros2, ros2_class, to_ros2
 from cyborg.transport.ros2.host import Host
@@ -107,6 +108,7 @@ class _Ros2ServerGoalHandle(ServerGoalHandle[G, R, F]):
                 return
             self._status = GoalStatus.ACTIVE
             self.decision = _ACCEPT
+        self._server.count_sent("accept")
         self.decided.set()
 
     def reject(self, result: R | None = None, text: str = "") -> None:
@@ -116,6 +118,7 @@ class _Ros2ServerGoalHandle(ServerGoalHandle[G, R, F]):
             self._status = GoalStatus.REJECTED
             self.decision = _REJECT
         self._server.publish_text(self._id, text)
+        self._server.count_sent("accept")
         self.decided.set()
 
     def publish_feedback(self, feedback: F) -> None:
@@ -150,6 +153,7 @@ class _Ros2ServerGoalHandle(ServerGoalHandle[G, R, F]):
                 self.decision = _RECALL
         if recalling:
             self._server.publish_text(self._id, text)
+            self._server.count_sent("accept")
             self.decided.set()
             return
         self._finish(GoalStatus.PREEMPTED, result, text)
@@ -168,6 +172,7 @@ class _Ros2ServerGoalHandle(ServerGoalHandle[G, R, F]):
             self._status = status
             self.outcome = (status, result if result is not None else self._server.action_type.result())
         self._server.publish_text(self._id, text)
+        self._server.count_sent("result")
         self.finished.set()
 
     def cancel_requested_now(self) -> bool:  # executor thread: a cancel came; True if it is new
@@ -228,6 +233,10 @@ class Ros2ActionServer(ActionServer[G, R, F]):
         self._goals: dict[bytes, _Ros2ServerGoalHandle[G, R, F]] = {}
         self._lock = threading.Lock()
         self._closed = False
+        self._ledger = transport.clock.ledger
+        if self._ledger is not None:
+            self._ledger.listen(f"{name}#goal", Channel.UNICAST)
+            self._ledger.listen(f"{name}#cancel", Channel.UNICAST)
         self._text = node.create_publisher(RosString, f"{name}/{TEXT_TOPIC}", volatile_qos(100))
         self._server = _RclServer(
             node,
@@ -245,6 +254,21 @@ class Ros2ActionServer(ActionServer[G, R, F]):
     def publish_text(self, goal_id: bytes, text: str) -> None:
         if not self._closed:
             self._text.publish(_text_message(goal_id, text))
+            self.count_sent("text")
+
+    def count_sent(self, leg: str) -> None:
+        """Lockstep time: count one message of ``leg`` (accept, result, text) sent."""
+        if self._ledger is not None:
+            self._ledger.sent(f"{self.name}#{leg}")
+
+    def _goal_arrived(self, handle: _Ros2ServerGoalHandle[G, R, F]) -> Awaitable[None] | None:  # on the loop
+        if self._ledger is not None:
+            self._ledger.received(f"{self.name}#goal")
+        return self._on_goal(handle)
+
+    def _cancel_handled(self) -> None:  # on the loop, after the cancel's callbacks
+        if self._ledger is not None:
+            self._ledger.received(f"{self.name}#cancel")
 
     # executor threads
     def _goal(self, ros_goal: Any) -> GoalResponse:
@@ -255,7 +279,7 @@ class Ros2ActionServer(ActionServer[G, R, F]):
             if self._closed:
                 return GoalResponse.REJECT
             self._goals[goal_id] = handle
-        self._transport.to_loop(self._on_goal, handle)
+        self._transport.to_loop(self._goal_arrived, handle)
         if not handle.decided.wait(DECISION_LIMIT):
             log.warning(
                 "action %s: goal %s was neither accepted nor rejected; rejecting it",
@@ -313,6 +337,8 @@ class Ros2ActionServer(ActionServer[G, R, F]):
 
     def cancels_marked(self) -> None:
         """A cancel request was answered: its goals that rcl now marks canceling may end CANCELED."""
+        if self._ledger is not None:
+            self._transport.to_loop(self._cancel_handled)
         with self._lock:
             goals = list(self._goals.values())
         for handle in goals:
@@ -437,6 +463,19 @@ class Ros2ActionClient(ActionClient[G, R, F]):
         )
         self._watchdog: Any = None
         self._closed = False
+        self._ledger = transport.clock.ledger
+        if self._ledger is not None:
+            for leg in ("accept", "result"):
+                self._ledger.listen(f"{name}#{leg}", Channel.UNICAST)
+            self._ledger.listen(f"{name}#text", Channel.BROADCAST)
+
+    def _count_received(self, leg: str) -> None:
+        if self._ledger is not None:
+            self._ledger.received(f"{self.name}#{leg}")
+
+    def _count_sent(self, leg: str) -> None:
+        if self._ledger is not None:
+            self._ledger.sent(f"{self.name}#{leg}")
 
     def server_available(self) -> bool:
         return not self._closed and bool(self._client.server_is_ready())
@@ -467,6 +506,7 @@ class Ros2ActionClient(ActionClient[G, R, F]):
         def answered(future: Any) -> None:  # executor thread
             to_loop(self._answered, handle, future.result() if future.exception() is None else None)
 
+        self._count_sent("goal")
         future = self._client.send_goal_async(
             to_ros2(goal, self.classes.Goal), feedback_callback=feedback, goal_uuid=UUID(uuid=list(goal_id))
         )
@@ -476,6 +516,7 @@ class Ros2ActionClient(ActionClient[G, R, F]):
 
     # on the loop
     def _answered(self, handle: _Ros2ClientGoalHandle[G, R, F], ros_handle: Any) -> None:
+        self._count_received("accept")
         if handle.status.is_terminal:
             return
         if ros_handle is None or not ros_handle.accepted:
@@ -493,6 +534,7 @@ class Ros2ActionClient(ActionClient[G, R, F]):
             self.send_cancel(handle)
 
     def _resulted(self, handle: _Ros2ClientGoalHandle[G, R, F], response: Any) -> None:
+        self._count_received("result")
         if response is None:
             self._end(handle, GoalStatus.LOST, None)
             return
@@ -504,6 +546,7 @@ class Ros2ActionClient(ActionClient[G, R, F]):
     def send_cancel(self, handle: _Ros2ClientGoalHandle[G, R, F]) -> None:
         if self._closed:
             return  # its goals ended LOST when it closed
+        self._count_sent("cancel")
         if handle.ros_handle is not None:
             handle.ros_handle.cancel_goal_async()
             if handle.status is GoalStatus.ACTIVE:
@@ -543,6 +586,7 @@ class Ros2ActionClient(ActionClient[G, R, F]):
         self.transport.to_loop(self._got_text, goal_id, text)
 
     def _got_text(self, goal_id: bytes, text: str) -> None:
+        self._count_received("text")
         handle = self._active.get(goal_id)
         if handle is None:
             return

@@ -19,6 +19,7 @@ from rclpy.node import Node as RclNode
 from cyborg.errors import ServiceTimeoutError, ServiceUnavailableError, TransportError
 from cyborg.transport._host import poll_until
 from cyborg.transport.base import MessageInfo, Req, Resp, ServiceProxy, ServiceServer, normalize_node_name
+from cyborg.transport.lockstep import Channel
 from cyborg.transport.messages import ServiceType
 from cyborg.transport.ros2.convert import from_ros2, ros2_class, to_ros2
 from cyborg.transport.ros2.host import Host
@@ -54,6 +55,9 @@ class Ros2ServiceServer(ServiceServer, Generic[Req, Resp]):
         self._srv_type = srv_type
         self._handler = handler
         self._srv_cls = ros2_class(srv_type.ros_type, "srv")
+        self._ledger = transport.clock.ledger
+        if self._ledger is not None:
+            self._ledger.listen(f"{name}#request", Channel.UNICAST)
         self._service = node.create_service(
             self._srv_cls, name, self._on_request, callback_group=callback_group
         )
@@ -61,12 +65,19 @@ class Ros2ServiceServer(ServiceServer, Generic[Req, Resp]):
     def _on_request(self, ros_request: Any, ros_response: Any) -> Any:  # executor thread
         request = from_ros2(ros_request, self._srv_type.request)
         info = MessageInfo(sender=only_client(self._node, self.name), stamp=time.time())
+        ledger = self._ledger
 
         async def answer() -> Resp:
-            result = self._handler(request, info)
-            if inspect.isawaitable(result):
-                result = await result
-            return result  # type: ignore[return-value]
+            if ledger is not None:
+                ledger.received(f"{self.name}#request")
+            try:
+                result = self._handler(request, info)
+                if inspect.isawaitable(result):
+                    result = await result
+                return result  # type: ignore[return-value]
+            finally:
+                if ledger is not None:
+                    ledger.sent(f"{self.name}#response")
 
         future = asyncio.run_coroutine_threadsafe(answer(), self._transport.clock.loop)
         try:
@@ -78,6 +89,8 @@ class Ros2ServiceServer(ServiceServer, Generic[Req, Resp]):
 
     def shutdown(self) -> None:
         self._node.destroy_service(self._service)
+        if self._ledger is not None:
+            self._ledger.unlisten(f"{self.name}#request")
 
 
 class Ros2ServiceProxy(ServiceProxy[Req, Resp]):
@@ -90,6 +103,9 @@ class Ros2ServiceProxy(ServiceProxy[Req, Resp]):
         self._srv_type = srv_type
         self._srv_cls = ros2_class(srv_type.ros_type, "srv")
         self._client = node.create_client(self._srv_cls, name, callback_group=callback_group)
+        self._ledger = transport.clock.ledger
+        if self._ledger is not None:
+            self._ledger.listen(f"{name}#response", Channel.UNICAST)
 
     def available(self) -> bool:
         return bool(self._client.service_is_ready())
@@ -107,8 +123,12 @@ class Ros2ServiceProxy(ServiceProxy[Req, Resp]):
         loop = self._transport.clock.loop
         answer: asyncio.Future[Any] = loop.create_future()
 
+        ledger = self._ledger
+
         def done(ros_future: Any) -> None:  # executor thread
             def settle() -> None:
+                if ledger is not None:
+                    ledger.received(f"{self.name}#response")
                 if answer.done():
                     return
                 if ros_future.exception() is not None:
@@ -121,6 +141,8 @@ class Ros2ServiceProxy(ServiceProxy[Req, Resp]):
             if not loop.is_closed():
                 loop.call_soon_threadsafe(settle)
 
+        if ledger is not None:
+            ledger.sent(f"{self.name}#request")
         ros_future = self._client.call_async(to_ros2(req, self._srv_cls.Request))
         ros_future.add_done_callback(done)
         self._transport.wake()

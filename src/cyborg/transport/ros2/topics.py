@@ -99,6 +99,7 @@ class Ros2Publisher(Publisher[M]):
     ) -> None:
         self.topic = topic
         self._stats = transport.stats
+        self._ledger = transport.clock.ledger
         self._cls = ros2_class(msg_type.ros_type)
         qos = latched_qos() if latch else volatile_qos(queue_size)
         self._node = node
@@ -117,6 +118,8 @@ class Ros2Publisher(Publisher[M]):
             return  # unregistered (its node shut down): a late publish while a process stops goes nowhere
         self._pub.publish(to_ros2(message, self._cls))
         self._stats.published += 1
+        if self._ledger is not None:
+            self._ledger.sent(self.topic)
 
     def subscriber_count(self) -> int:
         """The subscriptions DDS has matched with this publisher so far."""
@@ -150,6 +153,9 @@ class Ros2Subscription(Subscription[M]):
             transport.clock, callback, queue_size, transport.run_callback, transport.stats
         )
         self._senders = Senders(node, topic)
+        self._ledger = transport.clock.ledger
+        if self._ledger is not None:
+            self._ledger.listen(topic)
         self._last: dict[bytes, int] = {}
         self._lock = threading.Lock()
         cls = ros2_class(msg_type.ros_type)
@@ -196,11 +202,18 @@ class Ros2Subscription(Subscription[M]):
                 self._last[gid] = sequence
             sender = self._senders.name_of(gid) if gid else ""
             info = MessageInfo(sender=sender, stamp=time.time())
-            self._transport.to_loop(self._queue.put, from_ros2(ros_message, self._type), info)
+            self._transport.to_loop(self._deliver, from_ros2(ros_message, self._type), info)
+
+    def _deliver(self, message: M, info: MessageInfo) -> None:  # on the loop
+        if self._ledger is not None:
+            self._ledger.received(self.topic)
+        self._queue.put(message, info)
 
     def unsubscribe(self) -> None:
         """Deliver nothing more and destroy both rclpy subscriptions."""
         self._queue.close()
         for sub in self._subs:
             self._node.destroy_subscription(sub)
+        if self._subs and self._ledger is not None:
+            self._ledger.unlisten(self.topic)
         self._subs = []

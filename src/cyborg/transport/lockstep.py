@@ -1,0 +1,314 @@
+"""Lockstep time: a node's side of virtual time shared by a graph of processes.
+
+In one process virtual time jumps to the next timer whenever the loop has nothing to do
+(:class:`~cyborg.transport.clock.VirtualClock`). Over ROS every process has its own loop, so a
+jump is only safe once *every* process has nothing to do at the current time and no message is
+on its way. A :class:`LockstepClock` does not jump by itself: when its loop would wait, it tells
+the time server (``cyborg.run.lockstep``) that it is idle, when its next timer is due and what
+its transport sent and received since it last said (the :class:`Ledger`), then waits for I/O:
+a message from another node (handled, then it reports again) or a grant of a new time from the
+server, which comes once every node is idle and every message sent has been received.
+
+A channel is what the ledger counts on: a topic, or one leg of a service call or action goal
+(``/name#goal``, ``#accept``, ``#result``, ``#cancel``, ``#text``, ``#request``, ``#response``).
+A *broadcast* channel reaches each listener (a topic: every subscription); a *unicast* one
+reaches one (an action goal reaches its server, a result its client).
+
+The wire protocol is JSON lines over a TCP connection to the server: ``{"hello": NAME}``, then
+reports ``{"gen", "next", "sent", "recv", "listen"}`` (counts since the last report; ``next`` the
+next timer in integer nanoseconds of virtual time, or null); the server answers ``{"start":
+true}`` once every node has said hello, then grants ``{"gen", "t"}``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import selectors
+import socket
+import threading
+from collections import Counter
+from collections.abc import Callable, Iterator, Mapping
+from datetime import datetime
+from enum import StrEnum
+from typing import Any
+
+from cyborg.errors import CyborgError
+from cyborg.transport.clock import DEFAULT_VIRTUAL_START, NS, VirtualClock, on_grid
+
+__all__ = ["NS", "Channel", "Ledger", "LockstepClock"]
+
+CONNECT_TIMEOUT = 30.0  # real seconds a node tries to reach the time server
+START_TIMEOUT = 180.0  # real seconds a node waits for every other node to say hello
+
+
+class Channel(StrEnum):
+    """How many copies of one message the listeners of a channel receive."""
+
+    BROADCAST = "b"  # one per listener (a topic's subscriptions)
+    UNICAST = "u"  # one, when anyone listens (a goal to its server, a result to its client)
+
+
+class Ledger:
+    """What this process sent and received on each channel, and on which channels it listens.
+
+    Called from the loop (and, for ``sent``, from any thread): counts only grow. The lockstep
+    clock reads the changes since its last report (:meth:`take_changes`).
+    """
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._sent: Counter[str] = Counter()
+        self._received: Counter[str] = Counter()
+        self._listening: dict[str, tuple[int, Channel]] = {}
+        self._changed_listening: set[str] = set()
+
+    def sent(self, channel: str, count: int = 1) -> None:
+        with self._lock:
+            self._sent[channel] += count
+
+    def received(self, channel: str, count: int = 1) -> None:
+        with self._lock:
+            self._received[channel] += count
+
+    def listen(self, channel: str, kind: Channel = Channel.BROADCAST) -> None:
+        """One more endpoint of this process receives ``channel`` (a subscription, a server)."""
+        with self._lock:
+            count, _ = self._listening.get(channel, (0, kind))
+            self._listening[channel] = (count + 1, kind)
+            self._changed_listening.add(channel)
+
+    def unlisten(self, channel: str) -> None:
+        with self._lock:
+            count, kind = self._listening.get(channel, (0, Channel.BROADCAST))
+            self._listening[channel] = (max(0, count - 1), kind)
+            self._changed_listening.add(channel)
+
+    def take_changes(self) -> dict[str, Any] | None:
+        """The counts since the last call (None when nothing changed)."""
+        with self._lock:
+            if not (self._sent or self._received or self._changed_listening):
+                return None
+            changes: dict[str, Any] = {
+                "sent": dict(self._sent),
+                "recv": dict(self._received),
+                "listen": {
+                    channel: [self._listening[channel][0], self._listening[channel][1].value]
+                    for channel in self._changed_listening
+                },
+            }
+            self._sent.clear()
+            self._received.clear()
+            self._changed_listening.clear()
+            return changes
+
+
+class _Link:
+    """The connection to the time server: send reports, take grants (on the loop's thread)."""
+
+    def __init__(self, address: str, name: str) -> None:
+        host, _, port = address.rpartition(":")
+        try:
+            self.sock = socket.create_connection((host, int(port)), timeout=CONNECT_TIMEOUT)
+        except (OSError, ValueError) as exc:
+            raise CyborgError(
+                f"cannot reach the lockstep time server at {address!r} ({exc}); fix: start the node "
+                "with `cyborg launch --speed max` (or `cyborg sim --ros --speed max`), which runs it"
+            ) from None
+        self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self._buffer = b""
+        self.send({"hello": name})
+
+    def send(self, message: Mapping[str, Any]) -> None:
+        self.sock.sendall(json.dumps(message, separators=(",", ":")).encode() + b"\n")
+
+    def wait_for_start(self) -> None:
+        self.sock.settimeout(START_TIMEOUT)
+        try:
+            for message in self._read():
+                if message.get("start"):
+                    return
+        except TimeoutError:
+            pass
+        raise CyborgError(
+            f"the lockstep time server did not start the time within {START_TIMEOUT:.0f} s "
+            "(it starts once every node of the launch has joined); fix: see the launch's output"
+        )
+
+    def _read(self) -> Any:
+        while True:
+            chunk = self.sock.recv(65536)
+            if not chunk:
+                raise CyborgError("the lockstep time server went away: the launch has stopped")
+            self._buffer += chunk
+            while b"\n" in self._buffer:
+                line, self._buffer = self._buffer.split(b"\n", 1)
+                yield json.loads(line)
+
+    def take_grants(self) -> list[dict[str, Any]]:
+        """Every grant waiting on the socket now (the socket is non-blocking)."""
+        grants: list[dict[str, Any]] = []
+        while True:
+            try:
+                chunk = self.sock.recv(65536)
+            except (BlockingIOError, InterruptedError):
+                break
+            if not chunk:
+                raise CyborgError("the lockstep time server went away: the launch has stopped")
+            self._buffer += chunk
+        while b"\n" in self._buffer:
+            line, self._buffer = self._buffer.split(b"\n", 1)
+            grants.append(json.loads(line))
+        return grants
+
+    def close(self) -> None:
+        self.sock.close()
+
+
+class _LockstepSelector(selectors.BaseSelector):
+    """Runs what is due now; when the loop would wait, reports idle and waits for I/O or a grant."""
+
+    def __init__(self, clock: LockstepClock) -> None:
+        self._inner = selectors.DefaultSelector()
+        self._clock = clock
+        self._link_key: selectors.SelectorKey | None = None
+
+    def register(self, fileobj: Any, events: int, data: Any = None) -> selectors.SelectorKey:
+        return self._inner.register(fileobj, events, data)
+
+    def unregister(self, fileobj: Any) -> selectors.SelectorKey:
+        return self._inner.unregister(fileobj)
+
+    def modify(self, fileobj: Any, events: int, data: Any = None) -> selectors.SelectorKey:
+        return self._inner.modify(fileobj, events, data)
+
+    def get_map(self) -> Mapping[Any, selectors.SelectorKey]:
+        return self._inner.get_map()
+
+    def close(self) -> None:
+        self._inner.close()
+
+    def watch(self, link: _Link) -> None:
+        link.sock.setblocking(False)
+        self._link_key = self._inner.register(link.sock, selectors.EVENT_READ, None)
+
+    def select(self, timeout: float | None = None) -> list[tuple[selectors.SelectorKey, int]]:
+        clock = self._clock
+        if timeout is None or timeout > 0:
+            clock._report_idle(None if timeout is None else clock._virtual_elapsed + timeout)
+            timeout = None if clock._link is not None else timeout
+        ready = self._inner.select(timeout)
+        if self._link_key is None:
+            return ready
+        events = [(key, mask) for key, mask in ready if key is not self._link_key]
+        if len(events) != len(ready):
+            clock._take_grants()
+        return events
+
+
+class _LockstepLoop(asyncio.SelectorEventLoop):
+    def __init__(self, clock: LockstepClock) -> None:
+        self._lockstep_clock = clock
+        super().__init__(selector=_LockstepSelector(clock))
+        self._clock_resolution = 1e-9
+
+    def time(self) -> float:
+        return self._lockstep_clock._virtual_elapsed
+
+    def call_at(  # type: ignore[override]
+        self, when: float, callback: Callable[..., object], *args: Any, context: Any = None
+    ) -> asyncio.TimerHandle:
+        return super().call_at(on_grid(when), callback, *args, context=context)
+
+
+class LockstepClock(VirtualClock):
+    """Virtual time granted by the launch's time server (see the module doc).
+
+    Until :meth:`join` it is a clock standing at ``start``. ``on_advance`` callbacks run on the
+    loop after each grant that moved the time (the ``/clock`` publisher's cue).
+    """
+
+    def __init__(self, address: str, start: datetime | float = DEFAULT_VIRTUAL_START) -> None:
+        super().__init__(start)
+        self.address = address
+        self.ledger: Ledger = Ledger()
+        self._link: _Link | None = None
+        self._gen = 0
+        self._reported: tuple[int, int | None] | None = None
+        self._time_ns = 0
+        self._holds = 0
+        self.on_advance: list[Callable[[], object]] = []
+
+    @property
+    def is_lockstep(self) -> bool:
+        return True
+
+    def _make_loop(self) -> asyncio.AbstractEventLoop:
+        return _LockstepLoop(self)
+
+    def _loop_time(self) -> float:
+        return self._virtual_elapsed
+
+    monotonic = _loop_time
+
+    def join(self, name: str) -> None:
+        """Connect to the time server as ``name`` and wait until every node of the launch has."""
+        link = _Link(self.address, name)
+        link.wait_for_start()
+        self._link = link
+        selector = self.loop._selector  # type: ignore[attr-defined]
+        selector.watch(link)
+
+    def hold(self) -> contextlib.AbstractContextManager[None]:
+        """Keep the time where it is while the block runs (waits for what only real time brings,
+        such as a server's first status): the server grants nothing until it ends."""
+        return self._hold()
+
+    @contextlib.contextmanager
+    def _hold(self) -> Iterator[None]:
+        self._holds += 1
+        if self._holds == 1 and self._link is not None:
+            self._link.send({"gen": self._gen, "busy": True})
+            self._reported = None
+        try:
+            yield
+        finally:
+            self._holds -= 1
+
+    def _report_idle(self, next_due: float | None) -> None:
+        link = self._link
+        if link is None or self._holds:
+            return
+        next_ns = None if next_due is None else max(self._time_ns, round(next_due * NS))
+        changes = self.ledger.take_changes()
+        state = (self._gen, next_ns)
+        if changes is None and state == self._reported:
+            return
+        self._reported = state
+        link.send({"gen": self._gen, "next": next_ns, **(changes or {})})
+
+    def _take_grants(self) -> None:
+        assert self._link is not None
+        moved = False
+        for grant in self._link.take_grants():
+            self._gen = int(grant["gen"])
+            t_ns = int(grant["t"])
+            if t_ns > self._time_ns:
+                self._time_ns = t_ns
+                self._virtual_elapsed = t_ns / NS
+                moved = True
+        if moved:
+            for callback in self.on_advance:
+                self.loop.call_soon(callback)
+
+    @property
+    def time_ns(self) -> int:
+        """The granted virtual time: integer nanoseconds since ``start``."""
+        return self._time_ns
+
+    def close(self) -> None:
+        super().close()
+        if self._link is not None:
+            self._link.close()
+            self._link = None
