@@ -139,7 +139,8 @@ def say_command(text: tuple[str, ...], link: RobotLink) -> None:
     """Send TEXT as if speech-to-text heard it."""
     sentence = " ".join(text)
     link.say(sentence)
-    click.echo(f"heard: {sentence}")
+    reached = getattr(link, "delivered_to", None)
+    click.echo(f"heard: {sentence}" + (f" (by {', '.join(reached)})" if reached else ""))
 
 
 @click.group("emotion")

@@ -53,6 +53,8 @@ class RosLink:
         self._transport = middleware.tool_transport(self._clock)
         self._graph = cast(_GraphTransport, self._transport)
         self._node: Node = self._transport.node("cyborg_tool")
+        self.delivered_to: list[str] | None = None
+        """The nodes the last message reached (all the graph listed as listening), once sent."""
 
     def close(self) -> None:
         self._transport.close()
@@ -82,17 +84,26 @@ class RosLink:
                 f"no node listens on {topic}; fix: start the robot (`{launch}`) or check "
                 f"{self.middleware.graph_setting}"
             )
-        # Discovered late (ROS 2): volatile, so each listening node matches once (a latched
-        # publisher matches both halves of our subscriptions); the tool waits for them anyway, and
-        # for any listener the graph shows meanwhile (under load one node's endpoints may be
-        # discovered late).
-        publisher = self._node.publisher(topic, type(message), latch=not late)
+        # Latched, so that a listener whose reader meets ours only after the message was sent
+        # still gets it (ROS 2: a reader drops what a writer it has not yet discovered sends;
+        # our subscriptions take a message once, whichever of their two halves brings it). The
+        # tool waits for every listener the graph shows, then for each to acknowledge it.
+        publisher = self._node.publisher(topic, type(message), latch=True)
         while publisher.subscriber_count() < len(listeners) and loop.time() < deadline:
             await asyncio.sleep(0.01)
             if late:
                 listeners = sorted(set(listeners) | set(self._graph.subscribers_of(topic)))
+        matched = publisher.subscriber_count()
         publisher.publish(message)
+        acknowledged = await asyncio.to_thread(publisher.wait_delivered, CONNECT_TIMEOUT)
         await asyncio.sleep(DELIVERY_GRACE)
+        self.delivered_to = listeners
+        if not acknowledged or (late and matched < len(listeners)):
+            raise CyborgError(
+                f"{topic}: not every listener took the message (reached {matched} of "
+                f"{len(listeners)}: {', '.join(listeners)}); fix: check that those nodes run and "
+                f"share {self.middleware.graph_setting}, and send it again"
+            )
 
     async def _see_parameters(self) -> None:
         """Wait (up to CONNECT_TIMEOUT) until the controller's parameters can be read: on ROS 2 a

@@ -22,10 +22,13 @@ they are where a run may stop being reproducible.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
+import os
 import selectors
 import socket
+import tempfile
 import threading
 import time
 from collections import Counter
@@ -33,7 +36,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from cyborg.transport.lockstep import Channel
+from cyborg.transport.lockstep import Channel, SharedTime
 
 __all__ = ["TimeServer"]
 
@@ -50,6 +53,7 @@ class _Participant:
     buffer: bytes = b""
     gen: int = -1  # the grant its last report answered
     busy: bool = False  # it holds the time (LockstepClock.hold)
+    pending: int = 0  # messages it holds for the next grant (a delta cycle)
     next_ns: int | None = None
     sent: Counter[str] = field(default_factory=Counter)
     received: Counter[str] = field(default_factory=Counter)
@@ -66,15 +70,20 @@ class TimeServer:
         self,
         expected: set[str],
         *,
+        always: set[str] | None = None,
         patience: float = PATIENCE,
         on_grant: Callable[[int], None] | None = None,
     ) -> None:
         self.expected = set(expected)
+        self.always = set(always or ())
+        """Nodes woken by every grant that moves the time (the ``/clock`` publisher)."""
+        self._shared = SharedTime.create(tempfile.gettempdir())
         self.patience = patience
         self.on_grant = on_grant
         self.time_ns = 0
         self.gen = 0
         self.grants = 0
+        self.deltas = 0
         self.started = False
         self.written_off: Counter[str] = Counter()
         """Messages written off per channel (short channels; surpluses are not counted here)."""
@@ -104,6 +113,9 @@ class TimeServer:
             sock.close()
         self._listener.close()
         self._selector.close()
+        self._shared.close()
+        with contextlib.suppress(OSError):
+            os.unlink(self._shared.path)
 
     def joined(self) -> set[str]:
         return {p.name for p in list(self._participants.values()) if p.name}
@@ -147,15 +159,17 @@ class TimeServer:
             participant.name = str(message["hello"])
             if self.started:  # a node started again: it joins at the current time
                 participant.gen = -1
-                self._send(participant, {"start": True})
+                self._send(participant, {"start": True, "time_file": self._shared.path})
                 self._send(participant, {"gen": self.gen, "t": self.time_ns})
                 self._rebase(f"{participant.name} joined")
             return
         self._last_report = time.monotonic()
-        participant.gen = int(message["gen"])
+        # A report sent before the node saw the latest grant (which did not need it) is not older news.
+        participant.gen = max(participant.gen, int(message["gen"]))
         participant.busy = bool(message.get("busy"))
         if participant.busy:
             return
+        participant.pending = int(message.get("pending", 0))
         participant.next_ns = None if message.get("next") is None else int(message["next"])
         participant.sent.update(message.get("sent", {}))
         participant.received.update(message.get("recv", {}))
@@ -222,7 +236,7 @@ class TimeServer:
                 return
             self.started = True
             for p in participants:
-                self._send(p, {"start": True})
+                self._send(p, {"start": True, "time_file": self._shared.path})
             return
         if any(p.gen != self.gen or p.busy for p in participants if p.name):
             self._short_since = None
@@ -257,17 +271,31 @@ class TimeServer:
                 "; ".join(f"{n} message(s) on {c} ({self._who(c)})" for c, n in sorted(short.items())),
             )
         self._short_since = None
-        deadlines = [p.next_ns for p in participants if p.name and p.next_ns is not None]
-        if not deadlines:
-            return  # nothing is due anywhere: only a message from outside can start something
-        t_ns = max(self.time_ns, min(deadlines))
+        if any(p.pending for p in participants if p.name):
+            t_ns = self.time_ns  # a delta cycle: the messages of this instant are taken
+            self.deltas += 1
+        else:
+            deadlines = [p.next_ns for p in participants if p.name and p.next_ns is not None]
+            if not deadlines:
+                return  # nothing is due anywhere: only a message from outside can start something
+            t_ns = max(self.time_ns, min(deadlines))
         self.gen += 1
         self.grants += 1
         moved = t_ns > self.time_ns
         self.time_ns = t_ns
+        self._shared.write(self.gen, t_ns)  # before any node acts at the new time
         grant = {"gen": self.gen, "t": t_ns}
         for p in participants:
-            if p.name:
+            if not p.name:
+                continue
+            due = (
+                p.pending
+                or (p.next_ns is not None and p.next_ns <= t_ns)
+                or (moved and p.name in self.always)
+            )
+            if due:
                 self._send(p, grant)
+            else:  # nothing for it to do: it reads the time from the shared file when it wakes
+                p.gen = self.gen
         if moved and self.on_grant is not None:
             self.on_grant(t_ns)

@@ -129,13 +129,13 @@ class Launch:
             raise CyborgError("lockstep time runs as fast as the graph allows: give no speed with it")
         self._graph = self.middleware.launch_graph(self.data_dir, self.say)
         self._rendezvous, self._epoch_argument = self._graph.open(self.speed, lockstep=self.lockstep)
-        if self.lockstep:
-            self._time_server = TimeServer(set(self.parts)).start()
         if self.speed is not None or self.lockstep:
             self._clock_owner = clock_owner_of(self.config, self.parts)
             self.parts.sort(
                 key=lambda name: name != self._clock_owner
             )  # /clock first: the others wait for it
+        if self.lockstep:
+            self._time_server = TimeServer(set(self.parts), always={self._clock_owner or ""}).start()
         for name in self.parts:
             self._spawn(name, fresh=True)
         self.say(f"launched {len(self.processes)} nodes: {', '.join(self.parts)}")
@@ -248,7 +248,13 @@ class Launch:
                     process.wait(timeout=5)
         finally:
             if self._time_server is not None:
-                self._time_server.close()
+                server = self._time_server
+                server.close()
+                self.say(
+                    f"lockstep: {server.time_ns / NS:.1f} virtual s in {server.grants} grants "
+                    f"({server.deltas} of them delta cycles)"
+                    + (f"; written off: {dict(server.written_off)}" if server.written_off else "")
+                )
             if self._graph is not None:
                 self._graph.close()
 

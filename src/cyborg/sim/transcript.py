@@ -13,12 +13,27 @@ from __future__ import annotations
 import json
 from typing import IO, Any
 
-__all__ = ["INSTANT_ORDER", "TranscriptWriter"]
+__all__ = ["INSTANT_ORDER", "TranscriptWriter", "in_transcript_order"]
 
 INSTANT_ORDER = ("state", "motivator", "emotion", "say", "heard", "recognised", "pose")
 """How the records of one instant are ordered in a transcript (other kinds come last)."""
 
 _RANK = {kind: rank for rank, kind in enumerate(INSTANT_ORDER)}
+
+
+def _rank(record: dict[str, Any]) -> int:
+    return _RANK.get(str(record.get("type")), len(_RANK))
+
+
+def in_transcript_order(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """``records`` (in the order they came) as a transcript holds them: each instant in order."""
+    ordered: list[dict[str, Any]] = []
+    start = 0
+    for end in range(1, len(records) + 1):
+        if end == len(records) or records[end].get("t") != records[start].get("t"):
+            ordered.extend(sorted(records[start:end], key=_rank))
+            start = end
+    return ordered
 
 
 class TranscriptWriter:
@@ -40,7 +55,7 @@ class TranscriptWriter:
     def flush(self) -> None:
         """Write the held instant's records, in order, and flush the file."""
         instant, self._instant = self._instant, []
-        for record in sorted(instant, key=lambda r: _RANK.get(str(r.get("type")), len(_RANK))):
+        for record in sorted(instant, key=_rank):
             self.out.write(json.dumps(record) + "\n")
         self.out.flush()
 

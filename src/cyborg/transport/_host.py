@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import asyncio
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any, Protocol
 
 from cyborg.transport.base import TransportStats
@@ -33,6 +33,16 @@ class Host(Protocol):
 
     def to_loop(self, callback: Callable[..., object], *args: Any) -> None:
         """Run ``callback(*args)`` on the clock's loop; called from the middleware's threads."""
+
+    def arrive(
+        self,
+        channel: str,
+        sender: str,
+        callback: Callable[..., object],
+        *args: Any,
+        counted: Sequence[str] = (),
+    ) -> None:
+        """A message arrived: ``to_loop``, or with lockstep time in the next delta cycle."""
 
     def run_callback(self, callback: Callable[..., object], *args: Any) -> None:
         """Run a component's callback now, on the loop, counting and logging its failure."""

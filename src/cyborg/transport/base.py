@@ -34,7 +34,7 @@ from __future__ import annotations
 import enum
 import logging
 from abc import ABC, abstractmethod
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, Generic, Self, TypeVar
 
@@ -152,6 +152,12 @@ class Publisher(ABC, Generic[M]):
     def subscriber_count(self) -> int:
         """The subscriptions this publisher reaches now: in-process, every subscription of the
         topic; over ROS, those connected to it so far."""
+
+    def wait_delivered(self, timeout: float) -> bool:
+        """Block up to ``timeout`` real seconds until every subscription it reaches has taken
+        what it published (ROS 2: acknowledged it); True when all did. For a process about to
+        leave the graph (the command tool). In-process and on ROS 1 it returns True at once."""
+        return True
 
 
 class Subscription(ABC, Generic[M]):
@@ -602,6 +608,22 @@ class Transport(ABC):
         loop = self.clock.loop
         if not loop.is_closed():
             loop.call_soon_threadsafe(self.run_callback, callback, *args)
+
+    def arrive(
+        self,
+        channel: str,
+        sender: str,
+        callback: Callable[..., object],
+        *args: Any,
+        counted: Sequence[str] = (),
+    ) -> None:
+        """A message on ``channel`` from ``sender`` arrived on a middleware's thread: run
+        ``callback(*args)`` as :meth:`to_loop` does, or, with lockstep time, in the next delta
+        cycle (:meth:`Clock.deliver`), counting the channels in ``counted`` as received."""
+        if self.clock.is_lockstep:
+            self.clock.deliver(channel, sender, self.run_callback, callback, *args, counted=counted)
+        else:
+            self.to_loop(callback, *args)
 
     def wait_for_connections(self, timeout: float) -> list[str]:
         """Wait up to ``timeout`` real seconds until this process's topics are connected to every

@@ -18,9 +18,10 @@ import contextlib
 import logging
 import math
 import selectors
+import threading
 import time
 from abc import ABC, abstractmethod
-from collections.abc import Awaitable, Callable, Coroutine, Mapping
+from collections.abc import Awaitable, Callable, Coroutine, Mapping, Sequence
 from datetime import UTC, datetime
 from typing import TYPE_CHECKING, Any, TypeVar
 
@@ -68,6 +69,29 @@ class Clock(ABC):
     def is_lockstep(self) -> bool:
         """True if the time is granted by a time server shared with other processes."""
         return False
+
+    @property
+    def delivers_in_deltas(self) -> bool:
+        """True if messages are taken in delta cycles (:meth:`deliver`): virtual time at
+        ``--speed max``, in one process or in lockstep across a graph of them."""
+        return False
+
+    def deliver(
+        self,
+        channel: str,
+        sender: str,
+        callback: Callable[..., object] | None,
+        *args: Any,
+        counted: Sequence[str] = (),
+    ) -> None:
+        """A message on ``channel`` (a topic, or an action's leg such as ``/name#goal``) from
+        ``sender`` arrived: run ``callback(*args)`` on the loop in the next delta cycle (only
+        when :attr:`delivers_in_deltas`). The messages of one instant are taken a cycle at a
+        time, once nothing else is left to do at that instant; those that arrived in one cycle
+        in a fixed order (channel, sender, then arrival), so that what several senders send in
+        one instant is taken in the same order in every run, in one process or over ROS.
+        ``counted``: the channels whose arrival lockstep time counts with it."""
+        raise NotImplementedError(f"{type(self).__name__} takes each message as it comes")
 
     def hold(self) -> contextlib.AbstractContextManager[None]:
         """Keep the time from moving on while the block waits for something only real time
@@ -270,6 +294,9 @@ class _VirtualTimeSelector(selectors.BaseSelector):
             if real_timeout and before_origin > 0:  # time stands still until the origin
                 real_timeout = None if math.isinf(before_origin) else real_timeout + before_origin
             return self._inner.select(real_timeout)
+        if (timeout is None or timeout > 0) and self._clock._inbox:
+            self._clock._release()  # the next delta cycle of this instant, before the time moves
+            return []
         if timeout is None:
             # Nothing is scheduled: only I/O or another thread can wake us.
             return self._inner.select(None)
@@ -286,15 +313,19 @@ class _VirtualTimeSelector(selectors.BaseSelector):
         return []
 
 
-def on_grid(when: float) -> float:
-    """``when`` moved up to the next whole nanosecond.
+def on_grid(when: float, now: float) -> float:
+    """``when`` moved up to the next whole nanosecond (a float's noise below 0.001 ns aside),
+    and in any case after ``now`` if ``when`` is.
 
-    Timers of virtual time at ``--speed max`` fire on this grid, in one process as across the
-    processes of a lockstep graph: the time jumps from timer to timer, and how a time was
-    reached (directly, or through other processes' timers) must not change it by a float's last
-    bit, or a comparison such as "10 s in this state" would come out differently.
+    Timers of lockstep time fire on this grid (:mod:`cyborg.transport.lockstep`): the time
+    jumps from timer to timer through every process's timers, and how a time was reached must
+    not change it by a float's last bit, or a comparison such as "10 s in this state" would come
+    out differently from one run to the next.
     """
-    return math.ceil(round(when * NS, 3)) / NS
+    grid = math.ceil(round(when * NS, 3)) / NS
+    if grid <= now < when:  # a wait for a fraction of a nanosecond must still move the time
+        grid = max((round(now * NS) + 1) / NS, math.nextafter(now, math.inf))
+    return grid
 
 
 class _VirtualTimeLoop(asyncio.SelectorEventLoop):
@@ -302,13 +333,6 @@ class _VirtualTimeLoop(asyncio.SelectorEventLoop):
         self._virtual_clock = clock
         super().__init__(selector=_VirtualTimeSelector(clock))
         self._clock_resolution = 1e-9
-
-    def call_at(  # type: ignore[override]
-        self, when: float, callback: Callable[..., object], *args: Any, context: Any = None
-    ) -> asyncio.TimerHandle:
-        if self._virtual_clock.speed is None:
-            when = on_grid(when)
-        return super().call_at(when, callback, *args, context=context)
 
     def time(self) -> float:
         clock = self._virtual_clock
@@ -345,11 +369,37 @@ class VirtualClock(Clock):
                 "a real-time origin needs a speed: with speed=None the clock does not follow real time"
             )
         self.speed = speed
+        self._inbox: list[tuple[tuple[str, str, int], Callable[..., object] | None, tuple[Any, ...]]] = []
+        self._inbox_lock = threading.Lock()
+        self._arrivals: dict[tuple[str, str], int] = {}
         self._start_epoch = start.timestamp() if isinstance(start, datetime) else float(start)
         self._virtual_elapsed = 0.0
         self._real_origin = time.monotonic()
         if real_origin is not None:
             self.anchor(real_origin)
+
+    def deliver(
+        self,
+        channel: str,
+        sender: str,
+        callback: Callable[..., object] | None,
+        *args: Any,
+        counted: Sequence[str] = (),
+    ) -> None:
+        with self._inbox_lock:
+            key = (channel, sender)
+            self._arrivals[key] = arrival = self._arrivals.get(key, 0) + 1
+            self._inbox.append(((channel, sender, arrival), callback, args))
+
+    def _release(self) -> None:
+        """Hand the messages that arrived in the last delta cycle to the loop, in their order."""
+        with self._inbox_lock:
+            inbox, self._inbox = self._inbox, []
+        inbox.sort(key=lambda item: item[0])
+        loop = self.loop
+        for _, callback, args in inbox:
+            if callback is not None:
+                loop.call_soon(callback, *args)
 
     def anchor(self, real_origin: float) -> None:
         """Read ``start`` at wall-clock time ``real_origin`` (Unix seconds) and run at ``speed`` from there.
@@ -393,9 +443,7 @@ class VirtualClock(Clock):
     monotonic = _loop_time
 
     def _advance(self, seconds: float) -> None:
-        # To the next timer, which is on the nanosecond grid (on_grid): rounding takes away
-        # the float error of elapsed + (when - elapsed).
-        self._virtual_elapsed = round((self._virtual_elapsed + seconds) * NS) / NS
+        self._virtual_elapsed += seconds
 
     def now(self) -> float:
         return self._start_epoch + self._loop_time()

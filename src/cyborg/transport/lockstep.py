@@ -25,11 +25,16 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
+import math
+import mmap
+import os
 import selectors
 import socket
+import struct
+import tempfile
 import threading
 from collections import Counter
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from datetime import datetime
 from enum import StrEnum
 from typing import Any
@@ -37,8 +42,9 @@ from typing import Any
 from cyborg.errors import CyborgError
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, NS, VirtualClock, on_grid
 
-__all__ = ["NS", "Channel", "Ledger", "LockstepClock"]
+__all__ = ["NS", "Channel", "Ledger", "LockstepClock", "SharedTime"]
 
+LARGE_TIME_NS = 2**22 * NS
 CONNECT_TIMEOUT = 30.0  # real seconds a node tries to reach the time server
 START_TIMEOUT = 180.0  # real seconds a node waits for every other node to say hello
 
@@ -104,6 +110,52 @@ class Ledger:
             return changes
 
 
+class SharedTime:
+    """The granted time in a small shared file: the server writes it, every node reads it.
+
+    Layout: four little-endian int64: a sequence number (odd while a write is under way), the
+    grant's generation, its time in nanoseconds, and the sequence number again.
+    """
+
+    SIZE = 32
+
+    def __init__(self, path: str, memory: mmap.mmap) -> None:
+        self.path = path
+        self._memory = memory
+
+    @classmethod
+    def create(cls, folder: str) -> SharedTime:
+        handle, path = tempfile.mkstemp(prefix="cyborg-lockstep-", dir=folder)
+        os.write(handle, bytes(cls.SIZE))
+        memory = mmap.mmap(handle, cls.SIZE)
+        os.close(handle)
+        return cls(path, memory)
+
+    @classmethod
+    def open(cls, path: str) -> SharedTime:
+        with open(path, "r+b") as file:
+            return cls(path, mmap.mmap(file.fileno(), cls.SIZE))
+
+    def write(self, gen: int, t_ns: int) -> None:
+        sequence = struct.unpack_from("<q", self._memory, 0)[0] + 1
+        struct.pack_into("<q", self._memory, 0, sequence)
+        struct.pack_into("<qqq", self._memory, 8, gen, t_ns, sequence + 1)
+        struct.pack_into("<q", self._memory, 0, sequence + 1)
+
+    def read(self) -> tuple[int, int]:
+        while True:
+            first, gen, t_ns, last = struct.unpack_from("<qqqq", self._memory, 0)
+            if first == last and not first % 2:
+                return gen, t_ns
+
+    def close(self) -> None:
+        self._memory.close()
+
+
+def _nothing() -> None:
+    """What wakes a loop to report a message that arrived."""
+
+
 class _Link:
     """The connection to the time server: send reports, take grants (on the loop's thread)."""
 
@@ -123,12 +175,13 @@ class _Link:
     def send(self, message: Mapping[str, Any]) -> None:
         self.sock.sendall(json.dumps(message, separators=(",", ":")).encode() + b"\n")
 
-    def wait_for_start(self) -> None:
+    def wait_for_start(self) -> str:
+        """Wait for the start; return the path of the file that holds the granted time."""
         self.sock.settimeout(START_TIMEOUT)
         try:
             for message in self._read():
                 if message.get("start"):
-                    return
+                    return str(message["time_file"])
         except TimeoutError:
             pass
         raise CyborgError(
@@ -202,8 +255,7 @@ class _LockstepSelector(selectors.BaseSelector):
         if self._link_key is None:
             return ready
         events = [(key, mask) for key, mask in ready if key is not self._link_key]
-        if len(events) != len(ready):
-            clock._take_grants()
+        clock._take_grants(len(events) != len(ready))
         return events
 
 
@@ -219,7 +271,9 @@ class _LockstepLoop(asyncio.SelectorEventLoop):
     def call_at(  # type: ignore[override]
         self, when: float, callback: Callable[..., object], *args: Any, context: Any = None
     ) -> asyncio.TimerHandle:
-        return super().call_at(on_grid(when), callback, *args, context=context)
+        return super().call_at(
+            on_grid(when, self._lockstep_clock._virtual_elapsed), callback, *args, context=context
+        )
 
 
 class LockstepClock(VirtualClock):
@@ -234,14 +288,37 @@ class LockstepClock(VirtualClock):
         self.address = address
         self.ledger: Ledger = Ledger()
         self._link: _Link | None = None
+        self._shared: SharedTime | None = None
         self._gen = 0
-        self._reported: tuple[int, int | None] | None = None
+        self._reported: tuple[int, int | None, int] | None = None
         self._time_ns = 0
         self._holds = 0
         self.on_advance: list[Callable[[], object]] = []
 
+    def deliver(
+        self,
+        channel: str,
+        sender: str,
+        callback: Callable[..., object] | None,
+        *args: Any,
+        counted: Sequence[str] = (),
+    ) -> None:
+        """As :meth:`VirtualClock.deliver`, from any thread; the cycle starts with the server's
+        next grant. The channels in ``counted`` are counted received at once: the server grants
+        the cycle once nothing more is on its way."""
+        super().deliver(channel, sender, callback, *args)
+        for leg in counted:
+            self.ledger.received(leg)
+        loop = self.loop
+        if not loop.is_closed():
+            loop.call_soon_threadsafe(_nothing)  # wakes the loop, which reports the arrival
+
     @property
     def is_lockstep(self) -> bool:
+        return True
+
+    @property
+    def delivers_in_deltas(self) -> bool:
         return True
 
     def _make_loop(self) -> asyncio.AbstractEventLoop:
@@ -255,7 +332,7 @@ class LockstepClock(VirtualClock):
     def join(self, name: str) -> None:
         """Connect to the time server as ``name`` and wait until every node of the launch has."""
         link = _Link(self.address, name)
-        link.wait_for_start()
+        self._shared = SharedTime.open(link.wait_for_start())
         self._link = link
         selector = self.loop._selector  # type: ignore[attr-defined]
         selector.watch(link)
@@ -282,22 +359,36 @@ class LockstepClock(VirtualClock):
             return
         next_ns = None if next_due is None else max(self._time_ns, round(next_due * NS))
         changes = self.ledger.take_changes()
-        state = (self._gen, next_ns)
+        with self._inbox_lock:
+            state = (self._gen, next_ns, len(self._inbox))
         if changes is None and state == self._reported:
             return
         self._reported = state
-        link.send({"gen": self._gen, "next": next_ns, **(changes or {})})
+        with self._inbox_lock:
+            pending = len(self._inbox)
+        link.send({"gen": self._gen, "next": next_ns, "pending": pending, **(changes or {})})
 
-    def _take_grants(self) -> None:
-        assert self._link is not None
+    def _take_grants(self, granted: bool) -> None:
+        """After the loop woke: take the granted time (every node reads it from the shared file;
+        only the nodes that have something to do at it get a grant on their socket, which also
+        releases the messages they hold)."""
+        assert self._link is not None and self._shared is not None
         moved = False
-        for grant in self._link.take_grants():
-            self._gen = int(grant["gen"])
-            t_ns = int(grant["t"])
-            if t_ns > self._time_ns:
-                self._time_ns = t_ns
-                self._virtual_elapsed = t_ns / NS
-                moved = True
+        grants = self._link.take_grants() if granted else []
+        if grants:
+            self._release()
+        gen, t_ns = self._shared.read()
+        for grant in grants:
+            gen, t_ns = max(gen, int(grant["gen"])), max(t_ns, int(grant["t"]))
+        self._gen = max(self._gen, gen)
+        if t_ns > self._time_ns:
+            self._time_ns = t_ns
+            self._virtual_elapsed = t_ns / NS
+            moved = True
+            if t_ns > LARGE_TIME_NS:
+                # After ~48 days a float's step nears a nanosecond: asyncio must still see a
+                # timer due now as due (it takes those before now + its resolution).
+                self.loop._clock_resolution = 2 * math.ulp(self._virtual_elapsed)  # type: ignore[attr-defined]
         if moved:
             for callback in self.on_advance:
                 self.loop.call_soon(callback)
@@ -312,3 +403,6 @@ class LockstepClock(VirtualClock):
         if self._link is not None:
             self._link.close()
             self._link = None
+        if self._shared is not None:
+            self._shared.close()
+            self._shared = None

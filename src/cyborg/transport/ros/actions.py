@@ -157,9 +157,11 @@ class RosActionServer(ActionServer[G, R, F]):
         self._server.arrived = self._arrived
         self._server.start()
 
-    def _arrived(self, leg: str) -> None:  # rospy thread: a goal or cancel was handled by actionlib
+    def _arrived(self, leg: str) -> None:  # rospy thread: actionlib took a goal or cancel message
+        """Count a goal or cancel message that reached none of our callbacks (a duplicate goal, a
+        cancel of a finished one): lockstep time must see it arrive."""
         if self.ledger is not None:
-            self._transport.to_loop(self.ledger.received, f"{self.name}#{leg}")
+            self._transport.arrive(f"{self.name}#{leg}", "", _nothing, counted=(f"{self.name}#{leg}",))
 
     def _wrap(self, ros_handle: Any) -> _RosServerGoalHandle[G, R, F]:
         key = str(ros_handle.get_goal_id().id)
@@ -175,10 +177,16 @@ class RosActionServer(ActionServer[G, R, F]):
             self._handles.pop(goal_id, None)
 
     def _goal_cb(self, ros_handle: Any) -> None:  # rospy thread
-        self._transport.to_loop(self._on_goal, self._wrap(ros_handle))
+        handle = self._wrap(ros_handle)
+        leg = f"{self.name}#goal"
+        self._server.delivered = True
+        self._transport.arrive(leg, handle.sender, self._on_goal, handle, counted=(leg,))
 
     def _cancel_cb(self, ros_handle: Any) -> None:  # rospy thread
-        self._transport.to_loop(self._on_cancel, self._wrap(ros_handle))
+        leg = f"{self.name}#cancel"
+        counted = () if self._server.delivered else (leg,)  # one count for one cancel message
+        self._server.delivered = True
+        self._transport.arrive(leg, "", self._on_cancel, self._wrap(ros_handle), counted=counted)
 
     def shutdown(self) -> None:
         """Leave the graph quietly: first stop hearing goals and cancels, then stop publishing.
@@ -208,20 +216,27 @@ class _CountingActionServer(actionlib.ActionServer):  # type: ignore[misc]
     counts them as received after their callbacks are on the loop)."""
 
     arrived: Callable[[str], None] | None = None
+    delivered = False  # a goal or cancel callback of ours ran for the message being taken
 
     def internal_goal_callback(self, goal: Any) -> None:
+        self.delivered = False
         try:
             super().internal_goal_callback(goal)
         finally:
-            if self.arrived is not None:
+            if self.arrived is not None and not self.delivered:
                 self.arrived("goal")
 
     def internal_cancel_callback(self, goal_id: Any) -> None:
+        self.delivered = False
         try:
             super().internal_cancel_callback(goal_id)
         finally:
-            if self.arrived is not None:
+            if self.arrived is not None and not self.delivered:
                 self.arrived("cancel")
+
+
+def _nothing() -> None:
+    """What a counted arrival without a callback runs."""
 
 
 def _publish_nothing(*args: object) -> None:
@@ -361,12 +376,15 @@ class RosActionClient(ActionClient[G, R, F]):
     ) -> ClientGoalHandle[G, R, F]:
         handle = _RosClientGoalHandle(self, goal, on_feedback, on_status)
         transport = self.transport
+        answered = False
 
         def transition(ros_handle: Any) -> None:  # rospy thread
+            nonlocal answered
             status = GoalStatus(int(ros_handle.get_goal_status()))
             result = None
             text = ""
-            if ros_handle.get_comm_state() == actionlib.CommState.DONE:
+            done = ros_handle.get_comm_state() == actionlib.CommState.DONE
+            if done:
                 raw = ros_handle.get_result()
                 result = (
                     from_ros(raw, self.action_type.result) if raw is not None else self.action_type.result()
@@ -374,10 +392,21 @@ class RosActionClient(ActionClient[G, R, F]):
                 text = str(ros_handle.get_goal_status_text())
             elif status.is_terminal:
                 return  # wait for DONE to carry the result
-            transport.to_loop(self._update, handle, status, result, text)
+            # Lockstep time counts the goal's first answer (accepted, or ended at once) and its result.
+            counted = []
+            if not answered and (status is GoalStatus.ACTIVE or done):
+                answered = True
+                counted.append(f"{self.name}#accept")
+            if done:
+                counted.append(f"{self.name}#result")
+            leg = "result" if done else "accept" if status is GoalStatus.ACTIVE else "status"
+            transport.arrive(
+                f"{self.name}#{leg}", "", handle.update_status, status, result, text, counted=counted
+            )
 
         def feedback(ros_handle: Any, ros_feedback: Any) -> None:  # rospy thread
-            transport.to_loop(handle.deliver_feedback, from_ros(ros_feedback, self.action_type.feedback))
+            fb = from_ros(ros_feedback, self.action_type.feedback)
+            transport.arrive(f"{self.name}#feedback", "", handle.deliver_feedback, fb)
 
         if not self.server_available():
             transport.clock.loop.call_soon(
@@ -393,19 +422,6 @@ class RosActionClient(ActionClient[G, R, F]):
         self._active.add(handle)
         self._arm_watchdog()
         return handle
-
-    def _update(
-        self, handle: _RosClientGoalHandle[G, R, F], status: GoalStatus, result: R | None, text: str
-    ) -> None:
-        """The server's report, on the loop: counted (lockstep time) as the goal's answer and result."""
-        ledger = self._ledger
-        if ledger is not None and not handle.status.is_terminal and status is not handle.status:
-            answered = handle.status in (GoalStatus.PENDING, GoalStatus.RECALLING)
-            if answered and (status is GoalStatus.ACTIVE or status.is_terminal):
-                ledger.received(f"{self.name}#accept")
-            if status.is_terminal:
-                ledger.received(f"{self.name}#result")
-        handle.update_status(status, result, text)
 
     def forget(self, handle: _RosClientGoalHandle[G, R, F]) -> None:
         self._active.discard(handle)

@@ -155,12 +155,7 @@ class RosSubscription(Subscription[M]):
     def _on_ros(self, ros_message: Any) -> None:  # rospy thread
         info = MessageInfo(sender=sender(ros_message), stamp=time.time())
         message = from_ros(ros_message, self._type)
-        self._transport.to_loop(self._deliver, message, info)
-
-    def _deliver(self, message: M, info: MessageInfo) -> None:  # on the loop
-        if self._ledger is not None:
-            self._ledger.received(self.topic)
-        self._queue.put(message, info)
+        self._transport.arrive(self.topic, info.sender, self._queue.put, message, info, counted=(self.topic,))
 
     def unsubscribe(self) -> None:
         """Deliver nothing more and leave the topic."""

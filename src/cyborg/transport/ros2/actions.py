@@ -72,6 +72,10 @@ RESULT_KEPT = 5
 _ACCEPT, _REJECT, _RECALL = "accept", "reject", "recall"
 
 
+def _nothing() -> None:
+    """What a counted arrival without a callback runs."""
+
+
 def _text_message(goal_id: bytes, text: str) -> RosString:
     return RosString(data=f"{goal_id.hex()}\t{text}")
 
@@ -261,15 +265,6 @@ class Ros2ActionServer(ActionServer[G, R, F]):
         if self._ledger is not None:
             self._ledger.sent(f"{self.name}#{leg}")
 
-    def _goal_arrived(self, handle: _Ros2ServerGoalHandle[G, R, F]) -> Awaitable[None] | None:  # on the loop
-        if self._ledger is not None:
-            self._ledger.received(f"{self.name}#goal")
-        return self._on_goal(handle)
-
-    def _cancel_handled(self) -> None:  # on the loop, after the cancel's callbacks
-        if self._ledger is not None:
-            self._ledger.received(f"{self.name}#cancel")
-
     # executor threads
     def _goal(self, ros_goal: Any) -> GoalResponse:
         goal_id: bytes = getattr(_RclServer._deciding, "goal_id", uuid.uuid4().bytes)
@@ -279,7 +274,8 @@ class Ros2ActionServer(ActionServer[G, R, F]):
             if self._closed:
                 return GoalResponse.REJECT
             self._goals[goal_id] = handle
-        self._transport.to_loop(self._goal_arrived, handle)
+        leg = f"{self.name}#goal"
+        self._transport.arrive(leg, sender, self._on_goal, handle, counted=(leg,))
         if not handle.decided.wait(DECISION_LIMIT):
             log.warning(
                 "action %s: goal %s was neither accepted nor rejected; rejecting it",
@@ -332,13 +328,14 @@ class Ros2ActionServer(ActionServer[G, R, F]):
     def _cancel(self, ros_handle: Any) -> CancelResponse:
         handle = self._goals.get(bytes(ros_handle.goal_id.uuid))
         if handle is not None and handle.cancel_requested_now():
-            self._transport.to_loop(self._on_cancel, handle)
+            self._transport.arrive(f"{self.name}#cancel", "", self._on_cancel, handle)
         return CancelResponse.ACCEPT
 
     def cancels_marked(self) -> None:
         """A cancel request was answered: its goals that rcl now marks canceling may end CANCELED."""
-        if self._ledger is not None:
-            self._transport.to_loop(self._cancel_handled)
+        if self._ledger is not None:  # after the cancel's callbacks: one count for the request
+            leg = f"{self.name}#cancel"
+            self._transport.arrive(leg, "", _nothing, counted=(leg,))
         with self._lock:
             goals = list(self._goals.values())
         for handle in goals:
@@ -351,7 +348,7 @@ class Ros2ActionServer(ActionServer[G, R, F]):
         with self._lock:
             handle = self._goals.get(goal_id)
         if handle is not None and handle.status is GoalStatus.PENDING and handle.cancel_requested_now():
-            self._transport.to_loop(self._on_cancel, handle)
+            self._transport.arrive(f"{self.name}#cancel", "", self._on_cancel, handle)
 
     def shutdown(self) -> None:
         with self._lock:
@@ -469,10 +466,6 @@ class Ros2ActionClient(ActionClient[G, R, F]):
                 self._ledger.listen(f"{name}#{leg}", Channel.UNICAST)
             self._ledger.listen(f"{name}#text", Channel.BROADCAST)
 
-    def _count_received(self, leg: str) -> None:
-        if self._ledger is not None:
-            self._ledger.received(f"{self.name}#{leg}")
-
     def _count_sent(self, leg: str) -> None:
         if self._ledger is not None:
             self._ledger.sent(f"{self.name}#{leg}")
@@ -498,13 +491,16 @@ class Ros2ActionClient(ActionClient[G, R, F]):
             loop.call_soon(handle.update_status, GoalStatus.LOST, None, f"no action server at {self.name}")
             return handle
         self._active[goal_id] = handle
-        to_loop = self.transport.to_loop
+
+        arrive, name = self.transport.arrive, self.name
 
         def feedback(message: Any) -> None:  # executor thread
-            to_loop(handle.deliver_feedback, from_ros2(message.feedback, self.action_type.feedback))
+            fb = from_ros2(message.feedback, self.action_type.feedback)
+            arrive(f"{name}#feedback", "", handle.deliver_feedback, fb)
 
         def answered(future: Any) -> None:  # executor thread
-            to_loop(self._answered, handle, future.result() if future.exception() is None else None)
+            response = future.result() if future.exception() is None else None
+            arrive(f"{name}#accept", "", self._answered, handle, response, counted=(f"{name}#accept",))
 
         self._count_sent("goal")
         future = self._client.send_goal_async(
@@ -516,7 +512,6 @@ class Ros2ActionClient(ActionClient[G, R, F]):
 
     # on the loop
     def _answered(self, handle: _Ros2ClientGoalHandle[G, R, F], ros_handle: Any) -> None:
-        self._count_received("accept")
         if handle.status.is_terminal:
             return
         if ros_handle is None or not ros_handle.accepted:
@@ -524,17 +519,17 @@ class Ros2ActionClient(ActionClient[G, R, F]):
             return
         handle.ros_handle = ros_handle
         handle.update_status(GoalStatus.ACTIVE, None, "")
-        to_loop = self.transport.to_loop
+        arrive, name = self.transport.arrive, self.name
 
         def result(future: Any) -> None:  # executor thread
-            to_loop(self._resulted, handle, future.result() if future.exception() is None else None)
+            response = future.result() if future.exception() is None else None
+            arrive(f"{name}#result", "", self._resulted, handle, response, counted=(f"{name}#result",))
 
         self._client.when_done(ros_handle.get_result_async(), result)
         if handle.cancel_asked:
             self.send_cancel(handle)
 
     def _resulted(self, handle: _Ros2ClientGoalHandle[G, R, F], response: Any) -> None:
-        self._count_received("result")
         if response is None:
             self._end(handle, GoalStatus.LOST, None)
             return
@@ -583,10 +578,10 @@ class Ros2ActionClient(ActionClient[G, R, F]):
             goal_id = bytes.fromhex(goal_hex)
         except ValueError:
             return
-        self.transport.to_loop(self._got_text, goal_id, text)
+        leg = f"{self.name}#text"
+        self.transport.arrive(leg, "", self._got_text, goal_id, text, counted=(leg,))
 
     def _got_text(self, goal_id: bytes, text: str) -> None:
-        self._count_received("text")
         handle = self._active.get(goal_id)
         if handle is None:
             return

@@ -23,6 +23,7 @@ from collections.abc import Awaitable, Callable
 from typing import Any
 
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.duration import Duration
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.exceptions import InvalidHandle
 from rclpy.node import Node as RclNode
@@ -125,6 +126,12 @@ class Ros2Publisher(Publisher[M]):
         """The subscriptions DDS has matched with this publisher so far."""
         return 0 if self._pub is None else int(self._pub.get_subscription_count())
 
+    def wait_delivered(self, timeout: float) -> bool:
+        """Until every matched subscription acknowledged what was published (reliable QoS)."""
+        if self._pub is None:
+            return False
+        return bool(self._pub.wait_for_all_acked(Duration(nanoseconds=int(timeout * 1e9))))
+
     def unregister(self) -> None:
         """Leave the topic (its node's shutdown does this); a second call does nothing."""
         publisher, self._pub = self._pub, None
@@ -202,12 +209,8 @@ class Ros2Subscription(Subscription[M]):
                 self._last[gid] = sequence
             sender = self._senders.name_of(gid) if gid else ""
             info = MessageInfo(sender=sender, stamp=time.time())
-            self._transport.to_loop(self._deliver, from_ros2(ros_message, self._type), info)
-
-    def _deliver(self, message: M, info: MessageInfo) -> None:  # on the loop
-        if self._ledger is not None:
-            self._ledger.received(self.topic)
-        self._queue.put(message, info)
+            message = from_ros2(ros_message, self._type)
+            self._transport.arrive(self.topic, sender, self._queue.put, message, info, counted=(self.topic,))
 
     def unsubscribe(self) -> None:
         """Deliver nothing more and destroy both rclpy subscriptions."""
