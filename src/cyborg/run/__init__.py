@@ -10,6 +10,7 @@
   :mod:`~cyborg.run.logs`: where a node's log lines go.
 - :mod:`~cyborg.run.supervisor`: every part as its own process, restarted when it stops
   (``cyborg launch``); :mod:`~cyborg.run.roslaunch`: the same as a roslaunch file.
-- :mod:`~cyborg.run.simtime`: virtual time shared by processes (the origin, ``/clock``).
+- :mod:`~cyborg.run.simtime`: virtual time shared by processes (the origin, ``/clock``);
+  :mod:`~cyborg.run.lockstep`: the time server of lockstep time (``--speed max`` over ROS).
 - :mod:`~cyborg.run.scenario`: a scenario script over ROS (the ``cyborg_scenario`` node).
 """

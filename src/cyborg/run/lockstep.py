@@ -36,7 +36,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from cyborg.transport.lockstep import Channel, SharedTime
+from cyborg.transport.ledger import Channel
+from cyborg.transport.lockstep import SharedTime
 
 __all__ = ["TimeServer"]
 
@@ -88,6 +89,10 @@ class TimeServer:
         self.written_off: Counter[str] = Counter()
         """Messages written off per channel (short channels; surpluses are not counted here)."""
         self._offset: Counter[str] = Counter()
+        self._sent: Counter[str] = Counter()  # over the nodes now taking part
+        self._received: Counter[str] = Counter()
+        self._listeners: dict[str, tuple[int, Channel]] = {}
+        self._balance: dict[str, int] = {}  # the channels that do not balance, and by how much
         self._short_since: float | None = None
         self._last_report = 0.0
         self._listener = socket.create_server(("127.0.0.1", 0))
@@ -171,15 +176,37 @@ class TimeServer:
             return
         participant.pending = int(message.get("pending", 0))
         participant.next_ns = None if message.get("next") is None else int(message["next"])
-        participant.sent.update(message.get("sent", {}))
-        participant.received.update(message.get("recv", {}))
+        touched: set[str] = set()
+        for channel, count in message.get("sent", {}).items():
+            participant.sent[channel] += count
+            self._sent[channel] += count
+            touched.add(channel)
+        for channel, count in message.get("recv", {}).items():
+            participant.received[channel] += count
+            self._received[channel] += count
+            touched.add(channel)
         for channel, (count, kind) in message.get("listen", {}).items():
+            before, _ = participant.listening.get(channel, (0, Channel(kind)))
             participant.listening[channel] = (int(count), Channel(kind))
+            total, _ = self._listeners.get(channel, (0, Channel(kind)))
+            self._listeners[channel] = (total + int(count) - before, Channel(kind))
+            touched.add(channel)
+        for channel in touched:
+            self._recount(channel)
 
     def _leave(self, participant: _Participant) -> None:
         self._selector.unregister(participant.sock)
         participant.sock.close()
         del self._participants[participant.sock]
+        for channel, count in participant.sent.items():
+            self._sent[channel] -= count
+        for channel, count in participant.received.items():
+            self._received[channel] -= count
+        for channel, (count, kind) in participant.listening.items():
+            total, _ = self._listeners.get(channel, (0, kind))
+            self._listeners[channel] = (total - count, kind)
+        for channel in set(participant.sent) | set(participant.received) | set(participant.listening):
+            self._recount(channel)
         if participant.name:
             log.info("lockstep: %s left at %.3f s", participant.name, self.time_ns / 1e9)
             self._rebase(f"{participant.name} left")
@@ -193,25 +220,24 @@ class TimeServer:
         except OSError:
             pass  # it left: its socket reads empty next
 
+    def _recount(self, channel: str) -> None:
+        """Received minus expected on ``channel``, beyond what was written off, kept up to date."""
+        count, kind = self._listeners.get(channel, (0, Channel.BROADCAST))
+        sent = self._sent[channel]
+        expected = sent * count if kind is Channel.BROADCAST else (sent if count else 0)
+        difference = self._received[channel] - expected - self._offset[channel]
+        if difference:
+            self._balance[channel] = difference
+        else:
+            self._balance.pop(channel, None)
+
+    def _write_off(self, channel: str, difference: int) -> None:
+        self._offset[channel] += difference
+        self._recount(channel)
+
     def _shortfall(self) -> dict[str, int]:
         """Per channel: received minus expected, beyond what was written off (0: balanced)."""
-        sent: Counter[str] = Counter()
-        received: Counter[str] = Counter()
-        listeners: dict[str, tuple[int, Channel]] = {}
-        for p in self._participants.values():
-            sent.update(p.sent)
-            received.update(p.received)
-            for channel, (count, kind) in p.listening.items():
-                total, _ = listeners.get(channel, (0, kind))
-                listeners[channel] = (total + count, kind)
-        balance: dict[str, int] = {}
-        for channel in set(sent) | set(received) | set(self._offset):
-            count, kind = listeners.get(channel, (0, Channel.BROADCAST))
-            expected = sent[channel] * count if kind is Channel.BROADCAST else (sent[channel] if count else 0)
-            difference = received[channel] - expected - self._offset[channel]
-            if difference:
-                balance[channel] = difference
-        return balance
+        return dict(self._balance)
 
     def _who(self, channel: str) -> str:
         """Who sent and who received how many on ``channel``, for a warning."""
@@ -225,7 +251,7 @@ class TimeServer:
 
     def _rebase(self, why: str) -> None:
         for channel, difference in self._shortfall().items():
-            self._offset[channel] += difference
+            self._write_off(channel, difference)
             log.debug("lockstep: %s; %s rebased by %d", why, channel, difference)
 
     def _advance(self) -> None:
@@ -251,7 +277,7 @@ class TimeServer:
                 self._short_since = None
                 return
             for channel, difference in surplus.items():
-                self._offset[channel] += difference
+                self._write_off(channel, difference)
                 log.debug("lockstep: %d message(s) on %s from outside the lockstep", difference, channel)
         if short:
             now = time.monotonic()
@@ -261,7 +287,7 @@ class TimeServer:
             if now - self._short_since < self.patience:
                 return
             for channel, missing in short.items():
-                self._offset[channel] -= missing
+                self._write_off(channel, -missing)
                 self.written_off[channel] += missing
             log.warning(
                 "lockstep: at %.3f s every node was idle for %.1f s while %s had not arrived; "

@@ -4,6 +4,7 @@
 :mod:`~cyborg.sim.planner` plans its routes on the map, with the A* search in
 :mod:`~cyborg.sim.grid_search`, searched ahead on a second process by
 :mod:`~cyborg.sim.search_ahead` (whose worker is :mod:`~cyborg.sim._search_worker`).
-:mod:`~cyborg.sim.script` reads scenario scripts and :mod:`~cyborg.sim.scenario` runs them;
+:mod:`~cyborg.sim.script` reads scenario scripts and :mod:`~cyborg.sim.scenario` runs them,
+writing transcripts with :mod:`~cyborg.sim.transcript`;
 :mod:`~cyborg.sim.witness` tells a failed step what dropped or broke what it waited for.
 """

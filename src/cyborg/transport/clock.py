@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 from cyborg.errors import CyborgError, InvalidValueError
 
 if TYPE_CHECKING:
-    from cyborg.transport.lockstep import Ledger
+    from cyborg.transport.ledger import Ledger
 
 T = TypeVar("T")
 

@@ -4,20 +4,22 @@ In one process virtual time jumps to the next timer whenever the loop has nothin
 (:class:`~cyborg.transport.clock.VirtualClock`). Over ROS every process has its own loop, so a
 jump is only safe once *every* process has nothing to do at the current time and no message is
 on its way. A :class:`LockstepClock` does not jump by itself: when its loop would wait, it tells
-the time server (``cyborg.run.lockstep``) that it is idle, when its next timer is due and what
-its transport sent and received since it last said (the :class:`Ledger`), then waits for I/O:
-a message from another node (handled, then it reports again) or a grant of a new time from the
-server, which comes once every node is idle and every message sent has been received.
+the time server (:mod:`cyborg.run.lockstep`) that it is idle, when its next timer is due, how
+many messages it holds for the next delta cycle and what its transport sent and received since
+it last said (the :class:`~cyborg.transport.ledger.Ledger`); then it waits for I/O.
 
-A channel is what the ledger counts on: a topic, or one leg of a service call or action goal
-(``/name#goal``, ``#accept``, ``#result``, ``#cancel``, ``#text``, ``#request``, ``#response``).
-A *broadcast* channel reaches each listener (a topic: every subscription); a *unicast* one
-reaches one (an action goal reaches its server, a result its client).
+Messages that arrive are held (:meth:`LockstepClock.deliver`) and taken at the next grant, in
+a fixed order: the messages of one instant are taken in delta cycles, a hop at a time, so that
+what several senders send in one instant is taken in the same order in every run. The server
+grants the same time again (a delta cycle) while any node holds messages, else the earliest
+next timer; a grant goes only to the nodes that have something to do, and every node reads the
+granted time from a small shared file (:class:`SharedTime`) when it wakes.
 
 The wire protocol is JSON lines over a TCP connection to the server: ``{"hello": NAME}``, then
-reports ``{"gen", "next", "sent", "recv", "listen"}`` (counts since the last report; ``next`` the
-next timer in integer nanoseconds of virtual time, or null); the server answers ``{"start":
-true}`` once every node has said hello, then grants ``{"gen", "t"}``.
+reports ``{"gen", "next", "pending", "sent", "recv", "listen"}`` (counts since the last report;
+``next`` the next timer in integer nanoseconds of virtual time, or null; ``{"gen", "busy": true}``
+while the node holds the time, :meth:`Clock.hold`); the server answers ``{"start": true,
+"time_file": PATH}`` once every node has said hello, then grants ``{"gen", "t"}``.
 """
 
 from __future__ import annotations
@@ -32,82 +34,19 @@ import selectors
 import socket
 import struct
 import tempfile
-import threading
-from collections import Counter
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from datetime import datetime
-from enum import StrEnum
 from typing import Any
 
 from cyborg.errors import CyborgError
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, NS, VirtualClock, on_grid
+from cyborg.transport.ledger import Channel, Ledger
 
-__all__ = ["NS", "Channel", "Ledger", "LockstepClock", "SharedTime"]
+__all__ = ["LockstepClock", "SharedTime"]
 
 LARGE_TIME_NS = 2**22 * NS
 CONNECT_TIMEOUT = 30.0  # real seconds a node tries to reach the time server
 START_TIMEOUT = 180.0  # real seconds a node waits for every other node to say hello
-
-
-class Channel(StrEnum):
-    """How many copies of one message the listeners of a channel receive."""
-
-    BROADCAST = "b"  # one per listener (a topic's subscriptions)
-    UNICAST = "u"  # one, when anyone listens (a goal to its server, a result to its client)
-
-
-class Ledger:
-    """What this process sent and received on each channel, and on which channels it listens.
-
-    Called from the loop (and, for ``sent``, from any thread): counts only grow. The lockstep
-    clock reads the changes since its last report (:meth:`take_changes`).
-    """
-
-    def __init__(self) -> None:
-        self._lock = threading.Lock()
-        self._sent: Counter[str] = Counter()
-        self._received: Counter[str] = Counter()
-        self._listening: dict[str, tuple[int, Channel]] = {}
-        self._changed_listening: set[str] = set()
-
-    def sent(self, channel: str, count: int = 1) -> None:
-        with self._lock:
-            self._sent[channel] += count
-
-    def received(self, channel: str, count: int = 1) -> None:
-        with self._lock:
-            self._received[channel] += count
-
-    def listen(self, channel: str, kind: Channel = Channel.BROADCAST) -> None:
-        """One more endpoint of this process receives ``channel`` (a subscription, a server)."""
-        with self._lock:
-            count, _ = self._listening.get(channel, (0, kind))
-            self._listening[channel] = (count + 1, kind)
-            self._changed_listening.add(channel)
-
-    def unlisten(self, channel: str) -> None:
-        with self._lock:
-            count, kind = self._listening.get(channel, (0, Channel.BROADCAST))
-            self._listening[channel] = (max(0, count - 1), kind)
-            self._changed_listening.add(channel)
-
-    def take_changes(self) -> dict[str, Any] | None:
-        """The counts since the last call (None when nothing changed)."""
-        with self._lock:
-            if not (self._sent or self._received or self._changed_listening):
-                return None
-            changes: dict[str, Any] = {
-                "sent": dict(self._sent),
-                "recv": dict(self._received),
-                "listen": {
-                    channel: [self._listening[channel][0], self._listening[channel][1].value]
-                    for channel in self._changed_listening
-                },
-            }
-            self._sent.clear()
-            self._received.clear()
-            self._changed_listening.clear()
-            return changes
 
 
 class SharedTime:

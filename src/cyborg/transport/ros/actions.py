@@ -31,7 +31,7 @@ from cyborg.transport.base import (
     R,
     ServerGoalHandle,
 )
-from cyborg.transport.lockstep import Channel
+from cyborg.transport.ledger import Channel
 from cyborg.transport.messages import ActionType, Message
 from cyborg.transport.ros.convert import from_ros, ros_class, sender, to_ros
 from cyborg.transport.ros.master import UNREACHABLE, WATCH

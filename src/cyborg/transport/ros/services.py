@@ -18,7 +18,7 @@ import rospy  # type: ignore[import-not-found]
 from cyborg.errors import ServiceTimeoutError, ServiceUnavailableError, TransportError
 from cyborg.transport._host import Host
 from cyborg.transport.base import MessageInfo, Req, Resp, ServiceProxy, ServiceServer
-from cyborg.transport.lockstep import Channel
+from cyborg.transport.ledger import Channel
 from cyborg.transport.messages import ServiceType
 from cyborg.transport.ros.convert import from_ros, ros_class, sender, to_ros
 

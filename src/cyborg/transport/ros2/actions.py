@@ -46,7 +46,7 @@ from cyborg.transport.base import (
     R,
     ServerGoalHandle,
 )
-from cyborg.transport.lockstep import Channel
+from cyborg.transport.ledger import Channel
 from cyborg.transport.messages import ActionType
 from cyborg.transport.ros2.convert import from_ros2, ros2_class, to_ros2
 from cyborg.transport.ros2.host import Host

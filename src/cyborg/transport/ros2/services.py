@@ -19,7 +19,7 @@ from rclpy.node import Node as RclNode
 from cyborg.errors import ServiceTimeoutError, ServiceUnavailableError, TransportError
 from cyborg.transport._host import poll_until
 from cyborg.transport.base import MessageInfo, Req, Resp, ServiceProxy, ServiceServer, normalize_node_name
-from cyborg.transport.lockstep import Channel
+from cyborg.transport.ledger import Channel
 from cyborg.transport.messages import ServiceType
 from cyborg.transport.ros2.convert import from_ros2, ros2_class, to_ros2
 from cyborg.transport.ros2.host import Host
