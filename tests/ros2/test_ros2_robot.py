@@ -1,7 +1,7 @@
 """The whole robot on ROS 2, as a user runs it: every part its own ``cyborg node --ros2`` process.
 
 ``cyborg sim --ros2 --script FILE`` plays the thesis's four scenarios (10.2) on the robot's ROS 2
-nodes in shared virtual time at SPEED times real time, the simulated base publishing it on
+nodes in lockstep time (``--speed max``), the simulated base publishing it on
 /clock; the transcript must pass the checks of the embedded and ROS 1 runs
 (tests/scenarios/expectations.py, and the scripts' own ``expect:`` steps, which fail the run).
 ``cyborg launch --ros2`` starts the robot with its API node; the command tool (``--ros2``) and
@@ -38,7 +38,6 @@ from tests.support.paths import ROOT, SCENARIOS
 from tests.support.ros2 import Ros2Session, isolate
 
 TOOLS = Path(__file__).resolve().parent / "tools.yaml"
-SPEED = 25.0  # virtual seconds per real second, as the ROS 1 runs (tests/ros/test_scenarios_ros.py)
 
 
 @pytest.mark.parametrize("name", ["scenario_a", "scenario_b", "scenario_c", "scenario_d"])
@@ -58,7 +57,7 @@ def test_ros2_scenario(name: str, own_session: Ros2Session, tmp_path: Path) -> N
     script = load_script(script_path)
     transcript = tmp_path / "transcript.jsonl"
     command = [sys.executable, "-m", "cyborg.cli", "sim", "--ros2", "--script", str(script_path)]
-    command += ["--speed", str(SPEED), "--transcript", str(transcript), "--db", str(tmp_path / "data")]
+    command += ["--speed", "max", "--transcript", str(transcript), "--db", str(tmp_path / "data")]
     env = {**os.environ, "ROS_LOG_DIR": str(tmp_path / "log")}
     try:  # the session's loop runs meanwhile: it is where /clock's callbacks run
         result = session.clock.run(
@@ -70,7 +69,8 @@ def test_ros2_scenario(name: str, own_session: Ros2Session, tmp_path: Path) -> N
     records = [json.loads(line) for line in transcript.read_text().splitlines()]
     check_transcript(name, records, transcript)
     assert records[-1]["t"] <= script.until + 1
-    assert "virtual time: " in result.stdout and f"wrote {len(records)} records" in result.stdout
+    assert "in lockstep" in result.stdout and f"wrote {len(records)} records" in result.stdout
+    assert "written off" not in result.stdout + result.stderr, "every message was counted in and out"
     assert re.search(r"cyborg_scenario: (\d+) of \1 expectations? met", result.stdout), result.stdout[-2000:]
 
     # Simulated time on /clock, from the simulated base's process, starting at the script's start.

@@ -84,6 +84,8 @@ class TimeServer:
         self.time_ns = 0
         self.gen = 0
         self.grants = 0
+        self.woken: Counter[str] = Counter()
+        """Grants each node was woken by (it had a timer due or messages to take)."""
         self.deltas = 0
         self.started = False
         self.written_off: Counter[str] = Counter()
@@ -321,6 +323,7 @@ class TimeServer:
             )
             if due:
                 self._send(p, grant)
+                self.woken[p.name] += 1
             else:  # nothing for it to do: it reads the time from the shared file when it wakes
                 p.gen = self.gen
         if moved and self.on_grant is not None:

@@ -34,8 +34,7 @@ from cyborg.errors import CyborgError
 from cyborg.run.lockstep import TimeServer
 from cyborg.run.middleware import ROS1, LaunchGraph, Middleware, exit_description
 from cyborg.run.simtime import EPOCH_MARGIN, READY_TIMEOUT, Rendezvous, clock_owner_of
-from cyborg.transport.clock import DEFAULT_VIRTUAL_START
-from cyborg.transport.lockstep import NS
+from cyborg.transport.clock import DEFAULT_VIRTUAL_START, NS
 
 __all__ = ["Launch", "launch"]
 
@@ -252,7 +251,8 @@ class Launch:
                 server.close()
                 self.say(
                     f"lockstep: {server.time_ns / NS:.1f} virtual s in {server.grants} grants "
-                    f"({server.deltas} of them delta cycles)"
+                    f"({server.deltas} of them delta cycles); nodes woken most: "
+                    + ", ".join(f"{name} {count}" for name, count in server.woken.most_common(4))
                     + (f"; written off: {dict(server.written_off)}" if server.written_off else "")
                 )
             if self._graph is not None:

@@ -40,7 +40,7 @@ from typing import Any
 
 from cyborg.errors import CyborgError
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, NS, VirtualClock, on_grid
-from cyborg.transport.ledger import Channel, Ledger
+from cyborg.transport.ledger import Ledger
 
 __all__ = ["LockstepClock", "SharedTime"]
 

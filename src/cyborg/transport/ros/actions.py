@@ -50,6 +50,7 @@ log = logging.getLogger(__name__)
 
 SERVER_SILENCE_LIMIT = 1.0  # seconds without a status message before an action server counts as gone
 WATCHDOG_PERIOD = 0.2
+LOCKSTEP_WATCHDOG_PERIOD = 2.0  # lockstep time: a look every 0.2 s would be most of a run's time steps
 
 # The published cyborg_controller package (scripts/install-ros --flavour public) has a fourth goal
 # field, ``string order``, which its controller always sets to EXECUTE: a goal sent with those
@@ -428,7 +429,9 @@ class RosActionClient(ActionClient[G, R, F]):
 
     def _arm_watchdog(self) -> None:
         if self._watchdog is None:
-            self._watchdog = self.transport.clock.loop.call_later(WATCHDOG_PERIOD, self._check_server)
+            clock = self.transport.clock
+            period = LOCKSTEP_WATCHDOG_PERIOD if clock.is_lockstep else WATCHDOG_PERIOD
+            self._watchdog = clock.loop.call_later(period, self._check_server)
 
     def _check_server(self) -> None:
         """Goals of a vanished server end LOST (actionlib alone would wait forever)."""

@@ -60,6 +60,7 @@ log = logging.getLogger(__name__)
 TEXT_TOPIC = "_cyborg_text"  # below the action's name
 TEXT_WAIT = 0.3  # seconds a finished goal waits for its text from one of our servers
 WATCHDOG_PERIOD = 0.2
+LOCKSTEP_WATCHDOG_PERIOD = 2.0  # lockstep time: a look every 0.2 s would be most of a run's time steps
 DECISION_LIMIT = 3600.0  # seconds a goal may stay pending before the server gives up on it
 CANCEL_SETTLE = 1.0  # seconds the execute thread waits for rcl to mark a goal canceling
 # Seconds a finished goal stays in our server's status (and its result for a late request), as
@@ -595,7 +596,9 @@ class Ros2ActionClient(ActionClient[G, R, F]):
 
     def _arm_watchdog(self) -> None:
         if self._watchdog is None:
-            self._watchdog = self.transport.clock.loop.call_later(WATCHDOG_PERIOD, self._check_server)
+            clock = self.transport.clock
+            period = LOCKSTEP_WATCHDOG_PERIOD if clock.is_lockstep else WATCHDOG_PERIOD
+            self._watchdog = clock.loop.call_later(period, self._check_server)
 
     def _check_server(self) -> None:
         """Goals of a vanished server end LOST (rclpy alone would wait for their result forever)."""
