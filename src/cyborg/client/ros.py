@@ -42,6 +42,7 @@ class _GraphTransport(Protocol):
     """What the tool needs of a ROS transport beyond :class:`Transport`: who listens on a topic."""
 
     def subscribers_of(self, topic: str) -> list[str]: ...
+    def subscription_endpoints(self, topic: str) -> int: ...
 
 
 class RosLink:
@@ -89,20 +90,31 @@ class RosLink:
         # our subscriptions take a message once, whichever of their two halves brings it). The
         # tool waits for every listener the graph shows, then for each to acknowledge it.
         publisher = self._node.publisher(topic, type(message), latch=True)
-        while publisher.subscriber_count() < len(listeners) and loop.time() < deadline:
+        graph = self._graph
+
+        def all_matched() -> bool:
+            return publisher.subscriber_count() >= graph.subscription_endpoints(topic)
+
+        while not all_matched() and loop.time() < deadline:
             await asyncio.sleep(0.01)
-            if late:
-                listeners = sorted(set(listeners) | set(self._graph.subscribers_of(topic)))
-        matched = publisher.subscriber_count()
         publisher.publish(message)
         acknowledged = await asyncio.to_thread(publisher.wait_delivered, CONNECT_TIMEOUT)
+        # A listener the graph showed meanwhile gets the latched message once it matches.
+        while late and not all_matched() and loop.time() < deadline:
+            await asyncio.sleep(0.01)
+        if late:
+            acknowledged = await asyncio.to_thread(publisher.wait_delivered, CONNECT_TIMEOUT)
+        # ROS 1: rospy's writer threads have no acknowledgement; ROS 2: a reader that has the
+        # message may not have taken it yet, and a writer that leaves may take it along.
         await asyncio.sleep(DELIVERY_GRACE)
+        listeners = sorted(set(listeners) | set(graph.subscribers_of(topic)))
         self.delivered_to = listeners
-        if not acknowledged or (late and matched < len(listeners)):
+        if not acknowledged or not all_matched():
             raise CyborgError(
-                f"{topic}: not every listener took the message (reached {matched} of "
-                f"{len(listeners)}: {', '.join(listeners)}); fix: check that those nodes run and "
-                f"share {self.middleware.graph_setting}, and send it again"
+                f"{topic}: not every listener took the message (reached {publisher.subscriber_count()} "
+                f"of {graph.subscription_endpoints(topic)} subscriptions of {', '.join(listeners)}); "
+                f"fix: check that those nodes run and share {self.middleware.graph_setting}, and "
+                "send it again"
             )
 
     async def _see_parameters(self) -> None:

@@ -102,6 +102,10 @@ class RosTransport(Transport):
         """The nodes the master lists as subscribers of ``topic`` (empty if it does not answer)."""
         return listed_subscribers(topic)
 
+    def subscription_endpoints(self, topic: str) -> int:
+        """The subscriber connections a publisher of ``topic`` makes: one for each listed node."""
+        return len(listed_subscribers(topic))
+
     def set_param(self, key: str, value: Any) -> None:
         """Set a parameter on the master, skipping the round trip when it already holds ``value``.
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
+from collections import OrderedDict
 from collections.abc import Awaitable, Callable
 from typing import Any
 
@@ -37,6 +38,7 @@ from cyborg.transport.ros2.host import Host
 __all__ = ["SENDER_LOOKUP", "Ros2Publisher", "Ros2Subscription", "Senders", "latched_qos", "volatile_qos"]
 
 UNKNOWN_NODE = "_NODE_NAME_UNKNOWN_"  # what the graph names an endpoint whose node it does not know yet
+SEEN_KEPT = 4096  # messages remembered to drop the second copy of (both halves deliver each)
 SENDER_LOOKUP = 0.5  # seconds a publisher unknown to the graph is waited for, from its first message
 
 log = logging.getLogger(__name__)
@@ -163,7 +165,10 @@ class Ros2Subscription(Subscription[M]):
         self._ledger = transport.clock.ledger
         if self._ledger is not None:
             self._ledger.listen(topic)
-        self._last: dict[bytes, int] = {}
+        # What the two halves delivered lately: a message comes from both, once from each. Keyed
+        # by the writer, its sequence number and its time: a process that makes a new publisher
+        # may get a writer id used before, whose numbers start again at 1.
+        self._seen: OrderedDict[tuple[bytes, int, int], None] = OrderedDict()
         self._lock = threading.Lock()
         cls = ros2_class(msg_type.ros_type)
         # One at a time and in order: the executor has many threads, and a message taken after a
@@ -204,9 +209,12 @@ class Ros2Subscription(Subscription[M]):
         sequence = ros_info.get("publication_sequence_number")
         with self._lock:  # taken once, in order, whichever of the two delivers it first
             if gid and sequence is not None:
-                if sequence <= self._last.get(gid, 0):
+                key = (gid, int(sequence), int(ros_info.get("source_timestamp") or 0))
+                if key in self._seen:
                     return
-                self._last[gid] = sequence
+                self._seen[key] = None
+                if len(self._seen) > SEEN_KEPT:
+                    self._seen.popitem(last=False)
             sender = self._senders.name_of(gid) if gid else ""
             info = MessageInfo(sender=sender, stamp=time.time())
             message = from_ros2(ros_message, self._type)

@@ -279,6 +279,11 @@ class Ros2Transport(Transport):
             return []
         return sorted({info.node_name for info in probe.get_subscriptions_info_by_topic(topic)})
 
+    def subscription_endpoints(self, topic: str) -> int:
+        """The subscriptions (DDS readers) the graph knows on ``topic``: ours are two each."""
+        probe = self._param_node or next((node.rcl for node in self._ros2_nodes()), None)
+        return 0 if probe is None else len(probe.get_subscriptions_info_by_topic(topic))
+
     # --- parameters -------------------------------------------------------------------------
 
     def parameter_home_visible(self) -> bool:
