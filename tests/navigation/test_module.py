@@ -203,6 +203,11 @@ class Cyborg:
         """At the named pose ``place`` of the robot's map."""
         return math.dist(self.position, self.map.pose(place).position) < ARRIVED
 
+    @property
+    def at_rest(self) -> bool:
+        """Idle, or in the conversation that a question asked in idle starts (10.1)."""
+        return self.state in ("idle", "conversation")
+
     def sentences(self, since: float = 0.0) -> list[str]:
         return [s.text for s in self.said if s.t >= since]
 
@@ -311,10 +316,10 @@ def test_go_to_the_cafeteria_asks_to_confirm_then_drives_there_and_gives_an_opin
     if emotion == "angry":
         assert cyborg.sentences() == []  # ignored
         assert cyborg.moved_since(0.0) == 0.0 and cyborg.base.distance_travelled == 0.0
-        assert cyborg.transitions()[1:] == [
+        assert cyborg.transitions()[1:3] == [
             ("idle", "navigation_command", "navigation_talking"),
             ("navigation_talking", "succeeded", "idle"),
-        ]
+        ]  # (the "yes" then starts a conversation: any text does, 10.1)
         return
     assert cyborg.at("cafeteria")
     assert cyborg.transitions()[1:] == [
@@ -352,10 +357,10 @@ def test_a_command_answered_no_or_not_at_all_leaves_the_robot_where_it_is(
     clock.run(main())
     assert cyborg.sentences() == ["Shall I go to the cafeteria?", *([said] if said else [])]
     assert cyborg.moved_since(0.0) == 0.0
-    assert cyborg.transitions()[1:] == [
+    assert cyborg.transitions()[1:3] == [
         ("idle", "navigation_command", "navigation_talking"),
         ("navigation_talking", "succeeded", "idle"),
-    ]
+    ]  # (the late "yes" starts a conversation: any text in idle does, 10.1)
 
 
 def test_asked_to_confirm_a_new_request_replaces_the_question(clock: VirtualClock, cyborg: Cyborg) -> None:
@@ -438,7 +443,8 @@ def test_where_is_el6_yes_guides_there(clock: VirtualClock, cyborg: Cyborg, emot
     assert cyborg.at("el6")
     assert cyborg.sentences() == [OFFER, "At once.", "Human, this is el6"]
     assert cyborg.transitions()[1:] == [
-        ("idle", "navigation_information", "navigation_talking"),
+        ("idle", "conversation_interest", "conversation"),  # any text starts a conversation (10.1) ...
+        ("conversation", "navigation_information", "navigation_talking"),  # ... and is answered there
         ("navigation_talking", "navigation_command", "navigation_planning"),
         ("navigation_planning", "navigation_start_moving", "navigation_moving"),
         ("navigation_moving", "succeeded", "navigation_talking"),
@@ -455,15 +461,16 @@ def test_where_is_el6_no_declines_and_stays(clock: VirtualClock, cyborg: Cyborg)
         cyborg.hear("where is el6")
         await cyborg.until(lambda: OFFER in cyborg.sentences(), 5.0, "the offer")
         cyborg.hear("no")
-        await cyborg.until(lambda: cyborg.state == "idle", 30.0, "idle")
+        await cyborg.until(lambda: cyborg.state == "conversation", 30.0, "the conversation")
         await clock.sleep(60.0)
 
     clock.run(main())
     assert cyborg.sentences() == [OFFER, "All right, maybe another time."]
     assert cyborg.moved_since(0.0) == 0.0
     assert cyborg.transitions()[1:] == [
-        ("idle", "navigation_information", "navigation_talking"),
-        ("navigation_talking", "succeeded", "idle"),
+        ("idle", "conversation_interest", "conversation"),
+        ("conversation", "navigation_information", "navigation_talking"),
+        ("navigation_talking", "navigation_feedback_completed", "conversation"),  # the person is still there
     ]
 
 
@@ -472,13 +479,13 @@ def test_where_is_without_an_answer_gives_up_and_stays(clock: VirtualClock, cybo
         await cyborg.settle()
         cyborg.hear("where is el6")
         await cyborg.until(lambda: OFFER in cyborg.sentences(), 5.0, "the offer")
-        await cyborg.until(lambda: cyborg.state == "idle", 30.0, "idle")  # answer_timeout is 20 s
+        await cyborg.until(lambda: cyborg.state == "conversation", 30.0, "back")  # answer_timeout is 20 s
         cyborg.hear("yes")  # too late: nobody asked
         await clock.sleep(30.0)
 
     clock.run(main())
     assert cyborg.sentences() == [OFFER]
-    assert cyborg.moved_since(0.0) == 0.0 and cyborg.state == "idle"
+    assert cyborg.moved_since(0.0) == 0.0 and cyborg.state == "conversation"
 
 
 def test_a_question_on_a_guided_trip_is_answered_and_the_trip_goes_on(
@@ -512,7 +519,8 @@ def test_a_question_on_a_guided_trip_is_answered_and_the_trip_goes_on(
         "Human, this is el6",  # ... and is brought where they wanted to go
     ]
     assert cyborg.transitions()[1:] == [
-        ("idle", "navigation_information", "navigation_talking"),
+        ("idle", "conversation_interest", "conversation"),
+        ("conversation", "navigation_information", "navigation_talking"),
         ("navigation_talking", "navigation_command", "navigation_planning"),
         ("navigation_planning", "navigation_start_moving", "navigation_moving"),
         ("navigation_moving", "navigation_feedback", "navigation_talking"),
@@ -594,6 +602,71 @@ def test_after_a_guided_tour_a_command_is_a_command_again(clock: VirtualClock, c
     assert last.text in opinions(last.emotion, "elevator")
 
 
+# --- people around a trip (issue 28: keep the person's trip; 10.1: any text starts a conversation) ---
+
+
+def test_a_greeting_on_a_guided_trip_does_not_end_it(clock: VirtualClock, cyborg: Cyborg) -> None:
+    """Someone says hello to the robot while it shows a person the way: the person still gets there."""
+
+    async def main() -> None:
+        await cyborg.settle()
+        cyborg.hear("where is el6")
+        await cyborg.until(lambda: OFFER in cyborg.sentences(), 5.0, "the offer")
+        cyborg.hear("yes")
+        await cyborg.until(lambda: cyborg.state == "navigation_moving", 10.0, "moving")
+        await clock.sleep(10.0)
+        cyborg.hear("hello")
+        await cyborg.until(lambda: cyborg.state == "idle", 300.0, "the trip to end")
+
+    clock.run(main())
+    assert cyborg.at("el6")
+    assert cyborg.sentences()[-1] == "Human, this is el6"
+    assert cyborg.transitions()[-3:] == [
+        ("navigation_planning", "navigation_start_moving", "navigation_moving"),
+        ("navigation_moving", "succeeded", "navigation_talking"),
+        ("navigation_talking", "succeeded", "idle"),
+    ]
+
+
+def test_hello_to_a_wandering_robot_stops_the_wander_and_starts_a_conversation(
+    clock: VirtualClock, cyborg: Cyborg
+) -> None:
+    async def main() -> None:
+        await cyborg.settle("bored")
+        cyborg.send_event("navigation_emotional")
+        await cyborg.until(lambda: cyborg.state == "navigation_moving", 5.0, "wandering")
+        await clock.sleep(20.0)
+        marks["hello"] = clock.monotonic()
+        cyborg.hear("hello")
+        await cyborg.until(lambda: cyborg.state == "conversation", 5.0, "the conversation")
+        marks["talking"] = clock.monotonic()
+
+    marks: dict[str, float] = {}
+    clock.run(main())
+    assert cyborg.transitions()[-2:] == [
+        ("navigation_moving", "navigation_wandering_completed", "idle"),
+        ("idle", "conversation_interest", "conversation"),
+    ]
+    assert marks["talking"] - marks["hello"] < 3.0
+    assert cyborg.moved_since(marks["talking"]) < 0.5  # it stopped to listen
+
+
+@pytest.mark.parametrize("text", ["nice weather today", "what do you think of the cafeteria"])
+def test_any_text_in_idle_starts_a_conversation(clock: VirtualClock, cyborg: Cyborg, text: str) -> None:
+    """10.1: "if text input is detected it enters a conversation state"; a question in it is answered
+    from the conversation (idle has no navigation_feedback transition, 9.1), and it returns there."""
+
+    async def main() -> None:
+        await cyborg.settle()
+        cyborg.hear(text)
+        await cyborg.until(lambda: cyborg.state == "conversation", 5.0, "the conversation")
+        await clock.sleep(10.0)
+
+    clock.run(main())
+    assert cyborg.state == "conversation"
+    assert cyborg.transitions()[1] == ("idle", "conversation_interest", "conversation")
+
+
 # --- "what do you think of X?" ----------------------------------------------------------------
 
 
@@ -603,7 +676,7 @@ def test_what_do_you_think_of_the_cafeteria(clock: VirtualClock, cyborg: Cyborg,
         await cyborg.settle(emotion)
         cyborg.hear("what do you think of the cafeteria")
         await cyborg.until(lambda: bool(cyborg.said), 5.0, "an answer")
-        await cyborg.until(lambda: cyborg.state == "idle", 10.0, "idle")
+        await cyborg.until(lambda: cyborg.state == "conversation", 10.0, "the conversation")
 
     clock.run(main())
     [opinion] = cyborg.said
@@ -611,8 +684,9 @@ def test_what_do_you_think_of_the_cafeteria(clock: VirtualClock, cyborg: Cyborg,
     assert opinion.text in opinions(emotion, "cafeteria")
     assert cyborg.moved_since(0.0) == 0.0
     assert cyborg.transitions()[1:] == [
-        ("idle", "navigation_feedback", "navigation_talking"),
-        ("navigation_talking", "succeeded", "idle"),
+        ("idle", "conversation_interest", "conversation"),
+        ("conversation", "navigation_feedback", "navigation_talking"),
+        ("navigation_talking", "navigation_feedback_completed", "conversation"),
     ]
 
 
@@ -1088,7 +1162,7 @@ def test_a_place_of_another_map_is_no_target_and_the_robot_says_so(
         await cyborg.until(lambda: cyborg.state == "idle", 10.0, "idle")
         cyborg.hear("where is the stairs?")
         await cyborg.until(lambda: len(cyborg.said) == 2, 5.0, "a second answer")
-        await cyborg.until(lambda: cyborg.state == "idle", 10.0, "idle")
+        await cyborg.until(lambda: cyborg.state == "conversation", 10.0, "the conversation")
         cyborg.hear("yes")
         await clock.sleep(30.0)
 
@@ -1102,8 +1176,9 @@ def test_a_place_of_another_map_is_no_target_and_the_robot_says_so(
     assert cyborg.transitions()[1:] == [
         ("idle", "navigation_command", "navigation_talking"),
         ("navigation_talking", "succeeded", "idle"),
-        ("idle", "navigation_information", "navigation_talking"),
-        ("navigation_talking", "succeeded", "idle"),
+        ("idle", "conversation_interest", "conversation"),
+        ("conversation", "navigation_information", "navigation_talking"),
+        ("navigation_talking", "navigation_feedback_completed", "conversation"),
     ]
     assert "'stairs' is on map 'glassgarden', not on the map in use ('campus')" in caplog.text
     assert "cyborg db import-map" in caplog.text
@@ -1176,7 +1251,7 @@ def test_a_place_without_a_pose_is_no_target_and_the_robot_says_so(
         await cyborg.until(lambda: cyborg.state == "idle", 10.0, "idle")
         cyborg.hear("where is the cafeteria?")
         await cyborg.until(lambda: len(cyborg.said) == 2, 5.0, "a second answer")
-        await cyborg.until(lambda: cyborg.state == "idle", 10.0, "idle")
+        await cyborg.until(lambda: cyborg.state == "conversation", 10.0, "the conversation")
         cyborg.hear("yes")
         await clock.sleep(30.0)
 
@@ -1189,8 +1264,9 @@ def test_a_place_without_a_pose_is_no_target_and_the_robot_says_so(
     assert cyborg.transitions()[1:] == [
         ("idle", "navigation_command", "navigation_talking"),
         ("navigation_talking", "succeeded", "idle"),
-        ("idle", "navigation_information", "navigation_talking"),
-        ("navigation_talking", "succeeded", "idle"),
+        ("idle", "conversation_interest", "conversation"),
+        ("conversation", "navigation_information", "navigation_talking"),
+        ("navigation_talking", "navigation_feedback_completed", "conversation"),
     ]
     assert "'cafeteria' has no pose" in caplog.text
     assert "cyborg db locations set-pose 'cafeteria' --x X --y Y" in caplog.text

@@ -58,6 +58,8 @@ WANDER_CHECK = 1.0
 WANDER_DEBOUNCE = 2.0
 """Seconds the emotion must stay outside bored/unconcerned/curious before wandering ends (one
 flicker of the label between two emotions does not end it)."""
+SPOKEN_TO_GRACE = 3.0
+"""A wander that starts this many seconds after someone spoke to the robot ends at once."""
 REQUEST_PATIENCE = 5.0
 """Seconds a request's event is offered again at state changes if the controller dropped it."""
 OWN_STATES = frozenset({"navigation_planning", "navigation_moving", "navigation_talking"})
@@ -116,6 +118,8 @@ class NavigationModule(BehaviourModule):
         """A request's event the controller has not taken yet, and until when to offer it again."""
         self.conversing = False
         """True from entering the conversation until the robot is idle again (talking returns there)."""
+        self.spoken_to_at = -math.inf
+        """When someone last said something that is no navigation request (a wander ends for it)."""
         self.base = base_link(node, base_api)
         node.subscribe(topics.AMCL_POSE, PoseWithCovarianceStamped, self._on_pose, queue_size=10)
         node.subscribe(topics.STATE_CHANGE, SystemState, self._on_state_change)
@@ -183,7 +187,8 @@ class NavigationModule(BehaviourModule):
             or detect_navigation(text, self.db.matcher())
             or detect_answer(text)
         )
-        if found is None:
+        if found is None or (found.intent in (Intent.YES, Intent.NO) and self._inbox is None):
+            self.spoken_to_at = self.node.clock.monotonic()  # not for us: a wander stops to listen
             return
         if found.intent in (Intent.YES, Intent.NO):
             if self._inbox is not None:
@@ -351,7 +356,9 @@ class NavigationModule(BehaviourModule):
     async def _wander(self, ctx: GoalContext) -> None:
         """Wander until the emotion has left bored/unconcerned/curious for ``WANDER_DEBOUNCE`` s.
 
-        ``wander_limit`` is a safety cap for an emotion that never changes.
+        It also ends when someone says something to the robot that is no navigation request (a
+        greeting: the conversation module then asks for the conversation from idle); a person's
+        trip does not end for that. ``wander_limit`` is a safety cap for an emotion that never changes.
         """
         await self.base.wander()
         clock = self.node.clock
@@ -364,6 +371,9 @@ class NavigationModule(BehaviourModule):
                 if now - last_feedback >= self.feedback_interval:
                     self.send_emotion(*WANDERING_FEEDBACK)
                     last_feedback = now
+                if self.spoken_to_at >= started - SPOKEN_TO_GRACE:
+                    log.info("wandering ends: someone is talking to the robot")
+                    break
                 settled = now - self.emotion_since >= WANDER_DEBOUNCE
                 if should_stop_wandering(self.emotion) and settled:
                     log.info("wandering ends: the robot is %s now", self.emotion)
