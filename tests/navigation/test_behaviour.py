@@ -309,3 +309,12 @@ def test_a_request_with_its_own_question_is_asked_first(intent: Intent) -> None:
     assert after_answer(reply, Answer.YES) == reply_to(Request(intent, EL6), NEUTRAL)
     declined = after_answer(reply, Answer.NO)
     assert declined is not None and declined.say is ResponseType.DECLINED
+
+
+@pytest.mark.parametrize("emotion", EMOTIONS)
+def test_while_the_calendar_holds_it_at_a_place_its_own_trips_wait(emotion: str) -> None:
+    """11.3.3: the robot stays at the scheduled place while the event lasts (scenario C)."""
+    chosen = plan_for(Origin.MOTIVATOR, emotion, scheduled=CAFETERIA, here=CAFETERIA)
+    assert (chosen.kind, chosen.target, chosen.feedback) == (PlanKind.STAY, CAFETERIA, (0.0, 0.0, 0.0))
+    elsewhere = plan_for(Origin.MOTIVATOR, emotion, scheduled=CAFETERIA, here=EL6)
+    assert elsewhere.kind is not PlanKind.STAY  # not there (yet): the calendar will call it

@@ -125,7 +125,7 @@ class Cyborg:
             self.transport,
             data_dir=data_dir,
             rng=random.Random(seed),
-            map_path=map_path,
+            map_path=map_path or default_map_path(),  # the example campus unless a test says otherwise
             kinds=module_kinds(
                 {"simulated_base": ModuleKind(SimulatedBaseSettings, simulated_base), **(kinds or {})}
             ),

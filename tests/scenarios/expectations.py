@@ -8,6 +8,7 @@ database holds for the emotion in effect at that moment.
 from __future__ import annotations
 
 import itertools
+import math
 from typing import Any
 
 from cyborg.navigation.content import DEFAULT_RESPONSES
@@ -281,6 +282,40 @@ def check_scenario_c(records: list[Record]) -> None:
             moods = emotions_between(records, record["t"] - 1.0, record["t"] + 1.0)
             fitting = set().union(*(opinions_for(mood, "cafeteria") for mood in moods))
             assert record["text"] in fitting, (record, moods)
+    assert_stays_for_the_whole_event(records)
+
+
+EVENT_END = 1800.0
+"""Scenario C's calendar event ends at 15:59, 30 minutes after the script's start (15:29)."""
+AT_PLACE = 3.0
+"""Metres from the place that count as being there (the navigation module's own rule)."""
+
+
+def assert_stays_for_the_whole_event(records: list[Record]) -> None:
+    """11.3.3: the robot goes to the scheduled place and returns to it after a user took it away; it
+    stays there while the event lasts (most of the event) and is there when it ends, commenting
+    on the place only on its two arrivals (C.1 and C.2), neutral both times."""
+    first = next(r for r in records if r["type"] == "say" and "cafeteria" in r["text"])
+    poses = [r for r in records if r["type"] == "pose"]
+    arrived = [p for p in poses if p["t"] <= first["t"]][-1]
+    place = (arrived["x"], arrived["y"])
+    assert poses[-1]["t"] >= EVENT_END, "the run covers the whole event"
+
+    def there(pose: Record) -> bool:
+        return math.dist((pose["x"], pose["y"]), place) <= AT_PLACE
+
+    during = [p for p in poses if p["t"] <= EVENT_END]  # a pose holds until the next (none while standing)
+    ends = [p["t"] for p in during[1:]] + [EVENT_END]
+    time_there = sum(end - p["t"] for p, end in zip(during, ends, strict=True) if there(p))
+    assert time_there >= 0.5 * EVENT_END, (
+        f"at the cafeteria {time_there:.0f} s of the event's {EVENT_END:.0f} s"
+    )
+    assert there(during[-1]), ("at the cafeteria when the event ends", during[-1], place)
+    comments = [r for r in records if r["type"] == "say" and "cafeteria" in r["text"] and r["t"] <= EVENT_END]
+    assert [r["text"] for r in comments] == ["I am happy about cafeteria"] * 2, (
+        "two arrivals, neutral both times (C.1, C.2)",
+        [(r["t"], r["text"], emotion_when(records, r)) for r in comments],
+    )
 
 
 def check_scenario_d(records: list[Record]) -> None:

@@ -33,6 +33,7 @@ class PlanKind(enum.Enum):
     WANDER = "wander"
     NOT_ON_MAP = "not_on_map"  # asked for a known place that the loaded map does not have
     NO_POSE = "no_pose"  # asked for a known place whose pose nobody has given yet
+    STAY = "stay"  # the calendar holds the robot where it is: its own trips wait
     NOTHING = "nothing"
 
 
@@ -81,6 +82,10 @@ def plan(
 ) -> Plan:
     """Choose the target (or wandering) from why we plan and how the robot feels.
 
+    While a calendar event holds the robot at the place it is at (``scheduled`` is ``here``), its
+    own trips wait (STAY): the thesis's robot stays at the scheduled place while the event lasts
+    (11.3.3), and going for a wander only to be called back in seconds helps nobody.
+
     ``places`` are the places with a pose on the loaded map (the only possible
     targets); ``off_map`` names known places that are not on it and ``no_pose``
     those with no pose at all: asked for one, the robot says so instead of driving
@@ -89,6 +94,13 @@ def plan(
     """
     if origin is None:
         return Plan(PlanKind.NOTHING, "no reason to move")
+    if (
+        origin is Origin.MOTIVATOR
+        and scheduled is not None
+        and here is not None
+        and here.name == scheduled.name
+    ):
+        return Plan(PlanKind.STAY, f"scheduled to be at {here.name}: stays there", here)
     others = [p for p in places if here is None or p.name != here.name]
     situation = _Situation(requested, scheduled, others, rng, off_map, no_pose)
     return _RULES[origin](origin, emotion, situation)

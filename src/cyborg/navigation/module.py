@@ -49,7 +49,7 @@ PLANNING_ACTION = "cyborg_navigation/planning"
 MOVING_ACTION = "cyborg_navigation/moving"
 TALKING_ACTION = "cyborg_navigation/talking"
 
-MOVING_FEEDBACK = (0.0, 0.03, 0.01)
+MOVING_FEEDBACK = (0.0, 0.015, 0.01)
 WANDERING_FEEDBACK = (0.02, 0.05, 0.02)
 ARRIVAL_PLEASURE_SCALE = 0.125  # pleasantness 0.8 -> +0.1 pleasure on arrival
 AT_PLACE_DISTANCE = 3.0
@@ -293,6 +293,8 @@ class NavigationModule(BehaviourModule):
             log.warning("not going there: %s", self.db.no_pose_reason(chosen.target))
             await ctx.sleep(self._say(ResponseType.NO_POSE, chosen.target.name))
             return
+        if chosen.kind is PlanKind.STAY:
+            return  # succeeded: back to idle, where it is
         if chosen.kind is PlanKind.NOTHING:
             raise Abort(chosen.reason)
         self.publish_event(
