@@ -874,7 +874,7 @@ def test_feedback_directions_of_a_trip(clock: VirtualClock, cyborg: Cyborg) -> N
     assert len(moving) >= 6 and all(a > 0 for _, a, _ in moving)  # moving: arousal up
     assert deltas[-1][0] == pytest.approx(0.8 * 0.125) and deltas[-1][1:] == (0.0, 0.0)  # pleasant arrival
     assert pads["bossed"][2] < -0.15
-    assert pads["driven"][1] > pads["bossed"][1] + 0.1
+    assert pads["driven"][1] > pads["bossed"][1] + 0.05
     assert pads["arrived"][0] > pads["driven"][0] + 0.05
 
 
@@ -973,7 +973,6 @@ def test_scheduler_does_not_interrupt_a_users_errand_and_returns_after(
         marks["errand"] = clock.monotonic()
         await cyborg.order("go to el6")
         await cyborg.until(lambda: cyborg.at("el6"), 200.0, "el6")
-        await cyborg.until(lambda: cyborg.state == "idle", 20.0, "idle at el6")
         marks["el6"] = clock.monotonic()
         await cyborg.until(lambda: cyborg.at("cafeteria"), 300.0, "back at the cafeteria")
         await cyborg.until(lambda: cyborg.state == "idle", 20.0, "idle")
@@ -981,7 +980,8 @@ def test_scheduler_does_not_interrupt_a_users_errand_and_returns_after(
     clock.run(main())
     assert cyborg.sent("navigation_scheduler", marks["errand"], marks["el6"]) == []  # never during the errand
     [back] = cyborg.sent("navigation_scheduler", marks["el6"])
-    assert back - marks["el6"] <= cyborg.nav.scheduler_repeat + cyborg.nav.scheduler_interval
+    idle_at_el6 = next(t for t, a, _, b in cyborg.states if t >= marks["el6"] and b == "idle")
+    assert back - idle_at_el6 < 0.5  # at once when the errand is over, before the motivator's choice
     assert "Human, this is el6" not in cyborg.sentences()  # an errand, not a guided tour
     last = cyborg.said[-1]
     assert last.text in opinions(last.emotion, "cafeteria")

@@ -299,7 +299,7 @@ def assert_stays_for_the_whole_event(records: list[Record]) -> None:
     poses = [r for r in records if r["type"] == "pose"]
     arrived = [p for p in poses if p["t"] <= first["t"]][-1]
     place = (arrived["x"], arrived["y"])
-    assert poses[-1]["t"] >= EVENT_END, "the run covers the whole event"
+    assert max(r["t"] for r in records) >= EVENT_END, "the run covers the whole event"
 
     def there(pose: Record) -> bool:
         return math.dist((pose["x"], pose["y"]), place) <= AT_PLACE
@@ -322,14 +322,15 @@ def check_scenario_d(records: list[Record]) -> None:
     """Thesis 10.2.4: a long conversation; the motivator rotates its questions."""
     states = transitions(records)
     # The scripted user greets a second after the robot turns unconcerned; over ROS at 25x that
-    # second holds the motivator's next tick, which may start a wander first. Either way the
-    # greeting starts the conversation at once, from idle or from the wander's planning.
+    # second holds the motivator's next tick, which may start a wander first. The navigation
+    # states take no greeting (9.2.5): the wander stops to listen and the conversation starts
+    # from idle. Either way the greeting starts the conversation within a few seconds.
     conversation = states.index(next(s for s in states if s[1] == "conversation_interest"))
-    assert states[conversation] in (
-        ("idle", "conversation_interest", "conversation"),
-        ("navigation_planning", "conversation_interest", "conversation"),
-    ), states[: conversation + 1]
-    assert all(s[1] in ("start", "navigation_emotional") for s in states[:conversation]), states
+    assert states[conversation] == ("idle", "conversation_interest", "conversation"), states[
+        : conversation + 1
+    ]
+    before = {"start", "navigation_emotional", "navigation_start_wandering", "navigation_wandering_completed"}
+    assert all(s[1] in before for s in states[:conversation]), states
     questions = {
         "Do you want to play Simon says?",
         "Do you know any funny jokes?",
@@ -340,7 +341,7 @@ def check_scenario_d(records: list[Record]) -> None:
     greeted = next(r for r in records if r["type"] == "heard" and r["text"] == "Hello")
     assert emotion_when(records, greeted) == "unconcerned", "observation 1: unconcerned when greeted"
     entered = next(r for r in records if r["type"] == "state" and r.get("event") == "conversation_interest")
-    assert float(entered["t"]) - float(greeted["t"]) < 2.0, "the greeting starts the conversation at once"
+    assert float(entered["t"]) - float(greeted["t"]) < 4.0, "the greeting starts the conversation at once"
     asked = [r for r in records if r["type"] == "say" and r["text"] in questions]
     texts = [r["text"] for r in asked]
     assert len(asked) >= 8, texts

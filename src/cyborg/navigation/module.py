@@ -156,6 +156,10 @@ class NavigationModule(BehaviourModule):
         elif message.to_system_state in ("idle", "navigation_moving", "music"):
             self.conversing = False
         self._offer_again(message)
+        if message.to_system_state == "idle" and message.from_system_state and not self._closing:
+            # Back in idle (after a person's errand, say): the calendar speaks first, before the
+            # motivator's next choice, instead of at its next tick (11.3.3: it returns to the place).
+            self.node.clock.call_later(0.0, self._check_schedule)
 
     def _offer_again(self, change: SystemState) -> None:
         """Publish a request's event once more if the controller dropped it and the robot moved on.
@@ -368,14 +372,14 @@ class NavigationModule(BehaviourModule):
         self.wandering_now = True
         try:
             while True:
+                if self.spoken_to_at >= started - SPOKEN_TO_GRACE:
+                    log.info("wandering ends: someone is talking to the robot")
+                    break
                 await ctx.sleep(WANDER_CHECK)
                 now = clock.monotonic()
                 if now - last_feedback >= self.feedback_interval:
                     self.send_emotion(*WANDERING_FEEDBACK)
                     last_feedback = now
-                if self.spoken_to_at >= started - SPOKEN_TO_GRACE:
-                    log.info("wandering ends: someone is talking to the robot")
-                    break
                 settled = now - self.emotion_since >= WANDER_DEBOUNCE
                 if should_stop_wandering(self.emotion) and settled:
                     log.info("wandering ends: the robot is %s now", self.emotion)
