@@ -34,7 +34,7 @@ CONVERSATION_ACTION = "cyborg_conversation/conversation"
 CONVERSATION_INTEREST = "conversation_interest"
 CLAIM_SECONDS = 1.0
 """Seconds other text waits for another module to act on it before it starts a conversation."""
-PATIENCE = 5.0
+PATIENCE = 10.0
 """Seconds an ask the controller dropped is made again at each state change."""
 
 

@@ -366,8 +366,12 @@ class NavigationModule(BehaviourModule):
         greeting: the conversation module then asks for the conversation from idle); a person's
         trip does not end for that. ``wander_limit`` is a safety cap for an emotion that never changes.
         """
-        await self.base.wander()
         clock = self.node.clock
+        if self.spoken_to_at >= clock.monotonic() - SPOKEN_TO_GRACE:
+            log.info("no wander: someone is talking to the robot")
+            self.publish_event("navigation_wandering_completed")
+            await ctx.wait_forever()
+        await self.base.wander()
         started = last_feedback = clock.monotonic()
         self.wandering_now = True
         try:
