@@ -237,7 +237,10 @@ def _fill_polygon(mask: NDArray[np.bool_], corners: Sequence[Point]) -> None:
 
 
 def default_map_path() -> Path:
-    """The campus map shipped with the package (``cyborg/data/maps/campus.map``)."""
+    """The example campus map shipped with the package (``cyborg/data/maps/campus.map``).
+
+    The robot's default world is Glassgården when its scan is found (:mod:`cyborg.app.world`).
+    """
     return Path(str(resources.files("cyborg") / "data" / "maps" / "campus.map"))
 
 

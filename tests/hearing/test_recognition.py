@@ -19,7 +19,7 @@ from cyborg.navigation.database import NavigationDatabase
 from cyborg.navigation.keywords import detect_answer, detect_navigation
 from tests.support.paths import SCENARIOS
 
-SCENARIO_LINES = [  # every line a user says in tests/scenarios/scenario_*.yaml, but "nothing to see here"
+SCENARIO_LINES = [  # every line a user says in tests/scenarios/scenario_*.yaml
     "hello",
     "What do you think of el6?",
     "Where is el6 ?",
@@ -60,7 +60,7 @@ def test_the_scenario_lines_in_the_tests_are_those_of_the_scenarios() -> None:
             for line in path.read_text().splitlines()
             if "say:" in line
         }
-    assert {s.lower() for s in said} - {s.lower() for s in SCENARIO_LINES} == {"nothing to see here"}
+    assert {s.lower() for s in said} - {s.lower() for s in SCENARIO_LINES} == set()
 
 
 @pytest.mark.parametrize("voice", TEST_VOICES, ids=str)

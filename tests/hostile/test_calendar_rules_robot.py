@@ -24,7 +24,7 @@ from cyborg.navigation.models import CalendarEvent
 
 SCRIPT = """\
 start: 2026-11-23T12:00:00
-until: 120
+until: 300
 steps:
   - at: 60
     say: hello robot

@@ -171,6 +171,20 @@ def test_the_default_robot_rotates_its_questions() -> None:
     assert len(set(asked)) >= 4, asked
 
 
+def test_the_default_robot_carries_the_thesis_numbers() -> None:
+    """9.2.5 gives navigation_emotional the reward (0, 0.05, -0.01); 8.3 the step +0.33 / -0.05.
+    Scenario B's alternation holds with them (tests/scenarios; docs/motivator.md says what else it needs)."""
+    settings = load_config(packaged_config("cyborg.yaml")).model.motivator
+    [wander] = [e for e in settings.events if e.event == "navigation_emotional"]
+    assert (wander.state, wander.reward_pleasure, wander.reward_arousal, wander.reward_dominance) == (
+        "idle",
+        0.0,
+        0.05,
+        -0.01,
+    )
+    assert (settings.saturation_increment, settings.saturation_relief) == (0.33, 0.05)
+
+
 def test_not_ready_and_handover_decisions_say_why_nothing_was_chosen() -> None:
     decision = not_ready("idle", 3.25, MotivatorSettings(min_seconds_in_state=10))
     assert (decision.status, decision.chosen, decision.candidates) == (DecisionStatus.NOT_READY, None, ())

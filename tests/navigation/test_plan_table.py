@@ -51,11 +51,14 @@ def reference_plan(
             return Plan(PlanKind.NO_POSE, f"{requested.name} has no pose", requested)
         if requested.name in off_map:
             return Plan(PlanKind.NOT_ON_MAP, f"{requested.name} is not on the loaded map", requested)
-        if origin is Origin.COMMAND and emotion == ANGRY:
-            return Plan(
-                PlanKind.REFUSE, f"angry: refuses to go to {requested.name}", requested, BOSSED_AROUND
-            )
         return Plan(PlanKind.MOVE, f"asked to go to {requested.name}", requested, BOSSED_AROUND)
+    if (
+        origin is Origin.MOTIVATOR
+        and scheduled is not None
+        and here is not None
+        and here.name == scheduled.name
+    ):
+        return Plan(PlanKind.STAY, f"scheduled to be at {here.name}: stays there", here)
     others = [p for p in places if here is None or p.name != here.name]
     if origin is Origin.SCHEDULE:
         if emotion == ANGRY:
@@ -124,6 +127,18 @@ def test_the_cases_reach_every_kind_of_plan() -> None:
         ).kind
         for origin, emotion, requested in itertools.product(ORIGINS, EMOTIONS, REQUESTS)
     }
+    held = MAP[0]  # the calendar holds the robot where it is
+    kinds.add(
+        reference_plan(
+            Origin.MOTIVATOR,
+            "bored",
+            requested=None,
+            scheduled=held,
+            places=MAP,
+            rng=random.Random(0),
+            here=held,
+        ).kind
+    )
     assert kinds == set(PlanKind)
 
 

@@ -8,6 +8,7 @@ database holds for the emotion in effect at that moment.
 from __future__ import annotations
 
 import itertools
+import math
 from typing import Any
 
 from cyborg.navigation.content import DEFAULT_RESPONSES
@@ -106,9 +107,10 @@ def opinions_for(emotion: str, place: str) -> set[str]:
 
 
 def assert_opinion(records: list[Record], place: str) -> str:
-    """The first sentence about ``place`` is an opinion fitting the emotion at that moment."""
+    """The first sentence about ``place`` (not asking to go there) is an opinion fitting the emotion."""
+    asks = {r.say(place) for r in DEFAULT_RESPONSES if r.type is ResponseType.ASK_GO}
     for index, record in enumerate(records):
-        if record["type"] == "say" and place in record["text"]:
+        if record["type"] == "say" and place in record["text"] and record["text"] not in asks:
             emotion = emotion_at(records, index)
             assert record["text"] in opinions_for(emotion, place), (record, emotion)
             return emotion
@@ -186,7 +188,8 @@ def check_scenario_a(records: list[Record]) -> None:
             ("navigation_planning", "navigation_start_moving", "navigation_moving"),
             ("navigation_moving", "succeeded", "navigation_talking"),
             ("navigation_talking", "succeeded", "idle"),
-            ("idle", "navigation_command", "navigation_planning"),
+            ("idle", "navigation_command", "navigation_talking"),  # 7.7: it asks to confirm ...
+            ("navigation_talking", "navigation_command", "navigation_planning"),  # ... and hears yes
             ("navigation_planning", "navigation_start_moving", "navigation_moving"),
             ("navigation_moving", "succeeded", "navigation_talking"),
             ("navigation_talking", "succeeded", "idle"),
@@ -198,6 +201,8 @@ def check_scenario_a(records: list[Record]) -> None:
             "I think I know where that is, would you like me to show you?",
             "At once.",
             "Human, this is cafeteria",
+            "Shall I go to the entrance 2?",
+            "At once.",
         ],
     )
     assert assert_opinion(records, "el6") == "curious", "observation 3: curious when asked about el6"
@@ -277,20 +282,55 @@ def check_scenario_c(records: list[Record]) -> None:
             moods = emotions_between(records, record["t"] - 1.0, record["t"] + 1.0)
             fitting = set().union(*(opinions_for(mood, "cafeteria") for mood in moods))
             assert record["text"] in fitting, (record, moods)
+    assert_stays_for_the_whole_event(records)
+
+
+EVENT_END = 1800.0
+"""Scenario C's calendar event ends at 15:59, 30 minutes after the script's start (15:29)."""
+AT_PLACE = 3.0
+"""Metres from the place that count as being there (the navigation module's own rule)."""
+
+
+def assert_stays_for_the_whole_event(records: list[Record]) -> None:
+    """11.3.3: the robot goes to the scheduled place and returns to it after a user took it away; it
+    stays there while the event lasts (most of the event) and is there when it ends, commenting
+    on the place only on its two arrivals (C.1 and C.2), neutral both times."""
+    first = next(r for r in records if r["type"] == "say" and "cafeteria" in r["text"])
+    poses = [r for r in records if r["type"] == "pose"]
+    arrived = [p for p in poses if p["t"] <= first["t"]][-1]
+    place = (arrived["x"], arrived["y"])
+    assert max(r["t"] for r in records) >= EVENT_END, "the run covers the whole event"
+
+    def there(pose: Record) -> bool:
+        return math.dist((pose["x"], pose["y"]), place) <= AT_PLACE
+
+    during = [p for p in poses if p["t"] <= EVENT_END]  # a pose holds until the next (none while standing)
+    ends = [p["t"] for p in during[1:]] + [EVENT_END]
+    time_there = sum(end - p["t"] for p, end in zip(during, ends, strict=True) if there(p))
+    assert time_there >= 0.5 * EVENT_END, (
+        f"at the cafeteria {time_there:.0f} s of the event's {EVENT_END:.0f} s"
+    )
+    assert there(during[-1]), ("at the cafeteria when the event ends", during[-1], place)
+    comments = [r for r in records if r["type"] == "say" and "cafeteria" in r["text"] and r["t"] <= EVENT_END]
+    assert [r["text"] for r in comments] == ["I am happy about cafeteria"] * 2, (
+        "two arrivals, neutral both times (C.1, C.2)",
+        [(r["t"], r["text"], emotion_when(records, r)) for r in comments],
+    )
 
 
 def check_scenario_d(records: list[Record]) -> None:
     """Thesis 10.2.4: a long conversation; the motivator rotates its questions."""
     states = transitions(records)
     # The scripted user greets a second after the robot turns unconcerned; over ROS at 25x that
-    # second holds the motivator's next tick, which may start a wander first. Either way the
-    # greeting starts the conversation at once, from idle or from the wander's planning.
+    # second holds the motivator's next tick, which may start a wander first. The navigation
+    # states take no greeting (9.2.5): the wander stops to listen and the conversation starts
+    # from idle. Either way the greeting starts the conversation within a few seconds.
     conversation = states.index(next(s for s in states if s[1] == "conversation_interest"))
-    assert states[conversation] in (
-        ("idle", "conversation_interest", "conversation"),
-        ("navigation_planning", "conversation_interest", "conversation"),
-    ), states[: conversation + 1]
-    assert all(s[1] in ("start", "navigation_emotional") for s in states[:conversation]), states
+    assert states[conversation] == ("idle", "conversation_interest", "conversation"), states[
+        : conversation + 1
+    ]
+    before = {"start", "navigation_emotional", "navigation_start_wandering", "navigation_wandering_completed"}
+    assert all(s[1] in before for s in states[:conversation]), states
     questions = {
         "Do you want to play Simon says?",
         "Do you know any funny jokes?",
@@ -301,7 +341,7 @@ def check_scenario_d(records: list[Record]) -> None:
     greeted = next(r for r in records if r["type"] == "heard" and r["text"] == "Hello")
     assert emotion_when(records, greeted) == "unconcerned", "observation 1: unconcerned when greeted"
     entered = next(r for r in records if r["type"] == "state" and r.get("event") == "conversation_interest")
-    assert float(entered["t"]) - float(greeted["t"]) < 2.0, "the greeting starts the conversation at once"
+    assert float(entered["t"]) - float(greeted["t"]) < 8.0, "the greeting starts the conversation at once"
     asked = [r for r in records if r["type"] == "say" and r["text"] in questions]
     texts = [r["text"] for r in asked]
     assert len(asked) >= 8, texts

@@ -62,7 +62,8 @@ def test_a_script_run_starts_fresh_whatever_its_data_folder_holds(tmp_path: Path
 
 
 def test_a_question_asked_during_a_question_is_answered(tmp_path: Path) -> None:
-    """What the navigation module hears while the robot asks its own question is acted on."""
+    """What the navigation module hears while the robot asks its own question is acted on, and
+    the robot returns to the conversation afterwards (the person is still there)."""
     script = tmp_path / "ask.yaml"
     script.write_text(
         "seed: 5\nuntil: 60\nsteps:\n"
@@ -82,3 +83,5 @@ def test_a_question_asked_during_a_question_is_answered(tmp_path: Path) -> None:
     )
     offers = [r for r in records if r["type"] == "say" and "show you" in r["text"]]
     assert offers and offers[0]["t"] == pytest.approx(heard, abs=0.5)
+    after = next(r for r in changes if r["t"] > answer["t"])
+    assert (after["from"], after["to"]) == ("navigation_talking", "conversation")

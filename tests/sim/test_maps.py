@@ -385,3 +385,53 @@ def test_a_map_without_goals_leaves_the_last_maps_places_behind(tmp_path: Path) 
         if map_path is None:
             assert "cafeteria" in on_map
     assert db.current_map() == "willow" and on_map == set()
+
+
+# --- the default world (issue 28: Glassgården, where the thesis ran) ------------------------------
+
+
+def test_the_default_world_is_glassgarden_where_its_scan_is_found(tmp_path: Path) -> None:
+    from cyborg.app.world import default_world, glassgarden_candidates
+
+    assert default_world().name == "glassgarden.map"  # here: beside this checkout (../shared/maps)
+    world = load_map(default_world())
+    goals = {pose.name for pose in world.poses if pose.kind == "GoalWithHeading"}
+    assert {
+        "info",
+        "cafeteria",
+        "el6",
+        "entrance2",
+        "elevator1",
+        "waitingarea",
+    } <= goals  # the thesis's places
+    mine = tmp_path / "maps"
+    mine.mkdir()
+    (mine / "glassgarden.map").write_bytes(GLASSGARDEN.read_bytes())
+    env = {"CYBORG_MAPS": str(mine), "CYBORG_DATA_DIR": str(tmp_path / "data")}
+    assert glassgarden_candidates(env)[:2] == [
+        mine / "glassgarden.map",
+        tmp_path / "data/maps/glassgarden.map",
+    ]
+    assert default_world(glassgarden_candidates(env)) == mine / "glassgarden.map"
+
+
+def test_without_the_scan_the_robot_drives_on_the_campus_and_says_how_to_get_glassgarden(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    from cyborg.app.world import default_world
+
+    with caplog.at_level("WARNING", logger="cyborg.app.world"):
+        assert default_world([tmp_path / "nowhere" / "glassgarden.map"]) == default_map_path()
+    assert "the Glassgården map was not found" in caplog.text
+    assert "thentnucyborg/CyborgRobot" in caplog.text and "--map FILE" in caplog.text
+
+
+def test_a_scenario_runs_on_glassgarden_by_default(tmp_path: Path) -> None:
+    from cyborg.app.config import load_config, packaged_config
+    from cyborg.sim.scenario import run_scenario
+    from cyborg.sim.script import parse_script
+
+    records = run_scenario(load_config(packaged_config("cyborg.yaml")), parse_script("until: 2\n"))
+    first = next(r for r in records if r["type"] == "pose")
+    info = load_map(GLASSGARDEN).pose("info").position
+    assert math.dist((first["x"], first["y"]), info) < 0.5  # it starts at Glassgården's information desk

@@ -101,7 +101,7 @@ steps:
         "instead: no state record at all; in that window: t=5 event 'navigation_wandering_completed' "
         "from cyborg_scenario was dropped by the controller: it is no transition of 'idle' (its events: "
         "aborted, conversation_interest, music_play, navigation_command, navigation_emotional, "
-        "navigation_feedback, navigation_information, navigation_scheduler)"
+        "navigation_scheduler)"
     ), problem
     assert "motivator" not in problem, "the motivator had nothing to do with it"
 

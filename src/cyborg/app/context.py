@@ -43,11 +43,12 @@ class BuildContext:
     _listening: Listening | None = field(default=None, repr=False)
 
     def occupancy_map(self) -> OccupancyMap:
-        """The map of the world (``--map`` or the packaged campus), loaded once."""
+        """The map of the world (``--map``, else Glassgården if found, else the campus), loaded once."""
         if self._map is None:
-            from cyborg.maps import default_map_path, load_map
+            from cyborg.app.world import default_world
+            from cyborg.maps import load_map
 
-            self._map = load_map(self.map_path or default_map_path())
+            self._map = load_map(self.map_path or default_world())
         return self._map
 
     def listening(self) -> Listening:

@@ -1,7 +1,13 @@
 """Conversation and question modules of the thesis's test system (10.1).
 
-The conversation module listens to speech-to-text: a greeting asks the
-controller for the ``conversation`` state (event ``conversation_interest``).
+The conversation module listens to speech-to-text: any text asks the controller
+for the ``conversation`` state (event ``conversation_interest``, thesis 10.1). A
+greeting asks at once; other text after ``claim_seconds``, and only if the
+robot's state has not changed meanwhile: another module acted on it ("go to el6"
+is a command for the navigation module, not small talk). An ask the controller
+drops (the active state has no such transition) is made once more at the next
+state change within ``patience`` seconds if it was a greeting: "hello" to a
+wandering robot is taken once the wander has stopped to listen.
 While in conversation it waits; the motivator picks one of the question
 states (joke, weather, selfie, follower, Simon says), each served by its own
 question module, which asks its question, waits for an answer and succeeds. A
@@ -18,12 +24,18 @@ from pydantic import Field
 
 from cyborg.modules.behaviour import BehaviourModule, GoalContext
 from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
+from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Node
+from cyborg.transport.messages import SystemState
 
 GREETINGS = frozenset({"hello", "hi", "hey", "hallo", "hei", "greetings", "howdy", "yo"})
 GREETING_PHRASES = ("good morning", "good afternoon", "good evening")
 CONVERSATION_ACTION = "cyborg_conversation/conversation"
 CONVERSATION_INTEREST = "conversation_interest"
+CLAIM_SECONDS = 1.0
+"""Seconds other text waits for another module to act on it before it starts a conversation."""
+PATIENCE = 10.0
+"""Seconds an ask the controller dropped is made again at each state change."""
 
 
 def is_greeting(text: str) -> bool:
@@ -34,23 +46,73 @@ def is_greeting(text: str) -> bool:
 
 
 class ConversationModule(BehaviourModule):
-    """Asks for the conversation state on a greeting; stays until ``quiet_seconds`` pass without speech."""
+    """Asks for the conversation state on any text (10.1); stays until ``quiet_seconds`` pass without speech.
 
-    def __init__(self, node: Node, *, quiet_seconds: float = 90.0, action: str = CONVERSATION_ACTION) -> None:
+    Once in conversation, the robot counts as conversing until it is back in its initial state
+    (the person's questions and the robot's own, asked in other states, are part of it).
+    """
+
+    def __init__(
+        self,
+        node: Node,
+        *,
+        quiet_seconds: float = 90.0,
+        action: str = CONVERSATION_ACTION,
+        claim_seconds: float = CLAIM_SECONDS,
+        patience: float = PATIENCE,
+    ) -> None:
         super().__init__(node)
         self.quiet_seconds = quiet_seconds
+        self.claim_seconds = claim_seconds
+        self.patience = patience
         self.last_heard = node.clock.monotonic()
         self.in_conversation = False
+        self.conversing = False
+        self.state_changes = 0
+        self._initial_state: str | None = None
+        self._state_name: str | None = None
+        self._asking_until = -1.0
         self.serve(action, self.converse)
         self.on_speech_text(self._on_text)
+        node.subscribe(topics.STATE_CHANGE, SystemState, self._on_state_change, queue_size=100)
+
+    def _on_state_change(self, message: SystemState, info: MessageInfo) -> None:
+        self.state_changes += 1
+        if self._initial_state is None and not message.from_system_state:
+            self._initial_state = message.to_system_state
+        if message.to_system_state == self._state_name:
+            self.conversing = True
+        elif message.to_system_state == self._initial_state:
+            self.conversing = False
+        now = self.node.clock.monotonic()
+        if message.event == CONVERSATION_INTEREST or now > self._asking_until:
+            self._asking_until = -1.0
+        elif not self.conversing:
+            self.publish_event(CONVERSATION_INTEREST)  # dropped before; the robot has moved on
 
     def _on_text(self, text: str, info: MessageInfo) -> None:
         self.last_heard = self.node.clock.monotonic()
-        if is_greeting(text) and not self.in_conversation:
-            self.publish_event(CONVERSATION_INTEREST)
+        if self.in_conversation or self.conversing:
+            return
+        if is_greeting(text):
+            self._ask(again=True)
+            return
+        changes = self.state_changes
+        self.node.clock.call_later(self.claim_seconds, lambda: self._ask_unless_claimed(changes))
+
+    def _ask_unless_claimed(self, changes: int) -> None:
+        if self.state_changes == changes and not (self.in_conversation or self.conversing):
+            self._ask(again=False)
+
+    def _ask(self, *, again: bool) -> None:
+        """Ask for the conversation; ``again``: once more at each state change within ``patience``."""
+        self._asking_until = self.node.clock.monotonic() + self.patience if again else -1.0
+        self.publish_event(CONVERSATION_INTEREST)
 
     async def converse(self, ctx: GoalContext) -> None:
         self.in_conversation = True
+        self._state_name = ctx.state
+        self.conversing = True
         try:
             if ctx.event == CONVERSATION_INTEREST:
                 self.last_heard = self.node.clock.monotonic()
@@ -112,13 +174,13 @@ class QuestionModule(BehaviourModule):
 
 
 class ConversationSettings(ModuleSettings):
-    """Asks for the conversation state when someone greets the robot; ends after a quiet spell."""
+    """Asks for the conversation state when someone speaks to the robot (10.1); ends after a quiet spell."""
 
     action: str = Field(CONVERSATION_ACTION, description="action server of the conversation state")
     quiet_seconds: float = Field(90.0, gt=0, description="seconds without speech that end the conversation")
 
     def listens_for(self) -> tuple[str, ...]:
-        """Greetings: a sentence starting with one of them asks for the conversation state."""
+        """Greetings ask for the conversation state at once; any other text does if no module acts on it."""
         return (*sorted(GREETINGS), *GREETING_PHRASES)
 
     def publishes(self) -> tuple[str, ...]:

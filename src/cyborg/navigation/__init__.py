@@ -3,8 +3,9 @@
 - :mod:`~cyborg.navigation.module`: the module itself, serving the planning, moving and talking
   states; :mod:`~cyborg.navigation.kind`: its settings and factory; :mod:`~cyborg.navigation.base_link`:
   how it drives the base (ROSARNL's interface or nav2's).
-- :mod:`~cyborg.navigation.behaviour` (where to go, what to say) and
-  :mod:`~cyborg.navigation.keywords` (what was asked): its pure decisions.
+- :mod:`~cyborg.navigation.behaviour` (where to go, what to say),
+  :mod:`~cyborg.navigation.dialogue` (what the talking state answers a request, and requests that
+  wait for a yes or no) and :mod:`~cyborg.navigation.keywords` (what was asked): its pure decisions.
 - :mod:`~cyborg.navigation.database`: the SQLite database, a front over :mod:`~cyborg.navigation.schema`
   (tables and migrations), :mod:`~cyborg.navigation.locations` (places), :mod:`~cyborg.navigation.events`
   (calendar events), :mod:`~cyborg.navigation.responses` (sentences) and

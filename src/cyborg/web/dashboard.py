@@ -37,7 +37,7 @@ BASE_NODE = "rosarnl_node"
 NO_BASE = (
     f"this robot has no simulated base (no {BASE_NODE!r} module with a map); "
     f"fix: add `{BASE_NODE}: {{kind: simulated_base}}` under modules: in the YAML "
-    "(it drives on the packaged campus map unless you pass `cyborg sim --map FILE`)"
+    "(it drives on Glassgården if its map is found, else the example campus, unless you pass `cyborg sim --map FILE`)"
 )
 
 # Colours of the occupancy grid image, RGBA: free floor, walls, unknown space (transparent).
