@@ -156,9 +156,11 @@ class NavigationModule(BehaviourModule):
         elif message.to_system_state in ("idle", "navigation_moving", "music"):
             self.conversing = False
         self._offer_again(message)
-        if message.to_system_state == "idle" and message.from_system_state and not self._closing:
-            # Back in idle (after a person's errand, say): the calendar speaks first, before the
-            # motivator's next choice, instead of at its next tick (11.3.3: it returns to the place).
+        if message.to_system_state == "idle" and not self._closing:
+            # In idle (at the start, or back after a person's errand, say): the calendar speaks
+            # first, before the motivator's choice, instead of at its next tick (11.3.3: it returns
+            # to the place) - and not at the same instant as the motivator, where the first to be
+            # taken would win.
             self.node.clock.call_later(0.0, self._check_schedule)
 
     def _offer_again(self, change: SystemState) -> None:
