@@ -88,8 +88,9 @@ class Clock(ABC):
         ``sender`` arrived: run ``callback(*args)`` on the loop in the next delta cycle (only
         when :attr:`delivers_in_deltas`). The messages of one instant are taken a cycle at a
         time, once nothing else is left to do at that instant; those that arrived in one cycle
-        in a fixed order (channel, sender, then arrival), so that what several senders send in
-        one instant is taken in the same order in every run, in one process or over ROS.
+        in a fixed order (channel, then an action's legs in the order they are sent, sender, then
+        arrival), so that what several senders send in one instant is taken in the same order in
+        every run, in one process or over ROS.
         ``counted``: the channels whose arrival lockstep time counts with it."""
         raise NotImplementedError(f"{type(self).__name__} takes each message as it comes")
 
@@ -258,6 +259,7 @@ class RealClock(Clock):
 
 NS = 1_000_000_000
 """Nanoseconds in a second: virtual time at ``--speed max`` moves in whole nanoseconds."""
+LARGE_TIME = 2.0**22  # seconds (48 days) after which a float's step nears a nanosecond
 
 POLL_INTERVAL = 0.001
 """Real seconds between looks for I/O (sockets, other threads) while virtual time runs as fast as it can."""
@@ -313,6 +315,12 @@ class _VirtualTimeSelector(selectors.BaseSelector):
         return []
 
 
+_LEG_ORDER = {"goal": 0, "request": 0, "cancel": 1, "response": 1, "accept": 2, "status": 3, "feedback": 4}
+"""The legs of one action (or service) that arrive in one delta cycle, in the order they were
+sent: a goal before its cancel, the answer before the result (text and result come last)."""
+_LEG_ORDER.update(text=5, result=6)
+
+
 def on_grid(when: float, now: float) -> float:
     """``when`` moved up to the next whole nanosecond (a float's noise below 0.001 ns aside),
     and in any case after ``now`` if ``when`` is.
@@ -333,6 +341,13 @@ class _VirtualTimeLoop(asyncio.SelectorEventLoop):
         self._virtual_clock = clock
         super().__init__(selector=_VirtualTimeSelector(clock))
         self._clock_resolution = 1e-9
+
+    def call_at(  # type: ignore[override]
+        self, when: float, callback: Callable[..., object], *args: Any, context: Any = None
+    ) -> asyncio.TimerHandle:
+        if self._virtual_clock.speed is None:
+            when = on_grid(when, self._virtual_clock._virtual_elapsed)
+        return super().call_at(when, callback, *args, context=context)
 
     def time(self) -> float:
         clock = self._virtual_clock
@@ -369,7 +384,7 @@ class VirtualClock(Clock):
                 "a real-time origin needs a speed: with speed=None the clock does not follow real time"
             )
         self.speed = speed
-        self._inbox: list[tuple[tuple[str, str, int], Callable[..., object] | None, tuple[Any, ...]]] = []
+        self._inbox: list[tuple[tuple[str, int, str, int], Callable[..., object] | None, tuple[Any, ...]]] = []
         self._inbox_lock = threading.Lock()
         self._arrivals: dict[tuple[str, str], int] = {}
         self._start_epoch = start.timestamp() if isinstance(start, datetime) else float(start)
@@ -377,6 +392,10 @@ class VirtualClock(Clock):
         self._real_origin = time.monotonic()
         if real_origin is not None:
             self.anchor(real_origin)
+
+    @property
+    def delivers_in_deltas(self) -> bool:
+        return self.speed is None
 
     def deliver(
         self,
@@ -386,10 +405,11 @@ class VirtualClock(Clock):
         *args: Any,
         counted: Sequence[str] = (),
     ) -> None:
+        base, _, leg = channel.partition("#")
         with self._inbox_lock:
             key = (channel, sender)
             self._arrivals[key] = arrival = self._arrivals.get(key, 0) + 1
-            self._inbox.append(((channel, sender, arrival), callback, args))
+            self._inbox.append(((base, _LEG_ORDER.get(leg, 0), sender, arrival), callback, args))
 
     def _release(self) -> None:
         """Hand the messages that arrived in the last delta cycle to the loop, in their order."""
@@ -443,7 +463,15 @@ class VirtualClock(Clock):
     monotonic = _loop_time
 
     def _advance(self, seconds: float) -> None:
-        self._virtual_elapsed += seconds
+        # To the next timer, which is on the nanosecond grid (on_grid), as lockstep time is:
+        # rounding takes away the float error of elapsed + (when - elapsed).
+        target = self._virtual_elapsed + seconds
+        moved = round(target * NS) / NS
+        self._virtual_elapsed = moved if moved > self._virtual_elapsed else target
+        if self._virtual_elapsed > LARGE_TIME and self._loop is not None:
+            # After ~48 days a float's step nears a nanosecond: asyncio must still see a timer
+            # due now as due (it takes those before now + its resolution).
+            self._loop._clock_resolution = 2 * math.ulp(self._virtual_elapsed)  # type: ignore[attr-defined]
 
     def now(self) -> float:
         return self._start_epoch + self._loop_time()
