@@ -26,7 +26,6 @@ from tests.support.paths import SCENARIOS
 from tests.support.ros import Observers, RosSession
 
 
-
 @pytest.mark.parametrize("name", ["scenario_a", "scenario_b", "scenario_c", "scenario_d"])
 def test_scenario_over_ros(name: str, ros: RosSession, observe: Observers, tmp_path: Path) -> None:
     from rosgraph_msgs.msg import Clock  # type: ignore[import-not-found]

@@ -384,7 +384,9 @@ class VirtualClock(Clock):
                 "a real-time origin needs a speed: with speed=None the clock does not follow real time"
             )
         self.speed = speed
-        self._inbox: list[tuple[tuple[str, int, str, int], Callable[..., object] | None, tuple[Any, ...]]] = []
+        self._inbox: list[
+            tuple[tuple[str, int, str, int], Callable[..., object] | None, tuple[Any, ...]]
+        ] = []
         self._inbox_lock = threading.Lock()
         self._arrivals: dict[tuple[str, str], int] = {}
         self._start_epoch = start.timestamp() if isinstance(start, datetime) else float(start)
