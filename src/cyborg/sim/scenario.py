@@ -25,7 +25,7 @@ from cyborg.app.config import LoadedConfig
 from cyborg.app.registry import KindRegistry
 from cyborg.app.robot import Robot, build_robot
 from cyborg.errors import ConfigError, CyborgError, ScenarioFailed
-from cyborg.observe.records import Record, RecordStream
+from cyborg.observe.records import Record, RecordStream, to_ns
 from cyborg.sim.script import CalendarEntry, Match, Script, Step, check_against
 from cyborg.sim.witness import Witness
 from cyborg.storage import lock_data_dir
@@ -52,7 +52,7 @@ def _brief(record: Record) -> str:
         return f"{t} {kind} {record.get('text')!r}"
     if kind == "emotion":
         return f"{t} emotion {record.get('emotion')}"
-    rest = ", ".join(f"{k}: {v}" for k, v in record.items() if k not in ("t", "type"))
+    rest = ", ".join(f"{k}: {v}" for k, v in record.items() if k not in ("t", "t_ns", "type"))
     return f"{t} {kind} {{{rest}}}"
 
 
@@ -225,7 +225,7 @@ class ScenarioDriver:
         and what the witness saw drop or break in that window."""
         same = [record for record in self._since if record.get("type") == match.type]
         came = "; ".join(_brief(record) for record in same[-3:]) if same else f"no {match.type} record at all"
-        notes = self.witness.since(round(armed - self.stream.origin, 3))
+        notes = self.witness.since(to_ns(armed - self.stream.origin))
         if notes:
             told = "; ".join(f"t={note.t:g} {note.text}" for note in notes[-NOTES_TOLD:])
             return f"{came}; in that window: {told}"
