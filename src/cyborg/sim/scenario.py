@@ -25,6 +25,7 @@ from cyborg.app.config import LoadedConfig
 from cyborg.app.registry import KindRegistry
 from cyborg.app.robot import Robot, build_robot
 from cyborg.errors import ConfigError, CyborgError, ScenarioFailed
+from cyborg.observe.recorder import Recorder, RecorderSettings, RunFacts
 from cyborg.observe.records import Record, RecordStream, to_ns
 from cyborg.sim.script import CalendarEntry, Match, Script, Step, check_against
 from cyborg.sim.witness import Witness
@@ -276,6 +277,8 @@ class ScenarioRun:
         map_path: Path | None = None,
         keep_records: bool = True,
         kinds: KindRegistry | None = None,
+        record: RecorderSettings | None = None,
+        script_text: str | None = None,
     ) -> None:
         check_script(script, config)
         self.script = script
@@ -299,6 +302,10 @@ class ScenarioRun:
             self.records = self.driver.records
             self.listeners = self.driver.listeners
             self.stream = self.driver.stream
+            self.recorder: Recorder | None = None
+            """Writes the run to MCAP (with ``record``)."""
+            if record is not None:
+                self.recorder = self._recorder(config, record, speed, script_text)
             self._prepare()
         except BaseException:
             self.transport.shutdown()  # a refused script leaves no half-started robot behind
@@ -309,6 +316,27 @@ class ScenarioRun:
     def summary(self) -> str:
         """E.g. "6 of 6 expectations met" (after :meth:`run`)."""
         return self.driver.summary()
+
+    def _recorder(
+        self, config: LoadedConfig, record: RecorderSettings, speed: float | None, script_text: str | None
+    ) -> Recorder:
+        base = self.robot.base()
+        facts = RunFacts(
+            start_ns=to_ns(self.clock.start_epoch),
+            clock="virtual" if speed is None else f"virtual x{speed:g}",
+            seed=self.script.seed,
+            config_name=Path(config.source).name or "config.yaml",
+            config_text=config.text,
+            script_name=Path(self.script.source).name or "script.yaml",
+            script_text=script_text if script_text is not None else _script_text(self.script),
+        )
+        return Recorder(
+            self.transport.node("cyborg_recorder"),
+            self.driver.stream,
+            record,
+            facts,
+            occupancy=base.map if base is not None else None,
+        )
 
     def _prepare(self) -> None:
         if self.script.emotion:
@@ -352,6 +380,8 @@ class ScenarioRun:
         finally:
             if handled and not loop.is_closed():
                 loop.remove_signal_handler(signal.SIGINT)
+            if self.recorder is not None:
+                self.recorder.close()
             self.robot.close()
             self.transport.shutdown()
             self.clock.close()
@@ -385,6 +415,16 @@ def add_calendar(calendar: Callable[[CalendarEntry], None] | None, script: Scrip
             ) from exc
 
 
+def _script_text(script: Script) -> str:
+    """The script's file, as it was read (else the script written out as YAML)."""
+    try:
+        return Path(script.source).read_text(encoding="utf-8")
+    except (OSError, ValueError):
+        import yaml
+
+        return yaml.safe_dump(script.model_dump(mode="json", exclude_none=True), sort_keys=False)
+
+
 def script_start(script: Script) -> datetime:
     """The virtual date-time a script starts at (UTC unless it says otherwise)."""
     start = script.start or DEFAULT_VIRTUAL_START
@@ -403,6 +443,7 @@ def run_scenario(
     on_record: Callable[[Record], None] | None = None,
     kinds: KindRegistry | None = None,
     stop_on_interrupt: bool = False,
+    record: RecorderSettings | None = None,
 ) -> ScenarioRecords:
     """Run ``script``; write each record to ``transcript`` as a JSON line; return the records
     (and the ``summary`` of its expectations: "6 of 6 expectations met").
@@ -410,6 +451,7 @@ def run_scenario(
     ``kinds`` defaults to every installed module kind. With ``keep_records=False`` the records go
     only to ``transcript`` and ``on_record`` as they happen and the returned list is empty, so a
     week-long script runs in flat memory. ``stop_on_interrupt``: see :meth:`ScenarioRun.run`.
+    ``record``: write the run to MCAP as it happens (:mod:`cyborg.observe.recorder`).
     """
     with contextlib.ExitStack() as stack:
         scratch = stack.enter_context(tempfile.TemporaryDirectory(prefix="cyborg-scenario-"))
@@ -423,6 +465,7 @@ def run_scenario(
             map_path=map_path,
             keep_records=keep_records,
             kinds=kinds,
+            record=record,
         )
         if transcript is not None:
 
