@@ -51,6 +51,7 @@ from foxglove.messages import (
     Vector3,
 )
 
+from cyborg.errors import InvalidValueError
 from cyborg.maps import OccupancyMap
 from cyborg.observe import channels as ch
 from cyborg.observe.records import Record, RecordStream, to_ns
@@ -60,9 +61,9 @@ from cyborg.transport.messages import EmotionalFeedback, String
 
 __all__ = [
     "DEFAULT_BUDGET_BYTES",
+    "Recorder",
     "RecorderSettings",
     "RecorderState",
-    "Recorder",
     "RunFacts",
     "segment_name",
 ]
@@ -213,7 +214,7 @@ class Recorder:
         occupancy: OccupancyMap | None = None,
     ) -> None:
         if settings.file is None and settings.folder is None:
-            raise ValueError("RecorderSettings needs a folder or a file")
+            raise InvalidValueError("RecorderSettings needs a folder or a file; fix: give folder= or file=")
         self.node = node
         self.stream = stream
         self.settings = settings
@@ -474,7 +475,7 @@ class Recorder:
         occupancy = self.occupancy
         if occupancy is None:
             return
-        rows, cols = occupancy.shape
+        _rows, cols = occupancy.shape
         grid = Grid(
             timestamp=self._stamp(t_ns),
             frame_id=ch.FRAME,
@@ -568,6 +569,8 @@ class Recorder:
                 self._fail(exc)
                 return
             self.state = RecorderState.CLOSED
+            if self.settings.file is None:
+                self._keep_budget()
             self._publish_status()
 
 

@@ -105,7 +105,9 @@ class Recording:
 
 def _check_file(path: Path) -> None:
     if not path.exists():
-        raise RecordingError(f"{path}: no such file; fix: check the path (recordings are in the data folder's recordings/)")
+        raise RecordingError(
+            f"{path}: no such file; fix: check the path (recordings are in the data folder's recordings/)"
+        )
     if path.is_dir():
         raise RecordingError(f"{path} is a folder; fix: name one .mcap file in it")
     with path.open("rb") as file:
@@ -175,8 +177,8 @@ def open_recording(path: Path) -> Recording:
                     attachments.setdefault(item.name, bytes(item.data))
                     continue
                 if start_ns is None:
-                    metadata = _check_metadata(path, None)
-                    return None  # type: ignore[unreachable]  # _check_metadata raised
+                    _check_metadata(path, None)  # raises: messages before any metadata of ours
+                    continue
                 _schema, channel, message = item
                 t_ns = message.log_time - start_ns
                 topic = channel.topic
@@ -217,7 +219,9 @@ def window(path: Path, start_ns: int, end_ns: int, topics: Iterable[str] | None 
         try:
             found = [m for m in reader.iter_metadata() if m.name == ch.METADATA_NAME]
         except McapError as exc:
-            raise RecordingError(f"{path} has no index (it was cut short: {exc}); fix: read it whole") from exc
+            raise RecordingError(
+                f"{path} has no index (it was cut short: {exc}); fix: read it whole"
+            ) from exc
         metadata = _check_metadata(path, dict(found[0].metadata) if found else None)
         start = int(metadata["start_ns"])
         wanted = list(topics) if topics is not None else list(ch.TYPE_OF_TOPIC)

@@ -26,7 +26,7 @@ from cyborg.app.registry import KindRegistry
 from cyborg.app.robot import Robot, build_robot
 from cyborg.errors import ConfigError, CyborgError, ScenarioFailed
 from cyborg.observe.recorder import Recorder, RecorderSettings, RunFacts
-from cyborg.observe.records import Record, RecordStream, to_ns
+from cyborg.observe.records import NS_PER_S, Record, RecordStream, to_ns
 from cyborg.sim.script import CalendarEntry, Match, Script, Step, check_against
 from cyborg.sim.witness import Witness
 from cyborg.storage import lock_data_dir
@@ -41,6 +41,8 @@ log = logging.getLogger(__name__)
 RECENT_KEPT = 200
 """Records kept while a step waits, to say what came instead of what it waited for."""
 NOTES_TOLD = 5
+INPUT_GRID_NS = 1000
+"""A script's inputs happen on whole microseconds since the run started (see ``_on_the_grid``)."""
 """What dropped or broke in a failed step's window: the last this many notes are told."""
 
 
@@ -60,10 +62,12 @@ def _brief(record: Record) -> str:
 class ScenarioRecords(list[Record]):
     """A run's records (empty if it kept none), and its :attr:`summary`."""
 
-    def __init__(self, records: list[Record], summary: str) -> None:
+    def __init__(self, records: list[Record], summary: str, recordings: list[Path] | None = None) -> None:
         super().__init__(records)
         self.summary = summary
         """E.g. "6 of 6 expectations met"."""
+        self.recordings = recordings or []
+        """The MCAP files the run was recorded to."""
 
 
 class ScenarioDriver:
@@ -177,13 +181,14 @@ class ScenarioDriver:
                 self._arm(index + 1)
                 continue
             if step.at is not None:
-                await self.clock.sleep(step.at - self.clock.monotonic())
+                await self._until(step.at)
             elif not await self._wait_for(index):
                 self._fail_step()
                 return
             self._step = None
             self._arm(None)
             await self.clock.sleep(step.delay)
+            await self._on_the_grid()
             if step.say is not None:
                 self.say.publish(String(step.say))
             elif step.event is not None:
@@ -191,6 +196,38 @@ class ScenarioDriver:
             elif step.emotion is not None:
                 self.set_emotion.publish(String(step.emotion))
             self._arm(index + 1)
+
+    async def _until(self, when: float) -> None:
+        """Sleep until the loop's time is ``when`` exactly (a deadline, not a duration: a re-run's
+        input lands on the very float its recording names)."""
+        loop = self.clock.loop
+        if loop.time() >= when:
+            await asyncio.sleep(0)
+            return
+        woken: asyncio.Future[None] = loop.create_future()
+
+        def wake() -> None:
+            if not woken.done():
+                woken.set_result(None)
+
+        handle = loop.call_at(when, wake)
+        try:
+            await woken
+        finally:
+            handle.cancel()
+
+    async def _on_the_grid(self) -> None:
+        """Wait (at most a microsecond) until the loop's time is a whole microsecond since the run
+        started: an input then happens at the very time its record names (integer nanoseconds),
+        and a re-run that plays it there follows the same path. (A deadline closer than the
+        loop's resolution, a nanosecond, would fire at once, off the grid: the next one is taken.)"""
+        now = self.clock.monotonic() - self.stream.origin
+        t_ns = -(-round(now * NS_PER_S) // INPUT_GRID_NS) * INPUT_GRID_NS
+        if t_ns / NS_PER_S == now:
+            return
+        while t_ns / NS_PER_S - now < 2e-9:
+            t_ns += INPUT_GRID_NS
+        await self._until(self.stream.origin + t_ns / NS_PER_S)
 
     def _fail_step(self) -> None:
         """The step being waited for did not come: record what it waited for and what came instead."""
@@ -389,7 +426,8 @@ class ScenarioRun:
             raise KeyboardInterrupt
         if self.driver.failures:
             raise ScenarioFailed(self.driver.failures, source=self.script.source)
-        return ScenarioRecords(self.records, self.summary)
+        recordings = list(self.recorder.files) if self.recorder is not None else []
+        return ScenarioRecords(self.records, self.summary, recordings)
 
 
 def check_script(script: Script, config: LoadedConfig) -> None:
