@@ -107,6 +107,10 @@ class LazyGroup(click.Group):
             "cyborg.cli.recordings:export",
             "Export the recording FILE as a ROS 1 or ROS 2 bag of the thesis's messages.",
         ),
+        "replay": (
+            "cyborg.cli.recordings:replay",
+            "Serve the dashboard on the recording FILE: a time slider, play/pause and speed.",
+        ),
         "launch": (
             "cyborg.cli.ros:launch_command",
             "Start the whole robot over ROS 1 (a master if none runs) or ROS 2 (--ros2), a process a part.",

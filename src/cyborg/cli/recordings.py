@@ -98,3 +98,41 @@ def export(file: Path, kind: str, out: Path) -> None:
         fail(exc)
     except OSError as exc:
         fail(os_problem(exc))
+
+
+@click.command()
+@click.argument("file", type=click.Path(path_type=Path))
+@click.option("--host", default="127.0.0.1", show_default=True, help="address to serve on")
+@click.option("--port", default=8643, show_default=True, type=int, help="port (0: any free port)")
+def replay(file: Path, host: str, port: int) -> None:
+    """Serve the dashboard on the recording FILE: a time slider, play/pause and speed."""
+    try:
+        import asyncio
+
+        from aiohttp import web
+
+        from cyborg.web.replay import ReplayAPI
+
+        api = ReplayAPI(_open(file))
+
+        async def serve() -> None:
+            runner = web.AppRunner(api.app, access_log=None)
+            await runner.setup()
+            site = web.TCPSite(runner, host, port)
+            await site.start()
+            server = site._server
+            sockets = getattr(server, "sockets", None) or []
+            bound = sockets[0].getsockname()[1] if sockets else port
+            click.secho(f"replay of {file} at http://{host}:{bound}/", fg="green")
+            try:
+                await asyncio.Event().wait()
+            finally:
+                await runner.cleanup()
+
+        asyncio.run(serve())
+    except CyborgError as exc:
+        fail(exc)
+    except OSError as exc:
+        fail(os_problem(exc))
+    except KeyboardInterrupt:
+        click.echo("stopped")
