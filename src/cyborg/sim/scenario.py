@@ -43,6 +43,8 @@ RECENT_KEPT = 200
 NOTES_TOLD = 5
 INPUT_GRID_NS = 1000
 """A script's inputs happen on whole microseconds since the run started (see ``_on_the_grid``)."""
+ON_THE_GRID_NS = 0.001
+"""A time this close to a whole microsecond is on it (a float's last bits, not a later moment)."""
 """What dropped or broke in a failed step's window: the last this many notes are told."""
 
 
@@ -222,9 +224,10 @@ class ScenarioDriver:
         and a re-run that plays it there follows the same path. (A deadline closer than the
         loop's resolution, a nanosecond, would fire at once, off the grid: the next one is taken.)"""
         now = self.clock.monotonic() - self.stream.origin
-        t_ns = -(-round(now * NS_PER_S) // INPUT_GRID_NS) * INPUT_GRID_NS
-        if t_ns / NS_PER_S == now:
-            return
+        nearest = round(now * NS_PER_S)
+        if nearest % INPUT_GRID_NS == 0 and abs(now * NS_PER_S - nearest) < ON_THE_GRID_NS:
+            return  # on it, but for the last bit of a float (``at: 60`` after a long jump)
+        t_ns = -(-nearest // INPUT_GRID_NS) * INPUT_GRID_NS
         while t_ns / NS_PER_S - now < 2e-9:
             t_ns += INPUT_GRID_NS
         await self._until(self.stream.origin + t_ns / NS_PER_S)

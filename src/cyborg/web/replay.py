@@ -25,6 +25,8 @@ __all__ = ["ReplayAPI"]
 
 RECORDS_SHOWN = 200
 """The log's records up to a moment that ``/api/records`` gives (the latest)."""
+TRACK_POINTS = 4000
+"""At most about this many points of the robot's track and the emotion plot go to the page."""
 
 
 class _Timeline:
@@ -109,7 +111,8 @@ class ReplayAPI:
     async def get_replay(self, request: web.Request) -> web.Response:
         recording = self.recording
         poses = self.timelines.get("pose")
-        track = [[r["t"], r["x"], r["y"]] for r in poses.records] if poses else []
+        every = max(1, len(poses.records) // TRACK_POINTS) if poses else 1
+        track = [[r["t"], r["x"], r["y"]] for r in poses.records[::every]] if poses else []
         emotions = self.timelines.get("emotion")
         plot = (
             [[r["t"], r["pleasure"], r["arousal"], r["dominance"]] for r in emotions.records]
