@@ -107,29 +107,10 @@ def export(file: Path, kind: str, out: Path) -> None:
 def replay(file: Path, host: str, port: int) -> None:
     """Serve the dashboard on the recording FILE: a time slider, play/pause and speed."""
     try:
-        import asyncio
-
-        from aiohttp import web
-
-        from cyborg.web.replay import ReplayAPI
+        from cyborg.web.replay import ReplayAPI, serve_replay
 
         api = ReplayAPI(_open(file))
-
-        async def serve() -> None:
-            runner = web.AppRunner(api.app, access_log=None)
-            await runner.setup()
-            site = web.TCPSite(runner, host, port)
-            await site.start()
-            server = site._server
-            sockets = getattr(server, "sockets", None) or []
-            bound = sockets[0].getsockname()[1] if sockets else port
-            click.secho(f"replay of {file} at http://{host}:{bound}/", fg="green")
-            try:
-                await asyncio.Event().wait()
-            finally:
-                await runner.cleanup()
-
-        asyncio.run(serve())
+        serve_replay(api, host, port, lambda url: click.secho(f"replay of {file} at {url}", fg="green"))
     except CyborgError as exc:
         fail(exc)
     except OSError as exc:

@@ -10,9 +10,10 @@ read once; a moment is then a binary search per record type.
 
 from __future__ import annotations
 
+import asyncio
 import bisect
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from aiohttp import web
@@ -21,7 +22,7 @@ from cyborg.observe.recording import Recording
 from cyborg.observe.records import NS_PER_S, Record
 from cyborg.web.dashboard import STATIC_DIR
 
-__all__ = ["ReplayAPI"]
+__all__ = ["ReplayAPI", "serve_replay"]
 
 RECORDS_SHOWN = 200
 """The log's records up to a moment that ``/api/records`` gives (the latest)."""
@@ -139,3 +140,23 @@ class ReplayAPI:
         t_ns = self._at(request)
         index = bisect.bisect_right(self.all.times, t_ns)
         return web.json_response(self.all.records[max(0, index - RECORDS_SHOWN) : index])
+
+
+def serve_replay(api: ReplayAPI, host: str, port: int, announce: Callable[[str], None]) -> None:
+    """Serve ``api`` on ``host:port`` (0: any free port) until interrupted; ``announce`` gets the address."""
+
+    async def serve() -> None:
+        runner = web.AppRunner(api.app, access_log=None)
+        await runner.setup()
+        site = web.TCPSite(runner, host, port)
+        await site.start()
+        server = site._server
+        sockets = getattr(server, "sockets", None) or []
+        bound = sockets[0].getsockname()[1] if sockets else port
+        announce(f"http://{host}:{bound}/")
+        try:
+            await asyncio.Event().wait()
+        finally:
+            await runner.cleanup()
+
+    asyncio.run(serve())
