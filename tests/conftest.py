@@ -34,3 +34,20 @@ def clock() -> Iterator[VirtualClock]:
 @pytest.fixture
 def transport(clock: VirtualClock) -> EmbeddedTransport:
     return EmbeddedTransport(clock)
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _recordings_in_a_scratch_folder(tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
+    """Every run records (MCAP) unless told not to: the tests' runs record into a scratch folder,
+    never into the data folder of whoever runs the tests."""
+    import os
+
+    from cyborg.cli.recording import RECORDINGS_ENV
+
+    before = os.environ.get(RECORDINGS_ENV)
+    os.environ[RECORDINGS_ENV] = str(tmp_path_factory.mktemp("recordings"))
+    yield
+    if before is None:
+        os.environ.pop(RECORDINGS_ENV, None)
+    else:
+        os.environ[RECORDINGS_ENV] = before

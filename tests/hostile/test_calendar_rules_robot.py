@@ -104,7 +104,9 @@ def test_the_robot_still_answers_with_the_rule_in_its_calendar(
 
     assert run.returncode == 0, run.stdout + run.stderr
     records = [json.loads(line) for line in transcript.read_text(encoding="utf-8").splitlines()]
-    assert {"t": 60.0, "type": "heard", "text": "hello robot"} in records, "the robot heard what it was told"
+    assert {"t": 60.0, "t_ns": 60_000_000_000, "type": "heard", "text": "hello robot"} in records, (
+        "the robot heard what it was told"
+    )
     assert any(r["type"] == "state" and r["t"] >= 90 for r in records), "the controller still changes state"
     listed = cyborg(["db", "--db", str(data / "navigation.db"), "events", "list", "--at", "now"])
     assert listed.returncode == 0, listed.stdout + listed.stderr

@@ -49,7 +49,12 @@ def test_cli_streams_the_transcript_and_keeps_no_records(
     assert result.exit_code == 0, result.output
     records = [json.loads(line) for line in transcript.read_text(encoding="utf-8").splitlines()]
     assert f"wrote {len(records)} records" in result.output
-    assert {"t": 35.0, "type": "heard", "text": "hello"} in records  # 'when' still waits for its record
+    assert {
+        "t": 35.0,
+        "t_ns": 35_000_000_000,
+        "type": "heard",
+        "text": "hello",
+    } in records  # 'when' still waits
     assert "[    35.0s] User: hello" in result.output
     [driver] = drivers
     assert driver.count == len(records) and driver.records == [], "the run kept its records in memory"

@@ -33,6 +33,7 @@ __all__ = [
     "ConfigModel",
     "GatekeeperModel",
     "LoadedConfig",
+    "RecordingModel",
     "check_motivational_events",
     "load_config",
     "packaged_config",
@@ -57,6 +58,22 @@ class GatekeeperModel(BaseModel):
     )
 
 
+class RecordingModel(BaseModel):
+    """The flight recorder: where every run is recorded, and how much disk it may take."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    enabled: bool = Field(True, description="record every run (cyborg sim, scripts) to MCAP")
+    folder: str | None = Field(
+        None, description="folder of the recordings (default: the data folder's recordings/)"
+    )
+    budget_mb: float = Field(
+        1024.0, gt=0, description="MB the folder may hold; the oldest are deleted beyond"
+    )
+    segment_minutes: float = Field(60.0, gt=0, description="a new file after this many minutes of robot time")
+    segment_mb: float = Field(16.0, gt=0, description="a new file once one holds this many MB")
+
+
 class ConfigModel(MachineModel):
     """The whole YAML file. Sections other than the state machine belong to their components."""
 
@@ -71,6 +88,7 @@ class ConfigModel(MachineModel):
         default_factory=dict, description="node name: module settings (kind: ...)"
     )
     gatekeepers: list[GatekeeperModel] = Field(default_factory=list)
+    recording: RecordingModel = Field(default_factory=RecordingModel)  # type: ignore[arg-type]
 
 
 @dataclass

@@ -5,7 +5,8 @@ emotion, status), ``listen``, ``new`` and ``db``. Top of the import chain: it ma
 below it, but a command imports only what it needs, so that ``cyborg --help`` loads click
 alone, the command tool (``cyborg say``) click and urllib, and ``cyborg node`` only its own part.
 :mod:`~cyborg.cli.common` holds what the commands share (loading a configuration, failing with a
-readable message, checking options).
+readable message, checking options); :mod:`~cyborg.cli.recording` the ``--record`` options and
+where recordings go; :mod:`~cyborg.cli.recordings` ``rerun``, ``replay`` and ``export``.
 """
 
 from __future__ import annotations
@@ -97,6 +98,18 @@ class LazyGroup(click.Group):
             "cyborg.cli.ros:node",
             "Run one part of the robot as the ROS 1 node NAME (cyborg_controller, a module, a "
             "gatekeeper, cyborg_api, or cyborg_scenario with --script); with --ros2 as a ROS 2 node.",
+        ),
+        "rerun": (
+            "cyborg.cli.recordings:rerun",
+            "Re-run the recording FILE from its recorded inputs and compare what the robot did.",
+        ),
+        "export": (
+            "cyborg.cli.recordings:export",
+            "Export the recording FILE as a ROS 1 or ROS 2 bag of the thesis's messages.",
+        ),
+        "replay": (
+            "cyborg.cli.recordings:replay",
+            "Serve the dashboard on the recording FILE: a time slider, play/pause and speed.",
         ),
         "launch": (
             "cyborg.cli.ros:launch_command",

@@ -21,11 +21,13 @@ from cyborg.cli.common import (
     os_problem,
     parse_speed,
 )
+from cyborg.cli.recording import record_options, recorder_settings
 from cyborg.errors import CyborgError
 from cyborg.web.access import Access
 
 if TYPE_CHECKING:
     from cyborg.app.config import LoadedConfig
+    from cyborg.observe.recorder import RecorderSettings
     from cyborg.run.middleware import Middleware
 
 
@@ -73,6 +75,7 @@ if TYPE_CHECKING:
     is_flag=True,
     help="the robot hears the machine's microphone (adds a speech_input module; offline, pocketsphinx)",
 )
+@record_options
 @access_options
 def sim(
     config_path: Path | None,
@@ -87,6 +90,8 @@ def sim(
     over_ros: bool,
     over_ros2: bool,
     mic: bool,
+    record_path: Path | None,
+    no_record: bool,
     access: Access,
 ) -> None:
     """Run the whole simulated robot in this process, with its API and dashboard.
@@ -125,8 +130,9 @@ def sim(
                 middleware=middleware_for(over_ros2),
             )
             return
+        record = recorder_settings(config, record_path, no_record, data_dir)
         if script_path is not None:
-            _run_script(config, script_path, transcript_path, speed, data_dir, map_path)
+            _run_script(config, script_path, transcript_path, speed, data_dir, map_path, record)
             return
         if transcript_path is not None:
             raise click.UsageError("--transcript goes with --script")
@@ -144,6 +150,7 @@ def sim(
             serve=serve_api(host, port, click.secho, access),
             data_dir=data_dir,
             map_path=map_path,
+            record=record,
         )
     except CyborgError as exc:
         fail(exc)
@@ -238,6 +245,7 @@ def _run_script(
     speed: str | None,
     data_dir: Path | None,
     map_path: Path | None,
+    record: RecorderSettings | None = None,
 ) -> None:
     import contextlib
 
@@ -276,6 +284,7 @@ def _run_script(
                 keep_records=False,
                 on_record=echo,
                 stop_on_interrupt=True,
+                record=record,
             )
         except KeyboardInterrupt:
             written = f"; wrote {count} records to {transcript_path}" if transcript_path else ""
@@ -283,4 +292,6 @@ def _run_script(
             return
     if transcript_path:
         click.secho(f"wrote {count} records to {transcript_path}", fg="green")
+    for recording in result.recordings:
+        click.echo(f"recorded to {recording}")
     click.secho(result.summary, fg="green")

@@ -1,7 +1,8 @@
 """Turn what happens on the robot's topics into plain records.
 
-One record per observation, each a dict with ``t`` (seconds since the run
-started, on the injected clock) and ``type``: ``state``, ``emotion``, ``say``
+One record per observation, each a dict with ``t`` (seconds since the run started, on the
+injected clock, rounded to 1 ms for people to read), ``t_ns`` (the same time in exact integer
+nanoseconds: what code compares, orders and re-runs from) and ``type``: ``state``, ``emotion``, ``say``
 (what was actually spoken, after the gatekeeper), ``heard``, ``recognised`` (each utterance
 the speech input decoded: text, confidence, accepted), ``pose`` (at most
 once per second while the pose changes) and ``motivator``. The scenario
@@ -22,7 +23,19 @@ from cyborg.transport.messages import EmotionalState, PoseWithCovarianceStamped,
 from cyborg.transport.topics import SPOKEN_TOPIC
 
 Record = dict[str, Any]
-POSE_INTERVAL = 1.0
+POSE_INTERVAL_NS = 1_000_000_000
+"""At most one pose record a second."""
+NS_PER_S = 1_000_000_000
+
+
+def to_ns(seconds: float) -> int:
+    """Seconds (a clock reading) as integer nanoseconds."""
+    return round(seconds * NS_PER_S)
+
+
+def readable_seconds(t_ns: int) -> float:
+    """Integer nanoseconds as the seconds a transcript shows, rounded to 1 ms (never compared)."""
+    return round(t_ns / NS_PER_S, 3)
 
 
 def yaw_of(z: float, w: float) -> float:
@@ -36,7 +49,7 @@ class RecordStream:
         self.node = node
         self.origin = node.clock.monotonic() if origin is None else origin
         self.listeners: list[Callable[[Record], None]] = []
-        self._last_pose_t = -math.inf
+        self._last_pose_ns: int | None = None
         self._last_pose: tuple[float, float, float] | None = None
         self._pending_pose: tuple[float, float, float] | None = None
         self._pose_flush: asyncio.TimerHandle | None = None
@@ -48,11 +61,17 @@ class RecordStream:
         node.subscribe(topics.AMCL_POSE, PoseWithCovarianceStamped, self._on_pose, queue_size=10)
         node.subscribe(topics.MOTIVATOR_DECISION, String, self._on_decision, queue_size=1000)
 
+    def now_ns(self) -> int:
+        """Nanoseconds since the run started, on the injected clock."""
+        return to_ns(self.node.clock.monotonic() - self.origin)
+
     def now(self) -> float:
-        return round(self.node.clock.monotonic() - self.origin, 3)
+        """Seconds since the run started, rounded to 1 ms: for people, never for decisions."""
+        return readable_seconds(self.now_ns())
 
     def emit(self, record_type: str, **fields: Any) -> None:
-        record: Record = {"t": self.now(), "type": record_type, **fields}
+        t_ns = self.now_ns()
+        record: Record = {"t": readable_seconds(t_ns), "t_ns": t_ns, "type": record_type, **fields}
         for listener in list(self.listeners):
             listener(record)
 
@@ -95,12 +114,13 @@ class RecordStream:
         )
         if pose == self._last_pose:
             return
-        since_last = self.now() - self._last_pose_t
-        if since_last < POSE_INTERVAL:
+        since_last = None if self._last_pose_ns is None else self.now_ns() - self._last_pose_ns
+        if since_last is not None and since_last < POSE_INTERVAL_NS:
             # Held back, not lost: the last pose of a trip (the arrival) comes out a moment later.
             self._pending_pose = pose
             if self._pose_flush is None:
-                self._pose_flush = self.node.clock.call_later(POSE_INTERVAL - since_last, self._flush_pose)
+                wait = (POSE_INTERVAL_NS - since_last) / NS_PER_S
+                self._pose_flush = self.node.clock.call_later(wait, self._flush_pose)
             return
         self._emit_pose(pose)
 
@@ -111,7 +131,7 @@ class RecordStream:
             self._emit_pose(pose)
 
     def _emit_pose(self, pose: tuple[float, float, float]) -> None:
-        self._last_pose, self._last_pose_t = pose, self.now()
+        self._last_pose, self._last_pose_ns = pose, self.now_ns()
         self.emit("pose", x=pose[0], y=pose[1], theta=pose[2])
 
     def _on_decision(self, m: String, info: MessageInfo) -> None:

@@ -12,6 +12,8 @@ from typing import Any
 
 from cyborg.app.config import LoadedConfig
 from cyborg.app.robot import Robot, build_robot
+from cyborg.observe.recorder import Recorder, RecorderSettings, RunFacts
+from cyborg.observe.records import RecordStream, to_ns
 from cyborg.storage import lock_data_dir
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Transport
@@ -44,9 +46,38 @@ def run_sim(
     serve: Callable[[Transport, Robot], Awaitable[Callable[[], Awaitable[None]]]] | None = None,
     data_dir: Path | None = None,
     map_path: Path | None = None,
+    record: RecorderSettings | None = None,
 ) -> None:
+    """Run the robot of ``config`` until a signal (or ``duration``); ``record``: write it to MCAP."""
     with lock_data_dir(data_dir or default_data_dir()) as folder:
-        _run(config, folder, speed=speed, duration=duration, echo=echo, serve=serve, map_path=map_path)
+        _run(
+            config,
+            folder,
+            speed=speed,
+            duration=duration,
+            echo=echo,
+            serve=serve,
+            map_path=map_path,
+            record=record,
+        )
+
+
+def start_recorder(
+    config: LoadedConfig, transport: Transport, robot: Robot, settings: RecorderSettings, clock: Clock
+) -> Recorder:
+    """A recorder of this robot from now on, on its own node and record stream."""
+    node = transport.node("cyborg_recorder")
+    stream = RecordStream(node)
+    speed = getattr(clock, "speed", None)
+    kind = "real" if not clock.is_virtual else ("virtual" if speed is None else f"virtual x{speed:g}")
+    facts = RunFacts(
+        start_ns=to_ns(clock.now()),
+        clock=kind,
+        config_name=Path(config.source).name or "config.yaml",
+        config_text=config.text,
+    )
+    base = robot.base()
+    return Recorder(node, stream, settings, facts, occupancy=base.map if base is not None else None)
 
 
 def _run(
@@ -58,10 +89,14 @@ def _run(
     echo: Callable[[str], None],
     serve: Callable[[Transport, Robot], Awaitable[Callable[[], Awaitable[None]]]] | None,
     map_path: Path | None,
+    record: RecorderSettings | None,
 ) -> None:
     clock = make_clock(speed)
     transport = EmbeddedTransport(clock)
     robot = build_robot(config, transport, data_dir=data_dir, map_path=map_path)
+    recorder = start_recorder(config, transport, robot, record, clock) if record is not None else None
+    if recorder is not None and recorder.path is not None:
+        echo(f"recording to {recorder.path}")
     monitor = transport.node("cyborg_console")
     start = clock.monotonic()
 
@@ -93,6 +128,8 @@ def _run(
         await robot.controller.stop()
         if stop_server is not None:
             await stop_server()
+        if recorder is not None:
+            recorder.close()
         robot.close()
         transport.shutdown()
         if signalled.done():

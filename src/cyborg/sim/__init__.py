@@ -6,5 +6,6 @@
 :mod:`~cyborg.sim.search_ahead` (whose worker is :mod:`~cyborg.sim._search_worker`).
 :mod:`~cyborg.sim.script` reads scenario scripts and :mod:`~cyborg.sim.scenario` runs them,
 writing transcripts with :mod:`~cyborg.sim.transcript`;
-:mod:`~cyborg.sim.witness` tells a failed step what dropped or broke what it waited for.
+:mod:`~cyborg.sim.witness` tells a failed step what dropped or broke what it waited for;
+:mod:`~cyborg.sim.rerun` re-runs a recording from its recorded inputs (``cyborg rerun``).
 """

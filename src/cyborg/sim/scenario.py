@@ -24,7 +24,8 @@ from cyborg.app.config import LoadedConfig
 from cyborg.app.registry import KindRegistry
 from cyborg.app.robot import Robot, build_robot
 from cyborg.errors import ConfigError, CyborgError, ScenarioFailed
-from cyborg.observe.records import Record, RecordStream
+from cyborg.observe.recorder import Recorder, RecorderSettings, RunFacts
+from cyborg.observe.records import NS_PER_S, Record, RecordStream, to_ns
 from cyborg.sim.script import CalendarEntry, Match, Script, Step, check_against
 from cyborg.sim.transcript import TranscriptWriter
 from cyborg.sim.witness import Witness
@@ -40,6 +41,10 @@ log = logging.getLogger(__name__)
 RECENT_KEPT = 200
 """Records kept while a step waits, to say what came instead of what it waited for."""
 NOTES_TOLD = 5
+INPUT_GRID_NS = 1000
+"""A script's inputs happen on whole microseconds since the run started (see ``_on_the_grid``)."""
+ON_THE_GRID_NS = 0.001
+"""A time this close to a whole microsecond is on it (a float's last bits, not a later moment)."""
 """What dropped or broke in a failed step's window: the last this many notes are told."""
 
 
@@ -52,17 +57,19 @@ def _brief(record: Record) -> str:
         return f"{t} {kind} {record.get('text')!r}"
     if kind == "emotion":
         return f"{t} emotion {record.get('emotion')}"
-    rest = ", ".join(f"{k}: {v}" for k, v in record.items() if k not in ("t", "type"))
+    rest = ", ".join(f"{k}: {v}" for k, v in record.items() if k not in ("t", "t_ns", "type"))
     return f"{t} {kind} {{{rest}}}"
 
 
 class ScenarioRecords(list[Record]):
     """A run's records (empty if it kept none), and its :attr:`summary`."""
 
-    def __init__(self, records: list[Record], summary: str) -> None:
+    def __init__(self, records: list[Record], summary: str, recordings: list[Path] | None = None) -> None:
         super().__init__(records)
         self.summary = summary
         """E.g. "6 of 6 expectations met"."""
+        self.recordings = recordings or []
+        """The MCAP files the run was recorded to."""
 
 
 class ScenarioDriver:
@@ -176,13 +183,14 @@ class ScenarioDriver:
                 self._arm(index + 1)
                 continue
             if step.at is not None:
-                await self.clock.sleep(step.at - self.clock.monotonic())
+                await self._until(step.at)
             elif not await self._wait_for(index):
                 self._fail_step()
                 return
             self._step = None
             self._arm(None)
             await self.clock.sleep(step.delay)
+            await self._on_the_grid()
             if step.say is not None:
                 self.say.publish(String(step.say))
             elif step.event is not None:
@@ -190,6 +198,39 @@ class ScenarioDriver:
             elif step.emotion is not None:
                 self.set_emotion.publish(String(step.emotion))
             self._arm(index + 1)
+
+    async def _until(self, when: float) -> None:
+        """Sleep until the loop's time is ``when`` exactly (a deadline, not a duration: a re-run's
+        input lands on the very float its recording names)."""
+        loop = self.clock.loop
+        if loop.time() >= when:
+            await asyncio.sleep(0)
+            return
+        woken: asyncio.Future[None] = loop.create_future()
+
+        def wake() -> None:
+            if not woken.done():
+                woken.set_result(None)
+
+        handle = loop.call_at(when, wake)
+        try:
+            await woken
+        finally:
+            handle.cancel()
+
+    async def _on_the_grid(self) -> None:
+        """Wait (at most a microsecond) until the loop's time is a whole microsecond since the run
+        started: an input then happens at the very time its record names (integer nanoseconds),
+        and a re-run that plays it there follows the same path. (A deadline closer than the
+        loop's resolution, a nanosecond, would fire at once, off the grid: the next one is taken.)"""
+        now = self.clock.monotonic() - self.stream.origin
+        nearest = round(now * NS_PER_S)
+        if nearest % INPUT_GRID_NS == 0 and abs(now * NS_PER_S - nearest) < ON_THE_GRID_NS:
+            return  # on it, but for the last bit of a float (``at: 60`` after a long jump)
+        t_ns = -(-nearest // INPUT_GRID_NS) * INPUT_GRID_NS
+        while t_ns / NS_PER_S - now < 2e-9:
+            t_ns += INPUT_GRID_NS
+        await self._until(self.stream.origin + t_ns / NS_PER_S)
 
     def _fail_step(self) -> None:
         """The step being waited for did not come: record what it waited for and what came instead."""
@@ -225,7 +266,7 @@ class ScenarioDriver:
         and what the witness saw drop or break in that window."""
         same = [record for record in self._since if record.get("type") == match.type]
         came = "; ".join(_brief(record) for record in same[-3:]) if same else f"no {match.type} record at all"
-        notes = self.witness.since(round(armed - self.stream.origin, 3))
+        notes = self.witness.since(to_ns(armed - self.stream.origin))
         if notes:
             told = "; ".join(f"t={note.t:g} {note.text}" for note in notes[-NOTES_TOLD:])
             return f"{came}; in that window: {told}"
@@ -276,6 +317,8 @@ class ScenarioRun:
         map_path: Path | None = None,
         keep_records: bool = True,
         kinds: KindRegistry | None = None,
+        record: RecorderSettings | None = None,
+        script_text: str | None = None,
     ) -> None:
         check_script(script, config)
         self.script = script
@@ -299,6 +342,10 @@ class ScenarioRun:
             self.records = self.driver.records
             self.listeners = self.driver.listeners
             self.stream = self.driver.stream
+            self.recorder: Recorder | None = None
+            """Writes the run to MCAP (with ``record``)."""
+            if record is not None:
+                self.recorder = self._recorder(config, record, speed, script_text)
             self._prepare()
         except BaseException:
             self.transport.shutdown()  # a refused script leaves no half-started robot behind
@@ -309,6 +356,27 @@ class ScenarioRun:
     def summary(self) -> str:
         """E.g. "6 of 6 expectations met" (after :meth:`run`)."""
         return self.driver.summary()
+
+    def _recorder(
+        self, config: LoadedConfig, record: RecorderSettings, speed: float | None, script_text: str | None
+    ) -> Recorder:
+        base = self.robot.base()
+        facts = RunFacts(
+            start_ns=to_ns(self.clock.start_epoch),
+            clock="virtual" if speed is None else f"virtual x{speed:g}",
+            seed=self.script.seed,
+            config_name=Path(config.source).name or "config.yaml",
+            config_text=config.text,
+            script_name=Path(self.script.source).name or "script.yaml",
+            script_text=script_text if script_text is not None else _script_text(self.script),
+        )
+        return Recorder(
+            self.transport.node("cyborg_recorder"),
+            self.driver.stream,
+            record,
+            facts,
+            occupancy=base.map if base is not None else None,
+        )
 
     def _prepare(self) -> None:
         if self.script.emotion:
@@ -352,6 +420,8 @@ class ScenarioRun:
         finally:
             if handled and not loop.is_closed():
                 loop.remove_signal_handler(signal.SIGINT)
+            if self.recorder is not None:
+                self.recorder.close()
             self.robot.close()
             self.transport.shutdown()
             self.clock.close()
@@ -359,7 +429,8 @@ class ScenarioRun:
             raise KeyboardInterrupt
         if self.driver.failures:
             raise ScenarioFailed(self.driver.failures, source=self.script.source)
-        return ScenarioRecords(self.records, self.summary)
+        recordings = list(self.recorder.files) if self.recorder is not None else []
+        return ScenarioRecords(self.records, self.summary, recordings)
 
 
 def check_script(script: Script, config: LoadedConfig) -> None:
@@ -385,6 +456,16 @@ def add_calendar(calendar: Callable[[CalendarEntry], None] | None, script: Scrip
             ) from exc
 
 
+def _script_text(script: Script) -> str:
+    """The script's file, as it was read (else the script written out as YAML)."""
+    try:
+        return Path(script.source).read_text(encoding="utf-8")
+    except (OSError, ValueError):
+        import yaml
+
+        return yaml.safe_dump(script.model_dump(mode="json", exclude_none=True), sort_keys=False)
+
+
 def script_start(script: Script) -> datetime:
     """The virtual date-time a script starts at (UTC unless it says otherwise)."""
     start = script.start or DEFAULT_VIRTUAL_START
@@ -403,6 +484,7 @@ def run_scenario(
     on_record: Callable[[Record], None] | None = None,
     kinds: KindRegistry | None = None,
     stop_on_interrupt: bool = False,
+    record: RecorderSettings | None = None,
 ) -> ScenarioRecords:
     """Run ``script``; write each record to ``transcript`` as a JSON line; return the records
     (and the ``summary`` of its expectations: "6 of 6 expectations met").
@@ -410,6 +492,7 @@ def run_scenario(
     ``kinds`` defaults to every installed module kind. With ``keep_records=False`` the records go
     only to ``transcript`` and ``on_record`` as they happen and the returned list is empty, so a
     week-long script runs in flat memory. ``stop_on_interrupt``: see :meth:`ScenarioRun.run`.
+    ``record``: write the run to MCAP as it happens (:mod:`cyborg.observe.recorder`).
     """
     with contextlib.ExitStack() as stack:
         scratch = stack.enter_context(tempfile.TemporaryDirectory(prefix="cyborg-scenario-"))
@@ -423,6 +506,7 @@ def run_scenario(
             map_path=map_path,
             keep_records=keep_records,
             kinds=kinds,
+            record=record,
         )
         if transcript is not None:
             writer = TranscriptWriter(transcript)

@@ -91,7 +91,7 @@ class Match(BaseModel):
         if record.get("type") != self.type:
             return False
         if self.contains is not None:
-            haystack = " ".join(str(v) for k, v in record.items() if k not in ("t", "type")).lower()
+            haystack = " ".join(str(v) for k, v in record.items() if k not in ("t", "t_ns", "type")).lower()
             if self.contains.lower() not in haystack:
                 return False
         extra = self.model_extra or {}

@@ -16,7 +16,7 @@ from collections import deque
 from dataclasses import dataclass
 from typing import Any
 
-from cyborg.observe.records import Record
+from cyborg.observe.records import Record, readable_seconds, to_ns
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Node
 from cyborg.transport.messages import String
@@ -27,8 +27,14 @@ NOTES_KEPT = 200
 
 @dataclass(frozen=True)
 class Note:
-    t: float
+    t_ns: int
+    """Nanoseconds since the run started."""
     text: str
+
+    @property
+    def t(self) -> float:
+        """Seconds since the run started, rounded to 1 ms (to print)."""
+        return readable_seconds(self.t_ns)
 
 
 class Witness:
@@ -40,20 +46,20 @@ class Witness:
         self.notes: deque[Note] = deque(maxlen=NOTES_KEPT)
         self.state: str | None = None  # the active state, as the last state record told it
         self._transitions: dict[str, list[str]] | None = None
-        self._events: deque[tuple[float, str, str, str]] = deque(maxlen=NOTES_KEPT)
+        self._events: deque[tuple[int, str, str, str]] = deque(maxlen=NOTES_KEPT)
         """(time, event, sender, the state it was sent in), judged only when a failure is told."""
         node.subscribe(topics.REGISTER_EVENT, String, self._on_event, queue_size=1000)
         node.subscribe(topics.GATEKEEPER_DROPPED, String, self._on_drop, queue_size=1000)
         node.subscribe(topics.MODULE_CRASHED, String, self._on_crash, queue_size=100)
 
-    def now(self) -> float:
-        return round(self.node.clock.monotonic() - self.origin, 3)
+    def now_ns(self) -> int:
+        return to_ns(self.node.clock.monotonic() - self.origin)
 
     def note(self, text: str) -> None:
-        self.notes.append(Note(self.now(), text))
+        self.notes.append(Note(self.now_ns(), text))
 
-    def since(self, t: float) -> list[Note]:
-        """The notes from ``t`` on (seconds since the run started), the dropped events among them.
+    def since(self, t_ns: int) -> list[Note]:
+        """The notes from ``t_ns`` on (nanoseconds since the run started), the dropped events among them.
 
         Only here, when a failure is told, are the controller's transitions read (a parameter,
         a blocking call over ROS): while the run goes on, the witness only writes events down,
@@ -61,10 +67,12 @@ class Witness:
         dropped = [
             note
             for t_, name, sender, state in self._events
-            if t_ >= t
+            if t_ >= t_ns
             if (note := self._dropped(t_, name, sender, state))
         ]
-        return sorted([*(note for note in self.notes if note.t >= t), *dropped], key=lambda note: note.t)
+        return sorted(
+            [*(note for note in self.notes if note.t_ns >= t_ns), *dropped], key=lambda note: note.t_ns
+        )
 
     def on_record(self, record: Record) -> None:
         if record.get("type") == "state":
@@ -72,14 +80,14 @@ class Witness:
 
     def _on_event(self, message: String, info: MessageInfo) -> None:
         if self.state is not None:
-            self._events.append((self.now(), message.data.strip(), info.sender, self.state))
+            self._events.append((self.now_ns(), message.data.strip(), info.sender, self.state))
 
-    def _dropped(self, t: float, name: str, sender: str, state: str) -> Note | None:
+    def _dropped(self, t_ns: int, name: str, sender: str, state: str) -> Note | None:
         transitions = self._transitions_of(state)
         if transitions is None or name in transitions:
             return None
         return Note(
-            t,
+            t_ns,
             f"event {name!r} from {sender} was dropped by the controller: it is no transition of "
             f"{state!r} (its events: {', '.join(transitions) or 'none'})",
         )

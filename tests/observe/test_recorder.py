@@ -1,0 +1,169 @@
+"""The flight recorder: a scripted run's recording, read by the ``mcap`` library (not our reader),
+holds its transcript; bad files get a clear error; a failing disk never stops the robot;
+segments rotate and the folder keeps its budget; ``cyborg rerun`` compares decisions."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+from mcap.reader import make_reader
+
+from cyborg.app.config import load_config, packaged_config
+from cyborg.cli import cli
+from cyborg.observe import channels as ch
+from cyborg.observe.recorder import RecorderSettings
+from cyborg.observe.recording import RecordingError, open_recording
+from cyborg.sim.scenario import run_scenario
+from cyborg.sim.script import parse_script
+from tests.support.paths import SCENARIOS
+
+SCENARIO_D = SCENARIOS / "scenario_d.yaml"
+
+
+def record_d(tmp_path: Path) -> tuple[Path, Path, str]:
+    transcript, recording = tmp_path / "d.jsonl", tmp_path / "d.mcap"
+    result = CliRunner().invoke(
+        cli,
+        [
+            "sim",
+            "--script",
+            str(SCENARIO_D),
+            "--speed",
+            "max",
+            "--transcript",
+            str(transcript),
+            "--record",
+            str(recording),
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    assert f"recorded to {recording}" in result.output
+    return transcript, recording, result.output
+
+
+def test_a_scripted_run_s_recording_read_by_the_mcap_library_holds_its_transcript(tmp_path: Path) -> None:
+    transcript, recording, _ = record_d(tmp_path)
+    expected = [json.loads(line) for line in transcript.read_text().splitlines()]
+    with recording.open("rb") as file:
+        reader = make_reader(file)
+        [meta] = [m for m in reader.iter_metadata() if m.name == "cyborg"]
+        start = int(meta.metadata["start_ns"])
+        assert meta.metadata["seed"] == "5" and meta.metadata["clock"] == "virtual"
+        attachments = {a.name: a.data for a in reader.iter_attachments()}
+        assert attachments["scenario_d.yaml"] == SCENARIO_D.read_bytes()
+        assert b"motivator:" in attachments["cyborg.yaml"]
+        kinds = {topic: kind for kind, topic in ch.RECORD_TOPICS.items()}
+        back = []
+        schemas = {}
+        for schema, channel, message in reader.iter_messages(log_time_order=False):
+            schemas[channel.topic] = (schema.name if schema else None, channel.message_encoding)
+            if channel.topic in kinds:
+                t_ns = message.log_time - start
+                fields = json.loads(message.data)
+                back.append({"t": round(t_ns / 1e9, 3), "t_ns": t_ns, "type": kinds[channel.topic], **fields})
+    assert back == expected
+    assert schemas["/log"] == ("foxglove.Log", "protobuf")
+    assert schemas["/robot/pose"] == ("foxglove.PoseInFrame", "protobuf")
+    assert schemas["/map"] == ("foxglove.Grid", "protobuf")
+    assert schemas["/places"] == ("foxglove.SceneUpdate", "protobuf")
+    assert schemas["/cyborg_controller/state_change"] == ("cyborg.StateChange", "json")
+    events = open_recording(recording).events
+    assert {"event": "start", "sender": "cyborg_controller", "source": "module"} not in events
+    assert any(e["source"] == "motivator" for e in events), "the motivator's events carry their source"
+
+
+def test_rerun_says_where_another_configuration_decides_otherwise(tmp_path: Path) -> None:
+    _, recording, _ = record_d(tmp_path)
+    same = CliRunner().invoke(cli, ["rerun", str(recording), "--transcript", str(tmp_path / "again.jsonl")])
+    assert same.exit_code == 0, same.output
+    assert "same decisions as recorded" in same.output
+    assert (tmp_path / "again.jsonl").read_text() == (tmp_path / "d.jsonl").read_text()
+    other = tmp_path / "calm.yaml"
+    text = packaged_config("cyborg.yaml").read_text()
+    other.write_text(text.replace("rate_seconds: 2", "rate_seconds: 7"))
+    what_if = CliRunner().invoke(cli, ["rerun", str(recording), "--config", str(other)])
+    assert what_if.exit_code == 1, what_if.output
+    assert "the decisions first differ at decision" in what_if.output
+    assert f"with {other}" in what_if.output
+
+
+def test_bad_recordings_get_errors_that_name_the_fix(tmp_path: Path) -> None:
+    _, recording, _ = record_d(tmp_path)
+    text_file = tmp_path / "notes.mcap"
+    text_file.write_text("hello")
+    with pytest.raises(RecordingError, match=r"is not an MCAP file.*fix:"):
+        open_recording(text_file)
+    foreign = tmp_path / "foreign.mcap"
+    from mcap.writer import Writer
+
+    with foreign.open("wb") as file:
+        writer = Writer(file)
+        writer.start()
+        schema = writer.register_schema("x", "jsonschema", b"{}")
+        channel = writer.register_channel("/x", "json", schema)
+        writer.add_message(channel, 1, b"{}", 1)
+        writer.finish()  # type: ignore[no-untyped-call]
+    with pytest.raises(RecordingError, match=r"not one this robot recorded.*Foxglove"):
+        open_recording(foreign)
+    result = CliRunner().invoke(cli, ["rerun", str(foreign)])
+    assert result.exit_code == 1 and "not one this robot recorded" in result.output
+    data = recording.read_bytes()
+    newer = tmp_path / "newer.mcap"
+    newer.write_bytes(data.replace(b"format_version\x01\x00\x00\x001", b"format_version\x01\x00\x00\x009"))
+    with pytest.raises(RecordingError, match="recording format 9; this cyborg reads format 1; fix"):
+        open_recording(newer)
+    cut = tmp_path / "cut.mcap"
+    longer = tmp_path / "longer.mcap"
+    script = parse_script("seed: 1\nuntil: 1500\n")
+    run_scenario(load_config(packaged_config("cyborg.yaml")), script, record=RecorderSettings(file=longer))
+    with longer.open("rb") as file:
+        summary = make_reader(file).get_summary()
+    assert summary is not None and len(summary.chunk_indexes) > 2
+    middle = sorted(c.chunk_start_offset for c in summary.chunk_indexes)[-2]
+    cut.write_bytes(longer.read_bytes()[: middle + 20])  # into a chunk: the robot lost power there
+    partial = open_recording(cut)
+    assert partial.problem is not None and "cut short" in partial.problem
+    full = open_recording(longer)
+    assert 0 < len(partial.records) < len(full.records)
+    assert partial.records == full.records[: len(partial.records)], "what is read of a cut file is right"
+
+
+def test_a_full_disk_stops_the_recorder_and_not_the_robot(tmp_path: Path) -> None:
+    transcript = tmp_path / "d.jsonl"
+    result = CliRunner().invoke(
+        cli,
+        [
+            "sim",
+            "--script",
+            str(SCENARIO_D),
+            "--speed",
+            "max",
+            "--transcript",
+            str(transcript),
+            "--record",
+            "/dev/full",
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    assert "2 of 2 expectations met" in result.output, "the robot ran its script to the end"
+    assert len(transcript.read_text().splitlines()) > 100
+
+
+def test_segments_rotate_by_robot_time_and_the_folder_keeps_its_budget(tmp_path: Path) -> None:
+    folder = tmp_path / "recordings"
+    folder.mkdir()
+    old = folder / "cyborg-20250101T000000Z-0001.mcap"
+    old.write_bytes(b"x" * 300_000)
+    script = parse_script("seed: 1\nuntil: 1000\n")
+    settings = RecorderSettings(folder=folder, budget_bytes=250_000, segment_seconds=300)
+    records = run_scenario(load_config(packaged_config("cyborg.yaml")), script, record=settings)
+    segments = sorted(folder.glob("cyborg-*.mcap"))
+    assert not old.exists(), "the oldest recording went to keep the budget"
+    assert len(segments) == 4, segments  # 0-300, 300-600, 600-900, 900-1000 s
+    assert sum(p.stat().st_size for p in segments) < 250_000
+    back = [r for p in segments for r in open_recording(p).records]
+    assert back == list(records), "every record is in one segment, in order"
+    assert all(open_recording(p).attachments for p in segments), "each segment carries the configuration"
