@@ -9,7 +9,8 @@ module kinds found through entry points, the gatekeepers and the base.
   (from the main venv's packages too, in the ROS 2 venv: :mod:`~cyborg.app.plugin_path`);
   :mod:`~cyborg.app.kinds_doc` writes their settings as Markdown; :mod:`~cyborg.app.checks`
   warns about a robot whose modules and states do not fit together.
-- :mod:`~cyborg.app.context`: what a module's factory builds with (data folder, randomness, map).
+- :mod:`~cyborg.app.context`: what a module's factory builds with (data folder, randomness, map);
+  :mod:`~cyborg.app.world`: which map the robot lives on (the Glassgården scan when found).
 - :mod:`~cyborg.app.robot`: the in-process robot; :mod:`~cyborg.app.parts`: the part of one ROS
   node; :mod:`~cyborg.app.view`: what the dashboard reads of either.
 - :mod:`~cyborg.app.tuning`: the garbage collector and allocator set for a long-lived robot.
