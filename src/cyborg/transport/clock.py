@@ -395,10 +395,6 @@ class VirtualClock(Clock):
         if real_origin is not None:
             self.anchor(real_origin)
 
-    @property
-    def delivers_in_deltas(self) -> bool:
-        return self.speed is None
-
     def deliver(
         self,
         channel: str,
