@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import itertools
 
+import pytest
+
 from cyborg.app.config import parse_config
 from cyborg.controller.runtime import Controller
 from cyborg.modules.behaviour import BehaviourModule, GoalContext
