@@ -20,17 +20,34 @@ from cyborg.modules.behaviour import BehaviourModule, GoalContext
 from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
 from cyborg.transport.base import MessageInfo, Node
 
-GREETINGS = frozenset({"hello", "hi", "hey", "hallo", "hei", "greetings", "howdy", "yo"})
-GREETING_PHRASES = ("good morning", "good afternoon", "good evening")
+GREETINGS = frozenset({"hello", "hi", "hey", "hallo", "hei", "greetings", "howdy", "yo", "hiya", "heya"})
+GREETING_PHRASES = (
+    "good morning",
+    "good afternoon",
+    "good evening",
+    "good day",
+    "nice to meet you",
+    "pleased to meet you",
+    "how are you",
+    "how are you doing",
+    "hows it going",
+    "whats up",
+)
 CONVERSATION_ACTION = "cyborg_conversation/conversation"
 CONVERSATION_INTEREST = "conversation_interest"
 
 
 def is_greeting(text: str) -> bool:
-    """True when ``text`` greets the robot ("Hello!", "hi there", "good morning Cyborg")."""
-    lowered = text.lower()
-    words = re.findall(r"[a-zæøå]+", lowered)
-    return bool(words) and (words[0] in GREETINGS or any(p in lowered for p in GREETING_PHRASES))
+    """True when ``text`` greets the robot ("Hello!", "hi there", "good morning Cyborg", "how are you").
+
+    The greeting comes first ("well, hello"): "how old are you" and "I said hello to him" are none.
+    """
+    words = re.findall(r"[a-zæøå]+", text.lower().replace("'", "").replace("\u2019", ""))
+    opening = words[1:] if words[:1] in (["well"], ["oh"], ["and"]) else words
+    said = " ".join(opening)
+    return bool(opening) and (
+        opening[0] in GREETINGS or any(f"{said} ".startswith(f"{p} ") for p in GREETING_PHRASES)
+    )
 
 
 class ConversationModule(BehaviourModule):
