@@ -42,6 +42,7 @@ from cyborg.hearing.recogniser import (
     SpeechRecogniser,
     Utterances,
 )
+from cyborg.hearing.understanding import Understanding
 from cyborg.modules.kind import BuildContext, Listening, ModuleKind, ModuleSettings
 from cyborg.navigation.database import NavigationDatabase
 from cyborg.transport import topics
@@ -114,6 +115,8 @@ class SpeechInput:
         self._records = node.publisher(HEARD_TOPIC, String)
         self._utterances: Cutter = utterances or Utterances()
         self._known: list[PlaceWords] | None = None
+        self.understanding: Understanding | None = None
+        """What the robot's modules would do with a text (for ``cyborg listen`` and the benchmark)."""
         self._queue: asyncio.Queue[bytes] = asyncio.Queue()
         self._microphone = None
         if microphone:  # first: without one, nothing else is started
@@ -151,6 +154,7 @@ class SpeechInput:
             self._known = places
             grammar = grammar_of(places, self.recogniser, self.listening, self.extra_phrases)
             self.recogniser.use(grammar)
+            self.understanding = Understanding.of_grammar(grammar)
             if grammar.unsayable:
                 log.info("cannot hear (words not in the dictionary): %s", ", ".join(grammar.unsayable))
             log.info("listening for %d places and %d phrases", len(places), len(grammar.phrases))

@@ -66,6 +66,7 @@ class Heard:
             "confidence": round(self.confidence, 3),
             "accepted": self.accepted,
             "raw": self.raw,
+            "reason": self.reason,
         }
 
 

