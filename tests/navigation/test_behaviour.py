@@ -1,8 +1,8 @@
 """The navigation module's pure decisions (thesis 7.5 and 7.7): where to go and what to say.
 
 ``plan()`` is checked for every origin (why the robot plans) and every emotion
-the emotion system can name; ``talk_kind()`` for every event that leads to
-the talking state.
+the emotion system can name; ``talk_kind()`` for the end of a trip and ``reply_to()``
+(what the talking state answers a person's request, thesis 7.7) for every request and emotion.
 """
 
 from __future__ import annotations
@@ -23,10 +23,11 @@ from cyborg.navigation.behaviour import (
     plan,
     should_stop_wandering,
     talk_kind,
-    trip_goes_on,
 )
 from cyborg.navigation.content import DEFAULT_LOCATIONS
-from cyborg.navigation.models import Location
+from cyborg.navigation.dialogue import Answer, ReplyKind, Request, after_answer, reply_to
+from cyborg.navigation.keywords import Intent
+from cyborg.navigation.models import Location, ResponseType
 
 EMOTIONS = sorted([NEUTRAL, *TABLE_2_2])
 PLACES = {place.name: place for place in DEFAULT_LOCATIONS}
@@ -65,14 +66,11 @@ def test_the_default_places_cover_every_case() -> None:
 
 
 @pytest.mark.parametrize("emotion", EMOTIONS)
-def test_command_goes_to_the_place_unless_angry(emotion: str) -> None:
+def test_a_confirmed_command_goes_to_the_place(emotion: str) -> None:
     chosen = plan_for(Origin.COMMAND, emotion, requested=EL6, scheduled=CAFETERIA)
     assert chosen.target == EL6
     assert chosen.feedback == (0.0, 0.0, -0.2)  # bossed around: dominance down
-    if emotion == "angry":
-        assert chosen.kind is PlanKind.REFUSE
-    else:
-        assert chosen.kind is PlanKind.MOVE
+    assert chosen.kind is PlanKind.MOVE  # confirmed: even an angry robot goes (it ignores commands earlier)
 
 
 @pytest.mark.parametrize("emotion", EMOTIONS)
@@ -219,8 +217,10 @@ def test_a_requested_place_off_the_loaded_map_is_not_a_target(origin: Origin, em
 
 
 def test_asked_where_a_place_off_the_map_is_it_does_not_offer_to_show_it() -> None:
-    assert talk_kind("navigation_information", None, asked_on_map=False) is TalkKind.NOT_ON_MAP
-    assert talk_kind("navigation_feedback", None, asked_on_map=False) is TalkKind.OPINION
+    where = reply_to(Request(Intent.NAVIGATION_INFORMATION, EL6), NEUTRAL, on_map=False)
+    assert (where.kind, where.say) == (ReplyKind.SAY, ResponseType.NOT_ON_MAP)
+    opinion = reply_to(Request(Intent.NAVIGATION_FEEDBACK, EL6), NEUTRAL, on_map=False)
+    assert (opinion.kind, opinion.say) == (ReplyKind.SAY, ResponseType.OPINION)
 
 
 @pytest.mark.parametrize("origin", [Origin.COMMAND, Origin.GUIDE])
@@ -241,27 +241,11 @@ def test_a_requested_place_without_a_pose_is_not_a_target(origin: Origin, emotio
 
 
 def test_asked_where_a_place_without_a_pose_is_it_says_it_does_not_know() -> None:
-    kind = talk_kind("navigation_information", None, asked_on_map=False, asked_has_pose=False)
-    assert kind is TalkKind.NO_POSE
-    opinion = talk_kind("navigation_feedback", None, asked_has_pose=False)
-    assert opinion is TalkKind.OPINION  # it may think something of a place it cannot find
-
-
-@pytest.mark.parametrize(
-    ("event", "previous", "goes_on"),
-    [
-        ("navigation_feedback", "navigation_moving", True),  # asked on the way: answer, then drive on
-        ("navigation_feedback", "conversation", False),
-        ("navigation_feedback", "idle", False),
-        ("succeeded", "navigation_moving", False),  # arrived
-        ("aborted", "navigation_moving", False),  # stuck
-        ("navigation_information", "navigation_moving", False),
-    ],
-)
-def test_a_trip_goes_on_only_after_a_question_asked_on_the_way(
-    event: str, previous: str, goes_on: bool
-) -> None:
-    assert trip_goes_on(event, previous) is goes_on
+    for intent in (Intent.NAVIGATION_INFORMATION, Intent.NAVIGATION_COMMAND):
+        reply = reply_to(Request(intent, EL6), NEUTRAL, on_map=False, has_pose=False)
+        assert (reply.kind, reply.say) == (ReplyKind.SAY, ResponseType.NO_POSE)
+    opinion = reply_to(Request(Intent.NAVIGATION_FEEDBACK, EL6), NEUTRAL, has_pose=False)
+    assert opinion.say is ResponseType.OPINION  # it may think something of a place it cannot find
 
 
 # --- what the talking state says ----------------------------------------------------------
@@ -274,10 +258,8 @@ ORIGINS: list[Origin | None] = [*Origin, None]
     ("event", "kind"),
     [
         ("succeeded", None),  # depends on the origin
-        ("navigation_feedback", TalkKind.OPINION),
         ("aborted", TalkKind.STUCK),
-        ("navigation_information", TalkKind.OFFER_GUIDE),
-        ("navigation_command", TalkKind.NOTHING),
+        ("navigation_feedback", TalkKind.NOTHING),  # a person's request: reply_to's
         ("start", TalkKind.NOTHING),
     ],
 )
@@ -285,3 +267,45 @@ def test_talk_kind(event: str, kind: TalkKind | None, origin: Origin | None) -> 
     if kind is None:  # arriving: names the place when guiding, else gives an opinion
         kind = TalkKind.ARRIVED if origin is Origin.GUIDE else TalkKind.OPINION
     assert talk_kind(event, origin) is kind
+
+
+# --- a person's request in the talking state (7.7) --------------------------------------
+
+
+@pytest.mark.parametrize("emotion", EMOTIONS)
+def test_a_command_asks_for_confirmation_unless_angry(emotion: str) -> None:
+    """7.7: "ignore the command if it is angry, otherwise ask for confirmation"."""
+    reply = reply_to(Request(Intent.NAVIGATION_COMMAND, EL6), emotion)
+    if emotion == "angry":
+        assert (reply.kind, reply.say, reply.then) == (ReplyKind.IGNORE, None, None)
+        return
+    assert (reply.kind, reply.say) == (ReplyKind.ASK, ResponseType.ASK_GO)
+    go = after_answer(reply, Answer.YES)
+    assert go is not None and (go.kind, go.say, go.origin, go.place) == (
+        ReplyKind.GO,
+        ResponseType.CONFIRM,
+        Origin.COMMAND,
+        EL6,
+    )
+    declined = after_answer(reply, Answer.NO)
+    assert declined is not None and (declined.kind, declined.say) == (ReplyKind.SAY, ResponseType.DECLINED)
+    assert after_answer(reply, Answer.SILENCE) is None
+
+
+@pytest.mark.parametrize("emotion", EMOTIONS)
+def test_where_is_offers_to_guide_whatever_the_emotion(emotion: str) -> None:
+    reply = reply_to(Request(Intent.NAVIGATION_INFORMATION, EL6), emotion)
+    assert (reply.kind, reply.say) == (ReplyKind.ASK, ResponseType.OFFER_GUIDE)
+    go = after_answer(reply, Answer.YES)
+    assert go is not None and (go.kind, go.origin) == (ReplyKind.GO, Origin.GUIDE)
+
+
+@pytest.mark.parametrize("intent", [Intent.NAVIGATION_COMMAND, Intent.NAVIGATION_INFORMATION])
+def test_a_request_with_its_own_question_is_asked_first(intent: Intent) -> None:
+    """The general yes-or-no: e.g. "Did you mean el6?"; yes goes on with the request's own rule."""
+    question = ResponseType.OFFER_GUIDE  # any kind of sentence serves as the question
+    reply = reply_to(Request(intent, EL6, question=question), NEUTRAL)
+    assert (reply.kind, reply.say) == (ReplyKind.ASK, question)
+    assert after_answer(reply, Answer.YES) == reply_to(Request(intent, EL6), NEUTRAL)
+    declined = after_answer(reply, Answer.NO)
+    assert declined is not None and declined.say is ResponseType.DECLINED

@@ -14,6 +14,7 @@ import functools
 import itertools
 import math
 import random
+import re
 import typing
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -223,6 +224,13 @@ class Cyborg:
                 f"waited {timeout} s for {what}; states {self.transitions()}, said {self.sentences()}"
             )
 
+    async def order(self, text: str) -> None:
+        """Tell the robot to go somewhere (``text``) and say yes when it asks to confirm (7.7)."""
+        since = self.clock.monotonic()
+        self.hear(text)
+        await self.until(lambda: any(is_ask_go(t) for t in self.sentences(since)), 5.0, "its question")
+        self.hear("yes")
+
     async def settle(self, emotion: str = NEUTRAL) -> None:
         """Let the robot start (idle), then set the emotion and wait until it is in effect."""
         await self.until(lambda: self.state == "idle", 5.0, "idle")
@@ -254,6 +262,12 @@ def responses(kind: ResponseType, emotion: str, place: str) -> set[str]:
     return {r.say(place) for r in fitting}
 
 
+def is_ask_go(text: str) -> bool:
+    """True if ``text`` is the robot asking whether to go somewhere (any ask_go sentence, any place)."""
+    asks = [r for r in DEFAULT_RESPONSES if r.type is ResponseType.ASK_GO]
+    return any(re.fullmatch(re.escape(r.sentence).replace("LOCATION", ".+"), text) for r in asks)
+
+
 def opinions(emotion: str, place: str) -> set[str]:
     return responses(ResponseType.OPINION, emotion, place)
 
@@ -272,54 +286,139 @@ lowers dominance. The opinion then fits the emotion the robot has when it arrive
 
 
 @pytest.mark.parametrize("emotion", EMOTIONS)
-def test_go_to_the_cafeteria_confirms_drives_there_and_gives_an_opinion(
+def test_go_to_the_cafeteria_asks_to_confirm_then_drives_there_and_gives_an_opinion(
     clock: VirtualClock, cyborg: Cyborg, emotion: str
 ) -> None:
+    """7.7: a command leads to the talking state, which asks for confirmation, or, angry, ignores it."""
+
     async def main() -> None:
         await cyborg.settle(emotion)
         cyborg.hear("go to the cafeteria")
+        if emotion == "angry":
+            await cyborg.until(lambda: cyborg.state == "idle" and len(cyborg.states) > 2, 10.0, "idle")
+            cyborg.hear("yes")  # nobody asked: nothing happens
+            await clock.sleep(30.0)
+            return
+        await cyborg.until(lambda: bool(cyborg.said), 5.0, "its question")
+        assert cyborg.state == "navigation_talking" and cyborg.moved_since(0.0) == 0.0  # it waits
+        await clock.sleep(5.0)
+        assert cyborg.state == "navigation_talking" and cyborg.moved_since(0.0) == 0.0  # ... for an answer
+        cyborg.hear("yes")
         await cyborg.trip_done()
         await clock.sleep(10.0)
 
     clock.run(main())
     if emotion == "angry":
-        assert cyborg.sentences() == ["I will not go to the cafeteria, leave me alone."]
+        assert cyborg.sentences() == []  # ignored
         assert cyborg.moved_since(0.0) == 0.0 and cyborg.base.distance_travelled == 0.0
         assert cyborg.transitions()[1:] == [
-            ("idle", "navigation_command", "navigation_planning"),
-            ("navigation_planning", "succeeded", "idle"),
+            ("idle", "navigation_command", "navigation_talking"),
+            ("navigation_talking", "succeeded", "idle"),
         ]
         return
     assert cyborg.at("cafeteria")
     assert cyborg.transitions()[1:] == [
-        ("idle", "navigation_command", "navigation_planning"),
+        ("idle", "navigation_command", "navigation_talking"),
+        ("navigation_talking", "navigation_command", "navigation_planning"),
         ("navigation_planning", "navigation_start_moving", "navigation_moving"),
         ("navigation_moving", "succeeded", "navigation_talking"),
         ("navigation_talking", "succeeded", "idle"),
     ]
-    confirmation, opinion = cyborg.said
+    question, confirmation, opinion = cyborg.said
+    assert question.text in responses(ResponseType.ASK_GO, question.emotion, "cafeteria")
     assert confirmation.text in responses(ResponseType.CONFIRM, confirmation.emotion, "cafeteria")
     start_moving = next(t for t, _, _, b in cyborg.states if b == "navigation_moving")
     assert confirmation.t < start_moving  # it confirms, then drives
     assert opinion.text in opinions(opinion.emotion, "cafeteria")
     assert opinion.emotion == emotion or emotion in DRIFTING
-    arrival = next(t for t, _, e, b in cyborg.states if b == "navigation_talking")
+    arrival = next(t for t, _, e, b in cyborg.states if b == "navigation_talking" and e == "succeeded")
     assert opinion.t == pytest.approx(arrival, abs=0.5)  # said on arrival
+
+
+@pytest.mark.parametrize(("answer", "said"), [("no", "All right, maybe another time."), ("", None)])
+def test_a_command_answered_no_or_not_at_all_leaves_the_robot_where_it_is(
+    clock: VirtualClock, cyborg: Cyborg, answer: str, said: str | None
+) -> None:
+    async def main() -> None:
+        await cyborg.settle()
+        cyborg.hear("go to the cafeteria")
+        await cyborg.until(lambda: bool(cyborg.said), 5.0, "its question")
+        if answer:
+            cyborg.hear(answer)
+        await cyborg.until(lambda: cyborg.state == "idle", 30.0, "idle")  # answer_timeout is 20 s
+        cyborg.hear("yes")  # too late: nobody asked
+        await clock.sleep(30.0)
+
+    clock.run(main())
+    assert cyborg.sentences() == ["Shall I go to the cafeteria?", *([said] if said else [])]
+    assert cyborg.moved_since(0.0) == 0.0
+    assert cyborg.transitions()[1:] == [
+        ("idle", "navigation_command", "navigation_talking"),
+        ("navigation_talking", "succeeded", "idle"),
+    ]
+
+
+def test_asked_to_confirm_a_new_request_replaces_the_question(clock: VirtualClock, cyborg: Cyborg) -> None:
+    """Asked "Shall I go to the cafeteria?", the person asks where el6 is instead: that question now."""
+
+    async def main() -> None:
+        await cyborg.settle()
+        cyborg.hear("go to the cafeteria")
+        await cyborg.until(lambda: bool(cyborg.said), 5.0, "its question")
+        cyborg.hear("where is el6")
+        await cyborg.until(lambda: OFFER in cyborg.sentences(), 5.0, "the offer")
+        cyborg.hear("yes")
+        await cyborg.trip_done()
+
+    clock.run(main())
+    assert cyborg.at("el6")
+    assert cyborg.sentences() == ["Shall I go to the cafeteria?", OFFER, "At once.", "Human, this is el6"]
 
 
 def test_a_command_while_driving_changes_the_destination(clock: VirtualClock, cyborg: Cyborg) -> None:
     async def main() -> None:
         await cyborg.settle()
-        cyborg.hear("go to the cafeteria")
+        await cyborg.order("go to the cafeteria")
         await cyborg.until(lambda: cyborg.state == "navigation_moving", 5.0, "moving")
         await clock.sleep(20.0)
-        cyborg.hear("go to the elevator")
+        await cyborg.order("go to the elevator")
         await cyborg.trip_done()
 
     clock.run(main())
     assert cyborg.at("elevator")
-    assert ("navigation_moving", "navigation_command", "navigation_planning") in cyborg.transitions()
-    assert cyborg.sentences() == ["At once.", "At once.", "I am happy about elevator"]
+    assert ("navigation_moving", "navigation_command", "navigation_talking") in cyborg.transitions()
+    assert cyborg.sentences() == [
+        "Shall I go to the cafeteria?",
+        "At once.",
+        "Shall I go to the elevator?",
+        "At once.",
+        "I am happy about elevator",
+    ]
+
+
+def test_a_command_while_driving_answered_no_drives_on(clock: VirtualClock, cyborg: Cyborg) -> None:
+    """Sent to the cafeteria, then "go to the elevator" on the way, then "no": the cafeteria trip goes on."""
+
+    async def main() -> None:
+        await cyborg.settle()
+        await cyborg.order("go to the cafeteria")
+        await cyborg.until(lambda: cyborg.state == "navigation_moving", 5.0, "moving")
+        await clock.sleep(20.0)
+        cyborg.hear("go to the elevator")
+        await cyborg.until(lambda: len(cyborg.said) == 3, 5.0, "its question")
+        cyborg.hear("no")
+        await cyborg.until(lambda: cyborg.state == "idle", 300.0, "the trip to end")
+
+    clock.run(main())
+    assert cyborg.at("cafeteria")
+    assert cyborg.sentences() == [
+        "Shall I go to the cafeteria?",
+        "At once.",
+        "Shall I go to the elevator?",
+        "All right, maybe another time.",
+        "Now, on to cafeteria.",
+        "I am happy about cafeteria",
+    ]
 
 
 # --- "where is X?" -------------------------------------------------------------------------------
@@ -436,7 +535,7 @@ def test_asked_on_the_way_an_angry_robot_still_finishes_the_errand(
 
     async def main() -> None:
         await cyborg.settle()
-        cyborg.hear("go to the cafeteria")
+        await cyborg.order("go to the cafeteria")
         await cyborg.until(lambda: cyborg.state == "navigation_moving", 10.0, "moving")
         await clock.sleep(10.0)
         cyborg.set_emotion("angry")
@@ -446,7 +545,7 @@ def test_asked_on_the_way_an_angry_robot_still_finishes_the_errand(
 
     clock.run(main())
     assert cyborg.at("cafeteria")
-    confirmation, answer, going_on, arrival = cyborg.said
+    _, confirmation, answer, going_on, arrival = cyborg.said
     assert confirmation.text == "At once."
     assert answer.emotion == "angry" and answer.text in opinions("angry", "el5")
     assert going_on.text == "Now, on to cafeteria."
@@ -462,12 +561,12 @@ def test_a_new_command_while_answering_on_the_way_wins(clock: VirtualClock, cybo
 
     async def main() -> None:
         await cyborg.settle()
-        cyborg.hear("go to the cafeteria")
+        await cyborg.order("go to the cafeteria")
         await cyborg.until(lambda: cyborg.state == "navigation_moving", 10.0, "moving")
         await clock.sleep(10.0)
         cyborg.hear("what do you think of el5")
         await cyborg.until(lambda: cyborg.state == "navigation_talking", 5.0, "talking")
-        cyborg.hear("go to the elevator")
+        await cyborg.order("go to the elevator")
         await cyborg.until(lambda: cyborg.state == "idle", 300.0, "the trip to end")
 
     clock.run(main())
@@ -486,7 +585,7 @@ def test_after_a_guided_tour_a_command_is_a_command_again(clock: VirtualClock, c
         await cyborg.until(lambda: "Human, this is el6" in cyborg.sentences(), 300.0, "el6")
         await cyborg.until(lambda: cyborg.state == "idle", 10.0, "idle")
         cyborg.set_emotion(NEUTRAL)
-        cyborg.hear("go to the elevator")
+        await cyborg.order("go to the elevator")
         await cyborg.trip_done()
 
     clock.run(main())
@@ -557,18 +656,19 @@ def test_an_unreachable_place_aborts_and_says_it_is_stuck(
 
     async def main() -> None:
         await cyborg.settle(emotion)
-        cyborg.hear("go to the boiler room")
+        await cyborg.order("go to the boiler room")
         await cyborg.trip_done()
         await clock.sleep(10.0)
 
     clock.run(main())
     assert cyborg.transitions()[1:] == [
-        ("idle", "navigation_command", "navigation_planning"),
+        ("idle", "navigation_command", "navigation_talking"),
+        ("navigation_talking", "navigation_command", "navigation_planning"),
         ("navigation_planning", "navigation_start_moving", "navigation_moving"),
         ("navigation_moving", "aborted", "navigation_talking"),
         ("navigation_talking", "succeeded", "idle"),
     ]
-    assert cyborg.sentences() == ["At once.", sentence]
+    assert cyborg.sentences()[1:] == ["At once.", sentence]
     assert cyborg.position == start
     assert cyborg.base.path_state is PathState.FAILED_PLAN
 
@@ -597,7 +697,7 @@ def test_on_its_own_it_goes_where_the_emotion_says(
 def test_a_sad_robot_at_the_most_pleasant_place_goes_to_the_next(clock: VirtualClock, cyborg: Cyborg) -> None:
     async def main() -> None:
         await cyborg.settle()
-        cyborg.hear("go to the cafeteria")
+        await cyborg.order("go to the cafeteria")
         await cyborg.trip_done()
         await cyborg.settle("inhibited")
         cyborg.send_event("navigation_emotional")
@@ -684,7 +784,7 @@ def test_feedback_directions_of_a_trip(clock: VirtualClock, cyborg: Cyborg) -> N
 
     async def main() -> None:
         await cyborg.settle(NEUTRAL)
-        cyborg.hear("go to the cafeteria")
+        await cyborg.order("go to the cafeteria")
         await cyborg.until(lambda: cyborg.state == "navigation_moving", 5.0, "moving")
         pads["bossed"] = cyborg.robot.emotion.pad.as_tuple()
         await cyborg.until(lambda: cyborg.base.distance_travelled > 60.0, 200.0, "most of the way")
@@ -707,7 +807,7 @@ def test_feedback_directions_of_a_trip(clock: VirtualClock, cyborg: Cyborg) -> N
 def test_an_unpleasant_arrival_lowers_pleasure(clock: VirtualClock, cyborg: Cyborg) -> None:
     async def main() -> None:
         await cyborg.settle(NEUTRAL)
-        cyborg.hear("go to the elevator")
+        await cyborg.order("go to the elevator")
         await cyborg.trip_done()
 
     clock.run(main())
@@ -797,7 +897,7 @@ def test_scheduler_does_not_interrupt_a_users_errand_and_returns_after(
         await cyborg.trip_done()  # to the cafeteria on schedule
         assert cyborg.at("cafeteria")
         marks["errand"] = clock.monotonic()
-        cyborg.hear("go to el6")
+        await cyborg.order("go to el6")
         await cyborg.until(lambda: cyborg.at("el6"), 200.0, "el6")
         await cyborg.until(lambda: cyborg.state == "idle", 20.0, "idle at el6")
         marks["el6"] = clock.monotonic()
@@ -818,7 +918,7 @@ def test_scheduler_does_not_call_back_after_the_event(clock: VirtualClock, cybor
 
     async def main() -> None:
         await cyborg.trip_done()
-        cyborg.hear("go to the entrance")
+        await cyborg.order("go to the entrance")
         await cyborg.trip_done()
         await clock.sleep(300.0)
 
@@ -926,20 +1026,21 @@ def test_on_glassgarden_a_default_place_is_the_maps_goal(
 
     async def main() -> None:
         await glassgarden.settle()
-        glassgarden.hear(spoken)
+        await glassgarden.order(spoken)
         await glassgarden.trip_done()
 
     clock.run(main())
     assert glassgarden.at(goal)
     assert glassgarden.transitions()[1:] == [
-        ("idle", "navigation_command", "navigation_planning"),
+        ("idle", "navigation_command", "navigation_talking"),
+        ("navigation_talking", "navigation_command", "navigation_planning"),
         ("navigation_planning", "navigation_start_moving", "navigation_moving"),
         ("navigation_moving", "succeeded", "navigation_talking"),
         ("navigation_talking", "succeeded", "idle"),
     ]
     assert glassgarden.moved_since(0.0) > 5.0
-    confirmation, opinion = glassgarden.said
-    assert confirmation.text == "At once."
+    question, confirmation, opinion = glassgarden.said
+    assert question.text == f"Shall I go to the {place}?" and confirmation.text == "At once."
     assert opinion.text in opinions(opinion.emotion, place)  # it names the place as the user knows it
 
 
@@ -999,8 +1100,8 @@ def test_a_place_of_another_map_is_no_target_and_the_robot_says_so(
     assert cyborg.sentences() == [NOT_HERE, NOT_HERE]  # no drive, no offer to show the way
     assert cyborg.moved_since(0.0) == 0.0 and cyborg.base.distance_travelled == 0.0
     assert cyborg.transitions()[1:] == [
-        ("idle", "navigation_command", "navigation_planning"),
-        ("navigation_planning", "succeeded", "idle"),
+        ("idle", "navigation_command", "navigation_talking"),
+        ("navigation_talking", "succeeded", "idle"),
         ("idle", "navigation_information", "navigation_talking"),
         ("navigation_talking", "succeeded", "idle"),
     ]
@@ -1082,12 +1183,12 @@ def test_a_place_without_a_pose_is_no_target_and_the_robot_says_so(
     with caplog.at_level("WARNING", logger="cyborg.navigation.module"):
         clock.run(main())
     dont_know = "I have heard of the cafeteria, but I do not know where it is."
-    assert cyborg.sentences() == [dont_know, dont_know]  # no "At once.", no offer to show the way
+    assert cyborg.sentences() == [dont_know, dont_know]  # no question, no offer to show the way
     assert cyborg.moved_since(0.0) == 0.0 and cyborg.base.distance_travelled == 0.0  # not to the origin
     assert responses(ResponseType.NO_POSE, NEUTRAL, "cafeteria") == {dont_know}  # the database's sentence
     assert cyborg.transitions()[1:] == [
-        ("idle", "navigation_command", "navigation_planning"),
-        ("navigation_planning", "succeeded", "idle"),
+        ("idle", "navigation_command", "navigation_talking"),
+        ("navigation_talking", "succeeded", "idle"),
         ("idle", "navigation_information", "navigation_talking"),
         ("navigation_talking", "succeeded", "idle"),
     ]
@@ -1125,9 +1226,9 @@ def test_given_a_pose_by_hand_a_place_is_a_target(clock: VirtualClock, unplaced:
 
     async def main() -> None:
         await unplaced.settle()
-        unplaced.hear("go to the cafeteria")
+        await unplaced.order("go to the cafeteria")
         await unplaced.trip_done()
 
     clock.run(main())
     assert unplaced.at("cafeteria")
-    assert unplaced.sentences()[0] == "At once."
+    assert unplaced.sentences()[:2] == ["Shall I go to the cafeteria?", "At once."]

@@ -51,10 +51,6 @@ def reference_plan(
             return Plan(PlanKind.NO_POSE, f"{requested.name} has no pose", requested)
         if requested.name in off_map:
             return Plan(PlanKind.NOT_ON_MAP, f"{requested.name} is not on the loaded map", requested)
-        if origin is Origin.COMMAND and emotion == ANGRY:
-            return Plan(
-                PlanKind.REFUSE, f"angry: refuses to go to {requested.name}", requested, BOSSED_AROUND
-            )
         return Plan(PlanKind.MOVE, f"asked to go to {requested.name}", requested, BOSSED_AROUND)
     others = [p for p in places if here is None or p.name != here.name]
     if origin is Origin.SCHEDULE:

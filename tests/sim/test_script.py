@@ -125,7 +125,10 @@ def test_transcript_ends_a_trip_with_the_arrival_pose(tmp_path: Path) -> None:
     from cyborg.sim.base import SimulatedBase
     from cyborg.sim.scenario import ScenarioRun
 
-    script = parse_script("until: 400\nsteps:\n  - at: 1\n    say: go to the cafeteria\n")
+    script = parse_script(
+        "until: 400\nsteps:\n  - at: 1\n    say: go to the cafeteria\n"
+        "  - when: {type: say, contains: 'Shall I go'}\n    say: 'yes'\n"
+    )
     run = ScenarioRun(load_config(packaged_config("cyborg.yaml")), script, data_dir=tmp_path)
     base = next(c for c in run.robot.components.values() if isinstance(c, SimulatedBase))
     at_arrival: list[tuple[float, float]] = []

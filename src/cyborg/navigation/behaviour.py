@@ -31,7 +31,6 @@ class Origin(enum.Enum):
 class PlanKind(enum.Enum):
     MOVE = "move"
     WANDER = "wander"
-    REFUSE = "refuse"
     NOT_ON_MAP = "not_on_map"  # asked for a known place that the loaded map does not have
     NO_POSE = "no_pose"  # asked for a known place whose pose nobody has given yet
     NOTHING = "nothing"
@@ -51,15 +50,6 @@ class Trip:
 
     origin: Origin | None
     target: Location
-
-
-def trip_goes_on(event: str, previous_state: str) -> bool:
-    """True if the talking state was entered by a question asked on the way (thesis 7.7).
-
-    Asked what it thinks of a place while driving, the robot answers and then drives on to
-    where it was going: nobody is left halfway.
-    """
-    return event == "navigation_feedback" and previous_state == "navigation_moving"
 
 
 BOSSED_AROUND = (0.0, 0.0, -0.2)
@@ -118,9 +108,10 @@ class _Situation:
 
 
 def _asked(origin: Origin, emotion: str, situation: _Situation) -> Plan:
-    """A person asked: go there, unless the place cannot be reached or, told to go while angry, refuse.
+    """A person asked and said yes: go there, unless the place cannot be reached.
 
-    Guiding (the robot offered to show the way) is never refused.
+    An angry robot ignores a command before it gets here (the talking state, 7.7); once it
+    asked and heard yes, it goes.
     """
     requested = situation.requested
     if requested is None:
@@ -129,8 +120,6 @@ def _asked(origin: Origin, emotion: str, situation: _Situation) -> Plan:
         return Plan(PlanKind.NO_POSE, f"{requested.name} has no pose", requested)
     if requested.name in situation.off_map:
         return Plan(PlanKind.NOT_ON_MAP, f"{requested.name} is not on the loaded map", requested)
-    if origin is Origin.COMMAND and emotion == ANGRY:
-        return Plan(PlanKind.REFUSE, f"angry: refuses to go to {requested.name}", requested, BOSSED_AROUND)
     return Plan(PlanKind.MOVE, f"asked to go to {requested.name}", requested, BOSSED_AROUND)
 
 
@@ -219,31 +208,19 @@ class TalkKind(enum.Enum):
     ARRIVED = "arrived"
     STUCK = "stuck"
     OPINION = "opinion"
-    OFFER_GUIDE = "offer_guide"
-    NOT_ON_MAP = "not_on_map"
-    NO_POSE = "no_pose"
     NOTHING = "nothing"
 
 
-def talk_kind(
-    event: str, origin: Origin | None, *, asked_on_map: bool = True, asked_has_pose: bool = True
-) -> TalkKind:
-    """What the talking state says, from the event that led there (7.7).
+def talk_kind(event: str, origin: Origin | None) -> TalkKind:
+    """What the talking state says for the end of a trip (7.7): a person's request is for
+    :func:`cyborg.navigation.dialogue.reply_to`.
 
-    Asked where a place is that has no pose (``asked_has_pose`` False) or that the
-    loaded map does not have (``asked_on_map`` False), it says so instead of
-    offering to show the way.
+    Arrived as a guide it names the place; arrived otherwise it gives its opinion; stuck, it says so.
     """
-    if event == "succeeded" and origin is Origin.GUIDE:  # a question on the way still gets an opinion
-        return TalkKind.ARRIVED
-    if event in ("succeeded", "navigation_feedback"):
-        return TalkKind.OPINION
+    if event == "succeeded":
+        return TalkKind.ARRIVED if origin is Origin.GUIDE else TalkKind.OPINION
     if event == "aborted":
         return TalkKind.STUCK
-    if event == "navigation_information":
-        if not asked_has_pose:
-            return TalkKind.NO_POSE
-        return TalkKind.OFFER_GUIDE if asked_on_map else TalkKind.NOT_ON_MAP
     return TalkKind.NOTHING
 
 
@@ -257,7 +234,4 @@ RESPONSE_FOR_TALK = {
     TalkKind.ARRIVED: ResponseType.ARRIVED,
     TalkKind.STUCK: ResponseType.STUCK,
     TalkKind.OPINION: ResponseType.OPINION,
-    TalkKind.OFFER_GUIDE: ResponseType.OFFER_GUIDE,
-    TalkKind.NOT_ON_MAP: ResponseType.NOT_ON_MAP,
-    TalkKind.NO_POSE: ResponseType.NO_POSE,
 }

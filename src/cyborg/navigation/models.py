@@ -40,6 +40,8 @@ class ResponseType(enum.Enum):
     NOT_ON_MAP = "not_on_map"
     NO_POSE = "no_pose"
     RESUME = "resume"
+    ASK_GO = "ask_go"
+    """Asks to confirm a command before setting off (7.7): "Shall I go to the LOCATION?"."""
 
     @property
     def needs_location(self) -> bool:
@@ -49,6 +51,7 @@ class ResponseType(enum.Enum):
             ResponseType.STUCK,
             ResponseType.NOT_ON_MAP,
             ResponseType.NO_POSE,
+            ResponseType.ASK_GO,
         )
 
 

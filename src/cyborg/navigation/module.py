@@ -32,10 +32,10 @@ from cyborg.navigation.behaviour import (
     sentence,
     should_stop_wandering,
     talk_kind,
-    trip_goes_on,
 )
 from cyborg.navigation.calendar import CalendarEntry
 from cyborg.navigation.database import NavigationDatabase
+from cyborg.navigation.dialogue import Answer, Reply, ReplyKind, Request, after_answer, reply_to
 from cyborg.navigation.keywords import Intent, detect_answer, detect_navigation
 from cyborg.navigation.models import CalendarEvent, Location, ResponseType
 from cyborg.transport import topics
@@ -58,6 +58,8 @@ WANDER_CHECK = 1.0
 WANDER_DEBOUNCE = 2.0
 """Seconds the emotion must stay outside bored/unconcerned/curious before wandering ends (one
 flicker of the label between two emotions does not end it)."""
+REQUEST_PATIENCE = 5.0
+"""Seconds a request's event is offered again at state changes if the controller dropped it."""
 OWN_STATES = frozenset({"navigation_planning", "navigation_moving", "navigation_talking"})
 
 
@@ -106,7 +108,14 @@ class NavigationModule(BehaviourModule):
         self._closing = False
         self.emotion_since = node.clock.monotonic()
         self._warned_off_map: set[str] = set()
-        self._answer: asyncio.Future[Intent] | None = None
+        self.request: Request | None = None
+        """What a person asked for, waiting for the talking state (set with the event that leads there)."""
+        self._inbox: asyncio.Queue[Request | Answer] | None = None
+        """While the talking state runs: what the person says to it (answers and new requests)."""
+        self._unanswered: tuple[str, float] | None = None
+        """A request's event the controller has not taken yet, and until when to offer it again."""
+        self.conversing = False
+        """True from entering the conversation until the robot is idle again (talking returns there)."""
         self.base = base_link(node, base_api)
         node.subscribe(topics.AMCL_POSE, PoseWithCovarianceStamped, self._on_pose, queue_size=10)
         node.subscribe(topics.STATE_CHANGE, SystemState, self._on_state_change)
@@ -138,6 +147,27 @@ class NavigationModule(BehaviourModule):
 
     def _on_state_change(self, message: SystemState, info: MessageInfo) -> None:
         self.system_state = message.to_system_state
+        if message.to_system_state == "conversation":
+            self.conversing = True
+        elif message.to_system_state in ("idle", "navigation_moving", "music"):
+            self.conversing = False
+        self._offer_again(message)
+
+    def _offer_again(self, change: SystemState) -> None:
+        """Publish a request's event once more if the controller dropped it and the robot moved on.
+
+        "Where is el6?" said in idle starts a conversation (10.1) and is dropped by idle (9.1 has no
+        such transition): it is offered again once the conversation state is entered, and answered there.
+        """
+        if self._unanswered is None:
+            return
+        event, deadline = self._unanswered
+        if change.event == event or self.node.clock.monotonic() > deadline:
+            self._unanswered = None
+            return
+        if change.to_system_state not in OWN_STATES:
+            log.info("offering %s again in %s", event, change.to_system_state)
+            self.publish_event(event)
 
     def _on_pose(self, message: PoseWithCovarianceStamped, info: MessageInfo) -> None:
         self.pose = (message.pose.pose.position.x, message.pose.pose.position.y)
@@ -156,18 +186,29 @@ class NavigationModule(BehaviourModule):
         if found is None:
             return
         if found.intent in (Intent.YES, Intent.NO):
-            if self._answer is not None and not self._answer.done():
-                self._answer.set_result(found.intent)
+            if self._inbox is not None:
+                self._inbox.put_nowait(Answer.YES if found.intent is Intent.YES else Answer.NO)
             return
         location = self.db.find_location(found.location) if found.location else None
         if location is None:
             return
-        if found.intent is Intent.NAVIGATION_COMMAND:
-            self.requested, self.guiding, self.resume = location, False, None  # a new errand
-        else:
-            self.asked = location
         log.info("heard %s about %s in %r", found.intent.value, location.name, text)
-        self.publish_event(found.intent.value)
+        self.ask(Request(found.intent, location))
+
+    def ask(self, request: Request) -> None:
+        """Hand ``request`` to the talking state: the one running, or the next (by the request's event).
+
+        A request with a ``question`` is asked first and carried out only on yes.
+        """
+        if self._inbox is not None:
+            self._inbox.put_nowait(request)  # the talking state runs: it takes it from there
+            return
+        if request.intent is Intent.NAVIGATION_COMMAND:
+            self.resume = None  # a new errand
+        self.request = request
+        self.asked = request.place
+        self._unanswered = (request.intent.value, self.node.clock.monotonic() + REQUEST_PATIENCE)
+        self.publish_event(request.intent.value)
 
     def here(self) -> Location | None:
         """The known place on the loaded map the robot is at, if any."""
@@ -237,9 +278,6 @@ class NavigationModule(BehaviourModule):
         self.sulking = origin is Origin.SCHEDULE and self.emotion == ANGRY
         if any(chosen.feedback):
             self.send_emotion(*chosen.feedback)
-        if chosen.kind is PlanKind.REFUSE:
-            await ctx.sleep(self._say(ResponseType.REFUSE, chosen.target.name if chosen.target else ""))
-            return
         if chosen.kind is PlanKind.NOT_ON_MAP:
             assert chosen.target is not None
             log.warning("not going there: %s", self.db.off_map_reason(chosen.target))
@@ -252,8 +290,6 @@ class NavigationModule(BehaviourModule):
             return
         if chosen.kind is PlanKind.NOTHING:
             raise Abort(chosen.reason)
-        if origin is Origin.COMMAND and chosen.target is not None:
-            await ctx.sleep(self._say(ResponseType.CONFIRM, chosen.target.name))  # "At once.", then go
         self.publish_event(
             "navigation_start_moving" if chosen.kind is PlanKind.MOVE else "navigation_start_wandering"
         )
@@ -361,52 +397,111 @@ class NavigationModule(BehaviourModule):
         return estimated_duration(text)
 
     async def talking(self, ctx: GoalContext) -> None:
-        asked_on_map = self.asked is None or self.db.on_current_map(self.asked)
-        asked_has_pose = self.asked is None or self.asked.position is not None
-        kind = talk_kind(ctx.event, self.origin, asked_on_map=asked_on_map, asked_has_pose=asked_has_pose)
-        place = {
-            TalkKind.ARRIVED: self.arrived_at,
-            TalkKind.OPINION: self.arrived_at if ctx.event == "succeeded" else self.asked,
-            TalkKind.STUCK: self.failed_target,
-            TalkKind.OFFER_GUIDE: self.asked,
-            TalkKind.NOT_ON_MAP: self.asked,
-            TalkKind.NO_POSE: self.asked,
-        }.get(kind)
-        if kind is TalkKind.NOT_ON_MAP and place is not None:
-            log.warning("cannot show the way: %s", self.db.off_map_reason(place))
-        if kind is TalkKind.NO_POSE and place is not None:
-            log.warning("cannot show the way: %s", self.db.no_pose_reason(place))
+        """Say what the event calls for (7.7); a person's request may ask a yes-or-no question first.
+
+        Entered from the moving state with a trip under way (a question asked on the way), the
+        robot drives on afterwards unless the person sent it elsewhere: nobody is left halfway.
+        """
         trip, self.trip = self.trip, None
-        goes_on = trip is not None and trip_goes_on(ctx.event, ctx.previous_state)
+        request, self.request = self.request, None
+        self._inbox = asyncio.Queue()
+        try:
+            set_off = await self._talk(ctx, request)
+        finally:
+            self._inbox = None
         self.origin = None
-        if kind is TalkKind.OFFER_GUIDE:
-            self._answer = self.node.clock.loop.create_future()  # listen while still speaking
-        if kind is not TalkKind.NOTHING:
-            await ctx.sleep(self._say(RESPONSE_FOR_TALK[kind], place.name if place else "place"))
-        if goes_on and trip is not None:
+        if set_off:
+            await ctx.wait_forever()
+        if trip is not None and ctx.previous_state == "navigation_moving":
             log.info("answered on the way; going on to %s", trip.target.name)
             self.resume = trip
             self.publish_event("navigation_command")  # back through planning to the same place
             await ctx.wait_forever()
-        if kind is TalkKind.OFFER_GUIDE and place is not None:
-            answer = await self._await_answer()
-            if answer is Intent.YES:
-                await ctx.sleep(self._say(ResponseType.CONFIRM, place.name))
-                self.requested, self.guiding = place, True
-                self.publish_event("navigation_command")
-                await ctx.wait_forever()
-            if answer is Intent.NO:
-                await ctx.sleep(self._say(ResponseType.DECLINED, place.name))
-        if ctx.previous_state == "conversation":
+        if self.conversing:
             self.publish_event("navigation_feedback_completed")
             await ctx.wait_forever()
 
-    async def _await_answer(self) -> Intent | None:
-        if self._answer is None:
-            self._answer = self.node.clock.loop.create_future()
+    async def _talk(self, ctx: GoalContext, request: Request | None) -> bool:
+        """Speak for the event, then handle requests as they come; True once the robot sets off."""
+        if request is None or ctx.event != request.intent.value:
+            await self._speak_for_event(ctx)
+            request = None
+        inbox = self._inbox
+        assert inbox is not None
+        while True:
+            if request is not None and await self._handle(ctx, request):
+                return True
+            request = None
+            while not inbox.empty() and request is None:  # said while it was speaking
+                item = inbox.get_nowait()
+                request = item if isinstance(item, Request) else None
+            if request is None:
+                return False
+
+    async def _speak_for_event(self, ctx: GoalContext) -> None:
+        """The sentence for an arrival (guided: the place's name; else an opinion) or for being stuck."""
+        kind = talk_kind(ctx.event, self.origin)
+        place = {
+            TalkKind.ARRIVED: self.arrived_at,
+            TalkKind.OPINION: self.arrived_at,
+            TalkKind.STUCK: self.failed_target,
+        }.get(kind)
+        if kind in RESPONSE_FOR_TALK and place is not None:
+            await ctx.sleep(self._say(RESPONSE_FOR_TALK[kind], place.name))
+
+    async def _handle(self, ctx: GoalContext, request: Request) -> bool:
+        """Carry out ``request`` (asking first where the reply says so); True if the robot sets off."""
+        place = self.db.find_location(request.place.name) or request.place
+        reply: Reply | None = reply_to(
+            request,
+            self.emotion,
+            on_map=self.db.on_current_map(place),
+            has_pose=place.position is not None,
+        )
+        while reply is not None:
+            log.info("talking (%s, %s): %s", request.intent.value, self.emotion, reply.reason)
+            if reply.kind is ReplyKind.IGNORE:
+                return False
+            if reply.kind is ReplyKind.ASK:
+                self._drain_answers()  # listen from the question on (also while still speaking it)
+            assert reply.say is not None
+            if reply.say is ResponseType.NOT_ON_MAP:
+                log.warning("not going there: %s", self.db.off_map_reason(place))
+            if reply.say is ResponseType.NO_POSE:
+                log.warning("not going there: %s", self.db.no_pose_reason(place))
+            await ctx.sleep(self._say(reply.say, place.name))
+            if reply.kind is ReplyKind.GO:
+                self.requested, self.guiding = place, reply.origin is Origin.GUIDE
+                self.publish_event("navigation_command")
+                return True
+            if reply.kind is ReplyKind.SAY:
+                return False
+            heard = await self._await_answer()
+            if isinstance(heard, Request):  # a new request instead of an answer: that one now
+                return await self._handle(ctx, heard)
+            reply = after_answer(reply, heard)
+        return False
+
+    def _drain_answers(self) -> None:
+        """Forget yes and no said before the question (requests stay queued)."""
+        inbox = self._inbox
+        if inbox is None:
+            return
+        kept = [item for item in _drain(inbox) if isinstance(item, Request)]
+        for item in kept:
+            inbox.put_nowait(item)
+
+    async def _await_answer(self) -> Answer | Request:
+        inbox = self._inbox
+        assert inbox is not None
         try:
-            return await asyncio.wait_for(self._answer, self.answer_timeout)
+            return await asyncio.wait_for(inbox.get(), self.answer_timeout)
         except TimeoutError:
-            return None
-        finally:
-            self._answer = None
+            return Answer.SILENCE
+
+
+def _drain(queue: asyncio.Queue[Request | Answer]) -> list[Request | Answer]:
+    items: list[Request | Answer] = []
+    while not queue.empty():
+        items.append(queue.get_nowait())
+    return items

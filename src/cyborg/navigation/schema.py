@@ -66,6 +66,7 @@ MIGRATIONS: tuple[tuple[str, ...], ...] = (
         "DROP TABLE locations",
         "ALTER TABLE locations_v3 RENAME TO locations",
     ),
+    (),  # version 4: only new sentences (ask_go: the robot confirms a command, thesis 7.7)
 )
 SCHEMA_VERSION = len(MIGRATIONS)
 _COLUMNS: dict[str, set[str]] = {
@@ -89,6 +90,7 @@ _COLUMNS: dict[str, set[str]] = {
 NEW_RESPONSE_TYPES: dict[int, tuple[ResponseType, ...]] = {
     2: (ResponseType.NOT_ON_MAP,),
     3: (ResponseType.NO_POSE, ResponseType.RESUME),
+    4: (ResponseType.ASK_GO,),
 }
 """Response types added by a schema version: migrating an older file adds their default sentences."""
 
