@@ -81,7 +81,9 @@ def reply_to(request: Request, emotion: str, *, on_map: bool = True, has_pose: b
     if request.intent is Intent.NAVIGATION_FEEDBACK:
         return Reply(ReplyKind.SAY, ResponseType.OPINION, place, reason=f"its opinion of {place.name}")
     if request.intent is Intent.NAVIGATION_COMMAND and emotion == ANGRY:
-        return Reply(ReplyKind.IGNORE, None, place, reason=f"angry: ignores the command to go to {place.name}")
+        return Reply(
+            ReplyKind.IGNORE, None, place, reason=f"angry: ignores the command to go to {place.name}"
+        )
     if not has_pose:
         return Reply(ReplyKind.SAY, ResponseType.NO_POSE, place, reason=f"{place.name} has no pose")
     if not on_map:

@@ -19,7 +19,7 @@ import enum
 import itertools
 import re
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from rapidfuzz import fuzz
 
@@ -65,6 +65,9 @@ NUMBER_WORDS: dict[str, str] = {
         ]
     )
 }
+
+NUMBER_SOUNDS = {"to": "2", "too": "2", "for": "4", "won": "1", "ate": "8"}
+"""Words speech-to-text writes for a number at the end of a place's name ("entrance to")."""
 
 FILLER_WORDS = frozenset({"the", "a", "an", "my", "this", "that", "to", "at", "of", "is"})
 """Words a place-name match may not start or end with (unless the name itself does)."""
@@ -344,8 +347,21 @@ class LocationMatcher:
         return list(dict.fromkeys(s.location for s in self._spoken))
 
     def find(self, text: str) -> LocationMatch | None:
-        """The best place name in ``text`` (earliest; then highest score; then longest), or None."""
+        """The best place name in ``text`` (earliest; then highest score; then longest), or None.
+
+        A sentence that ends in a word that sounds like a number ("where is the entrance to",
+        speech-to-text's "entrance 2") is also read with the number; a place found only that way
+        is not certain, and neither is the place without the number.
+        """
         words = normalise(text).split()
+        found = self._find(words)
+        if words and words[-1] in NUMBER_SOUNDS:
+            with_number = self._find([*words[:-1], NUMBER_SOUNDS[words[-1]]])
+            if with_number is not None and (found is None or with_number.location != found.location):
+                return replace(with_number, score=min(with_number.score, CERTAIN_SCORE - 1))
+        return found
+
+    def _find(self, words: list[str]) -> LocationMatch | None:
         best: tuple[int, float, int] | None = None
         found: LocationMatch | None = None
         for spoken in self._spoken:
@@ -458,7 +474,7 @@ def detect_answer(text: str) -> Detection | None:
     [(intent, (first, phrase))] = found.items()
     if first > ANSWER_START and len(words) > SHORT_ANSWER:
         return None
-    if phrase in WEAK_ANSWERS and not set(words) <= WEAK_ANSWERS | ANSWER_COMPANIONS:
+    if intent is Intent.YES and phrase in WEAK_ANSWERS and not set(words) <= WEAK_ANSWERS | ANSWER_COMPANIONS:
         return None
     return Detection(intent, None, phrase, 100.0)
 
