@@ -3,7 +3,21 @@ about ("Did you mean the el6?") before the robot offers the way; yes goes on, no
 
 from __future__ import annotations
 
-from tests.navigation.test_module import OFFER, Cyborg, VirtualClock, cyborg  # noqa: F401 (fixture)
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from cyborg.transport.clock import VirtualClock
+from tests.navigation.test_module import OFFER, Cyborg
+
+
+@pytest.fixture
+def cyborg(clock: VirtualClock, tmp_path: Path) -> Iterator[Cyborg]:
+    robot = Cyborg(clock, tmp_path)
+    yield robot
+    robot.transport.shutdown()
+
 
 ASKED = "Did you mean the el6?"
 
@@ -26,7 +40,7 @@ def test_a_roughly_heard_place_is_asked_about_then_offered_on_yes(
     assert cyborg.sentences()[:2] == [ASKED, OFFER]
 
 
-def test_a_roughly_heard_place_answered_no_stays(clock: VirtualClock, cyborg: Cyborg) -> None:  # noqa: F811
+def test_a_roughly_heard_place_answered_no_stays(clock: VirtualClock, cyborg: Cyborg) -> None:
     async def main() -> None:
         await cyborg.settle()
         cyborg.hear("where is the a16")
@@ -38,7 +52,7 @@ def test_a_roughly_heard_place_answered_no_stays(clock: VirtualClock, cyborg: Cy
     assert OFFER not in cyborg.sentences() and cyborg.moved_since(0.0) == 0.0
 
 
-def test_a_place_heard_clearly_is_offered_at_once(clock: VirtualClock, cyborg: Cyborg) -> None:  # noqa: F811
+def test_a_place_heard_clearly_is_offered_at_once(clock: VirtualClock, cyborg: Cyborg) -> None:
     async def main() -> None:
         await cyborg.settle()
         cyborg.hear("where is the e16")
