@@ -137,7 +137,7 @@ NEW_IN = {  # issue 34: new phrasings of the same requests, written before any r
     "hello robot": GREETING,
     "good afternoon": GREETING,
     "hi, nice to meet you": GREETING,
-    "how are you doing": GREETING,
+    "how are you doing": GREETING,  # wrong now: "how are you" is no greeting (primed with it, Whisper heard "how old are you" as it)
     "hey cyborg": GREETING,
     "howdy": GREETING,
     "good morning to you": GREETING,
