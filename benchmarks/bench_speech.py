@@ -23,6 +23,7 @@ Targets on every set: >= 95 % intended at the quiet noise level and >= 90 % at t
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import pickle
 import resource
@@ -34,8 +35,6 @@ from collections import Counter
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import contextlib
-
 from _machine import machine_line, percentile
 
 NAV_INFO, NAV_CMD, NAV_FEEDBACK = "navigation_information", "navigation_command", "navigation_feedback"
