@@ -32,6 +32,8 @@ from cyborg.hearing import HearingError
 from cyborg.hearing.grammar import ALWAYS_HEARD, Grammar
 from cyborg.hearing.recogniser import SAMPLE_RATE, Heard
 from cyborg.hearing.understanding import Understanding
+from cyborg.modules.conversation import is_greeting
+from cyborg.navigation.keywords import detect_answer
 
 __all__ = [
     "DEFAULT_BEAM",
@@ -117,11 +119,13 @@ PROMPT_LEADS = {
 
 def prompt_of(grammar: Grammar, extra: str = "", *, budget: Callable[[str], int] | None = None) -> str:
     """The text Whisper is primed with: ``extra``, the greetings and answers every robot hears,
-    the phrases the modules declare (as many as fit), then each place (stored names and aliases)
-    in a request.
+    the other phrases modules declare (as many as fit), then each place (stored names and
+    aliases) in a request, as a person says them.
 
     Whisper keeps only the last :data:`PROMPT_TOKENS` tokens of its prompt: the places come last
     so that they are always kept; ``budget`` counts a text's tokens (default: about one per word).
+    Whole sentences, not lists: primed with bare phrases ("Go to. Where is."), Whisper heard
+    "yes" and "hello" as them (docs/benchmarks-history.md).
     """
     count = budget or (lambda text: round(1.4 * len(text.split())))
     places = sorted(set(grammar.place_forms.values()))
@@ -135,13 +139,15 @@ def prompt_of(grammar: Grammar, extra: str = "", *, budget: Callable[[str], int]
     head = [extra.strip()] if extra.strip() else []
     head += [f"{p.capitalize()}." for p in ALWAYS_HEARD]
     room = PROMPT_TOKENS - count(" ".join(head + named))
-    phrases = []
-    for phrase in (*grammar.triggers, *grammar.phrases):
+    own = []
+    for phrase in grammar.phrases:  # a module's own phrase; the many greetings and answers are left out
         said = f"{phrase.capitalize()}."
-        if phrase not in ALWAYS_HEARD and count(said) < room:
-            phrases.append(said)
+        if phrase in ALWAYS_HEARD or is_greeting(phrase) or detect_answer(phrase) is not None:
+            continue
+        if count(said) < room:
+            own.append(said)
             room -= count(said)
-    return " ".join(head + phrases + named)
+    return " ".join(head + own + named)
 
 
 _SPACES = re.compile(r"\s+")
