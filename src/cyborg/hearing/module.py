@@ -45,6 +45,7 @@ from cyborg.hearing.recogniser import (
 from cyborg.hearing.understanding import Understanding
 from cyborg.modules.kind import BuildContext, Listening, ModuleKind, ModuleSettings
 from cyborg.navigation.database import NavigationDatabase
+from cyborg.navigation.keywords import ALL_TRIGGERS, NO_PHRASES, PLAIN_PHRASES, YES_PHRASES
 from cyborg.transport import topics
 from cyborg.transport.base import Node
 from cyborg.transport.messages import String
@@ -81,9 +82,17 @@ def grammar_of(
 ) -> Grammar:
     """The grammar of ``places`` after the phrases that take one, of what the modules listen for,
     greetings and yes/no (:data:`~cyborg.hearing.grammar.ALWAYS_HEARD`) and ``extra``, in
-    ``recogniser``'s words."""
-    alone = (*ALWAYS_HEARD, *listening.phrases, *extra)
-    return build_grammar(places, listening.place_phrases, alone, recogniser.known_word)
+    ``recogniser``'s words.
+
+    Pocketsphinx hears only whole sentences of its grammar: of the navigation module's many
+    phrasings and answers it gets the plain ones (:data:`~cyborg.navigation.keywords.PLAIN_PHRASES`).
+    """
+    before_place, alone = listening.place_phrases, (*ALWAYS_HEARD, *listening.phrases, *extra)
+    if recogniser.name == "pocketsphinx":
+        many = {*ALL_TRIGGERS, *YES_PHRASES, *NO_PHRASES}
+        before_place = tuple(p for p in before_place if p not in many or p in PLAIN_PHRASES)
+        alone = tuple(p for p in alone if p not in many or p in PLAIN_PHRASES)
+    return build_grammar(places, before_place, alone, recogniser.known_word)
 
 
 class SpeechInput:

@@ -184,6 +184,19 @@ ALL_TRIGGERS: tuple[str, ...] = tuple(
 )
 """Every trigger, the intents taking turns, the most common phrasings first."""
 
+PLAIN_PHRASES = frozenset(
+    {
+        *("go to", "goto", "move to", "drive to", "where is", "wheres", "where can i find"),
+        *("think of", "think about", "feel about"),
+        *("yes", "yeah", "yea", "yep", "yup", "sure", "ok", "okay", "alright", "all right", "of course"),
+        *("please", "why not", "go ahead", "definitely", "absolutely", "certainly"),
+        *("no", "nope", "nah", "not really", "no thanks", "never", "dont", "do not", "not now"),
+    }
+)
+"""The requests and answers of the thesis and a few more: what a recogniser that can only hear
+whole sentences of a grammar (pocketsphinx) listens for; the many other phrasings cost it more in
+confusions than they gain (docs/benchmarks-history.md, issue 34)."""
+
 WEAK_ANSWERS = frozenset({"please", "right"})
 """Answers only when said (nearly) alone: "please" is yes, "turn around please" is not."""
 ANSWER_COMPANIONS = frozenset(
