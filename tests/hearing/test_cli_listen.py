@@ -34,7 +34,46 @@ def test_listen_to_a_wav_prints_the_sentence_and_that_no_robot_took_it(tmp_path:
     )
     assert result.exit_code == 0, result.output
     assert "heard: where is the cafeteria  [confidence" in result.output
+    assert "-> navigation_information: cafeteria" in result.output  # what the robot would do
     assert "not sent: no robot answers at http://127.0.0.1:9" in result.output
+
+
+def test_listen_no_send_says_what_the_robot_would_do_and_what_it_rejects_without_a_robot(
+    tmp_path: Path,
+) -> None:
+    path = tmp_path / "two.wav"
+    quiet = bytes(32000)  # a second of silence between the sentences
+    with wave.open(str(path), "wb") as wav:
+        wav.setnchannels(1)
+        wav.setsampwidth(2)
+        wav.setframerate(16000)
+        wav.writeframes(
+            synthesise("take me to the canteen", VOICES[3])
+            + quiet
+            + synthesise("what is the weather like today", VOICES[3])
+        )
+    result = CliRunner().invoke(
+        cli,
+        [
+            "listen",
+            "--wav",
+            str(path),
+            "--db",
+            str(tmp_path / "nav.db"),
+            "--no-send",
+            "--url",
+            "http://127.0.0.1:9",
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    lines = [line for line in result.output.splitlines() if line.startswith("heard:")]
+    assert len(lines) == 2, result.output
+    assert lines[0].startswith("heard: take me to the canteen  [confidence")
+    assert lines[0].endswith("-> navigation_command: cafeteria")
+    assert lines[1].startswith("heard: what is the weather like today") and lines[1].endswith(
+        "rejected: not understood"
+    )
+    assert "not sent" not in result.output and "error" not in result.output.lower()
 
 
 def test_listen_without_a_microphone_names_the_fix(tmp_path: Path) -> None:

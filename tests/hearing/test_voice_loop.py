@@ -1,5 +1,6 @@
-"""A full voice loop: the robot hears a synthesised "where is the cafeteria", offers to show the way
-(its text-to-speech WAV, heard back), hears "yes" and drives to the cafeteria."""
+"""A full voice loop: the robot hears a synthesised "where is the cafeteria" (with the default
+engine, Whisper tiny.en from the packaged model, and Silero VAD), offers to show the way (its
+text-to-speech WAV, heard back), hears "yes" and drives to the cafeteria."""
 
 from __future__ import annotations
 
@@ -20,7 +21,7 @@ from tests.navigation.test_module import (  # the default robot and a user, as i
 )
 
 
-@pytest.mark.slow  # about 13 s: real speech synthesis and recognition of every turn
+@pytest.mark.slow  # about 15 s: real speech synthesis and recognition of every turn
 def test_where_is_the_cafeteria_then_yes_drives_there(tmp_path: Path) -> None:
     clock = VirtualClock(speed=10.0)  # time runs while espeak-ng writes and pocketsphinx decodes
     cyborg = Cyborg(clock, tmp_path / "data")
@@ -39,6 +40,7 @@ def test_where_is_the_cafeteria_then_yes_drives_there(tmp_path: Path) -> None:
         cyborg.robot.place,
     )
     assert isinstance(ears, SpeechInput)
+    assert ears.recogniser.name == "whisper", "the Whisper model must be installed (scripts/setup)"
     person = Recogniser(min_confidence=0.0)  # a person who knows what the robot may offer
     person.use(build_grammar([], [], [OFFER, "all right maybe another time"], person.known_word))
 

@@ -666,7 +666,7 @@ def test_a_version_2_file_keeps_its_data_and_its_placeholder_poses_become_no_pos
     with sqlite3.connect(path) as raw:
         assert raw.execute("PRAGMA user_version").fetchone() == (SCHEMA_VERSION,)
         kept = raw.execute(
-            "SELECT id, sentence, type, emotion FROM responses WHERE type NOT IN ('no_pose', 'resume', 'ask_go') ORDER BY id"
+            "SELECT id, sentence, type, emotion FROM responses WHERE type NOT IN ('no_pose', 'resume', 'ask_go', 'did_you_mean') ORDER BY id"
         ).fetchall()
         assert kept == responses_before
         assert raw.execute("PRAGMA foreign_key_check").fetchall() == []

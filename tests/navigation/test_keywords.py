@@ -194,3 +194,52 @@ def test_threshold_controls_tolerance() -> None:
 
 def test_matcher_lists_names_once() -> None:
     assert MATCHER.names == [name for name, _ in PLACES]
+
+
+@pytest.mark.parametrize(
+    ("text", "intent", "location"),
+    [  # how people ask, beyond the thesis's three phrasings
+        ("can you point me to the cafeteria", INFO, "cafeteria"),
+        ("I need to find the elevator", INFO, "elevator"),
+        ("how can I reach entrance 2", INFO, "entrance 2"),
+        ("where exactly is the information desk", INFO, "information desk"),
+        ("how do I go to the cafeteria", INFO, "cafeteria"),
+        ("take me to the waiting area", CMD, "waiting area"),
+        ("show me the way to el5", CMD, "el5"),
+        ("drive over to the elevator", CMD, "elevator"),
+        ("what's your opinion of the cafeteria", FEEDBACK, "cafeteria"),
+        ("do you like the elevator", FEEDBACK, "elevator"),
+    ],
+)
+def test_many_phrasings_of_a_request_are_understood(text: str, intent: Intent, location: str) -> None:
+    found = detect(text, MATCHER)
+    assert found is not None and (found.intent, found.location) == (intent, location), text
+
+
+def test_a_negated_command_is_none() -> None:
+    assert detect_navigation("don't go to the cafeteria", MATCHER) is None
+    assert detect_navigation("please do not drive to the elevator", MATCHER) is None
+
+
+@pytest.mark.parametrize(
+    ("text", "intent"),
+    [
+        ("not right now", Intent.NO),
+        ("please", Intent.YES),
+        ("that would be great", Intent.YES),
+        ("maybe another time", Intent.NO),
+        ("turn around please", None),
+        ("I said no to him yesterday at the bus stop", None),
+    ],
+)
+def test_answers_said_many_ways_and_not_hidden_in_other_sentences(text: str, intent: Intent | None) -> None:
+    found = detect_answer(text)
+    assert (found.intent if found else None) is intent, text
+
+
+def test_a_place_heard_roughly_is_found_but_not_certain() -> None:
+    rough = detect("where is the a16", MATCHER)
+    assert rough is not None and rough.location == "el6" and not rough.certain
+    clear = detect("where is the e16", MATCHER)
+    assert clear is not None and clear.certain
+    assert detect("where is the a17", MATCHER) is None  # other digits: never that place

@@ -84,7 +84,7 @@ class LazyGroup(click.Group):
         ),
         "listen": (
             "cyborg.cli.listen:listen",
-            "Hear speech (offline) and print each sentence with its confidence; rejected ones are marked.",
+            "Hear speech (offline) and print each sentence, its confidence and what the robot would do.",
         ),
         "new": (
             "cyborg.cli.new:new_group",

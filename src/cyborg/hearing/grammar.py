@@ -100,6 +100,7 @@ class Grammar:
     jsgf: str
     place_forms: dict[str, str] = field(default_factory=dict)
     phrases: tuple[str, ...] = ()
+    """Phrases said on their own, in the order they were declared."""
     unsayable: tuple[str, ...] = ()
     """Places and phrases left out: a word the dictionary does not know."""
     triggers: tuple[str, ...] = ()
@@ -204,7 +205,7 @@ def build_grammar(
     return Grammar(
         "\n".join(rules) + "\n",
         forms,
-        tuple(sorted(set(alone))),
+        tuple(dict.fromkeys(alone)),
         tuple(unsayable),
-        tuple(sorted(set(triggers))) if forms else (),
+        tuple(dict.fromkeys(triggers)) if forms else (),
     )

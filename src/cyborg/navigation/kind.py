@@ -12,7 +12,7 @@ from pydantic import Field
 
 from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
 from cyborg.navigation.database import NavigationDatabase
-from cyborg.navigation.keywords import NO_PHRASES, TRIGGERS, YES_PHRASES, Intent
+from cyborg.navigation.keywords import ALL_TRIGGERS, NO_PHRASES, YES_PHRASES, Intent
 from cyborg.navigation.module import MOVING_ACTION, PLANNING_ACTION, TALKING_ACTION, NavigationModule
 from cyborg.transport.base import Node
 from cyborg.transport.topics import BaseApi
@@ -55,11 +55,11 @@ class NavigationSettings(ModuleSettings):
 
     def listens_for(self) -> tuple[str, ...]:
         """The phrases that start a request for a place (the place follows them), and the answers."""
-        return (*(phrase for phrases in TRIGGERS.values() for phrase in phrases), *YES_PHRASES, *NO_PHRASES)
+        return (*ALL_TRIGGERS, *YES_PHRASES, *NO_PHRASES)
 
     def listens_for_places(self) -> tuple[str, ...]:
         """The phrases a place follows: "go to", "where is", "what do you think of" ..."""
-        return tuple(phrase for phrases in TRIGGERS.values() for phrase in phrases)
+        return ALL_TRIGGERS
 
 
 def _build(node: Node, settings: NavigationSettings, context: BuildContext) -> NavigationModule:

@@ -42,6 +42,8 @@ class ResponseType(enum.Enum):
     RESUME = "resume"
     ASK_GO = "ask_go"
     """Asks to confirm a command before setting off (7.7): "Shall I go to the LOCATION?"."""
+    DID_YOU_MEAN = "did_you_mean"
+    """Asks which place was meant when speech understanding heard it only roughly: "Did you mean the LOCATION?"."""
 
     @property
     def needs_location(self) -> bool:
@@ -52,6 +54,7 @@ class ResponseType(enum.Enum):
             ResponseType.NOT_ON_MAP,
             ResponseType.NO_POSE,
             ResponseType.ASK_GO,
+            ResponseType.DID_YOU_MEAN,
         )
 
 

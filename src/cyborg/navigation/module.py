@@ -204,7 +204,10 @@ class NavigationModule(BehaviourModule):
         if location is None:
             return
         log.info("heard %s about %s in %r", found.intent.value, location.name, text)
-        self.ask(Request(found.intent, location))
+        # A place heard only roughly ("where is the a16"): never guess, ask "Did you mean the el6?"
+        # before offering the way (a command's own question, "Shall I go to the el6?", names it).
+        unsure = not found.certain and found.intent is Intent.NAVIGATION_INFORMATION
+        self.ask(Request(found.intent, location, ResponseType.DID_YOU_MEAN if unsure else None))
 
     def ask(self, request: Request) -> None:
         """Hand ``request`` to the talking state: the one running, or the next (by the request's event).

@@ -67,6 +67,7 @@ MIGRATIONS: tuple[tuple[str, ...], ...] = (
         "ALTER TABLE locations_v3 RENAME TO locations",
     ),
     (),  # version 4: only new sentences (ask_go: the robot confirms a command, thesis 7.7)
+    (),  # version 5: only new sentences (did_you_mean: a place heard only roughly is asked about)
 )
 SCHEMA_VERSION = len(MIGRATIONS)
 _COLUMNS: dict[str, set[str]] = {
@@ -91,6 +92,7 @@ NEW_RESPONSE_TYPES: dict[int, tuple[ResponseType, ...]] = {
     2: (ResponseType.NOT_ON_MAP,),
     3: (ResponseType.NO_POSE, ResponseType.RESUME),
     4: (ResponseType.ASK_GO,),
+    5: (ResponseType.DID_YOU_MEAN,),
 }
 """Response types added by a schema version: migrating an older file adds their default sentences."""
 

