@@ -269,6 +269,9 @@ def test_robot_moves_on_the_map(page: Page, sim: str) -> None:
     start = robot_dot(page)
     page.fill("#chat-input", "Go to the cafeteria")
     page.press("#chat-input", "Enter")
+    expect(page.locator("#log")).to_contain_text("Shall I go to the cafeteria?")  # 7.7: it asks first
+    page.fill("#chat-input", "yes")
+    page.press("#chat-input", "Enter")
     expect(page.locator("#map-pose")).to_contain_text("m to go")  # a route is planned and drawn
     deadline = time.monotonic() + 15
     while time.monotonic() < deadline:
