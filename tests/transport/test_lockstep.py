@@ -1,0 +1,88 @@
+"""Lockstep time without ROS: a time server and nodes on LockstepClocks, each on a thread of its own.
+
+The server grants the earliest next timer of all nodes once every node is idle and every message
+counted out has been counted in; a node's clock reads exactly the granted times.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import threading
+import time
+from collections.abc import Callable, Iterator
+
+import pytest
+
+from cyborg.run.lockstep import TimeServer
+from cyborg.transport.ledger import Channel
+from cyborg.transport.lockstep import LockstepClock
+
+UNTIL = 1.5
+
+
+@pytest.fixture
+def server() -> Iterator[TimeServer]:
+    time_server = TimeServer({"a", "b"}, patience=30.0).start()
+    yield time_server
+    time_server.close()
+
+
+def run_node(clock: LockstepClock, name: str, main: Callable[[], object]) -> threading.Thread:
+    def run() -> None:
+        clock.join(name)
+        clock.run(main())  # type: ignore[arg-type]
+        clock.close()
+
+    thread = threading.Thread(target=run, name=name, daemon=True)
+    thread.start()
+    return thread
+
+
+def test_every_node_reads_the_times_its_timers_are_due(server: TimeServer) -> None:
+    fired: dict[str, list[float]] = {"a": [], "b": []}
+    clocks = {name: LockstepClock(server.address) for name in fired}
+
+    def ticker(name: str, period: float) -> Callable[[], object]:
+        async def main() -> None:
+            while clocks[name].monotonic() < UNTIL:
+                await asyncio.sleep(period)
+                fired[name].append(clocks[name].monotonic())
+
+        return main
+
+    threads = [run_node(clocks["a"], "a", ticker("a", 0.3)), run_node(clocks["b"], "b", ticker("b", 0.5))]
+    for thread in threads:
+        thread.join(timeout=30)
+    assert fired["a"] == pytest.approx([0.3, 0.6, 0.9, 1.2, 1.5], abs=1e-9)
+    assert fired["b"] == pytest.approx([0.5, 1.0, 1.5], abs=1e-9)
+    assert server.time_ns == 1_500_000_000
+    assert not server.written_off
+
+
+def test_the_time_waits_for_a_message_on_its_way(server: TimeServer) -> None:
+    """A sends on /chat at 0.1 s; B takes it 0.3 real seconds later: A's timer at 0.2 s comes after."""
+    a, b = LockstepClock(server.address), LockstepClock(server.address)
+    b.ledger.listen("/chat", Channel.BROADCAST)
+    order: list[str] = []
+
+    def deliver_late() -> None:
+        time.sleep(0.3)
+        order.append("delivered")
+        b.deliver("/chat", "a", order.append, "taken by b", counted=("/chat",))
+
+    async def main_a() -> None:
+        await asyncio.sleep(0.1)
+        a.ledger.sent("/chat")
+        threading.Thread(target=deliver_late, daemon=True).start()
+        await asyncio.sleep(0.1)
+        order.append(f"a at {a.monotonic():.1f}")
+
+    async def main_b() -> None:
+        while b.monotonic() < 0.3:
+            await asyncio.sleep(0.05)
+
+    threads = [run_node(a, "a", main_a), run_node(b, "b", main_b)]
+    for thread in threads:
+        thread.join(timeout=30)
+    assert order == ["delivered", "taken by b", "a at 0.2"]
+    assert not server.written_off
