@@ -35,6 +35,7 @@ if TYPE_CHECKING:
 T = TypeVar("T")
 CONNECT_TIMEOUT = 3.0  # seconds to wait for the listening nodes to connect, or for a latched message
 DELIVERY_GRACE = 0.3  # seconds rospy's writer threads get before the node leaves the graph
+DDS_TAKE_GRACE = 1.0  # ROS 2: seconds the listeners get to take an acknowledged message (see _publish)
 DISCOVERY_SETTLE = 0.3  # ROS 2: seconds a topic's listeners stay the same before the tool publishes
 
 
@@ -104,9 +105,10 @@ class RosLink:
             await asyncio.sleep(0.01)
         if late:
             acknowledged = await asyncio.to_thread(publisher.wait_delivered, CONNECT_TIMEOUT)
-        # ROS 1: rospy's writer threads have no acknowledgement; ROS 2: a reader that has the
-        # message may not have taken it yet, and a writer that leaves may take it along.
-        await asyncio.sleep(DELIVERY_GRACE)
+        # ROS 1: rospy's writer threads have no acknowledgement. ROS 2: a reader that has the
+        # message may not have taken it yet, and a writer that leaves takes its untaken samples
+        # along (a loaded machine lost one in 0.3 s: the listener's executor had not run yet).
+        await asyncio.sleep(DDS_TAKE_GRACE if late else DELIVERY_GRACE)
         listeners = sorted(set(listeners) | set(graph.subscribers_of(topic)))
         self.delivered_to = listeners
         if not acknowledged or not all_matched():
