@@ -23,7 +23,8 @@ SENDS = 50
 
 @pytest.fixture
 def own_session(monkeypatch: pytest.MonkeyPatch) -> Iterator[Ros2Session]:
-    monkeypatch.setenv("ROS_DOMAIN_ID", str(int(os.environ.get("ROS_DOMAIN_ID", "0")) + 150))
+    # A domain of the test's own (the runner picks 1-100; test_ros2_robot takes +100; DDS has 0-232).
+    monkeypatch.setenv("ROS_DOMAIN_ID", str(int(os.environ.get("ROS_DOMAIN_ID", "0")) + 120))
     session = Ros2Session()
     yield session
     session.close()
