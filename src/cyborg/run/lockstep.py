@@ -124,9 +124,6 @@ class TimeServer:
         with contextlib.suppress(OSError):
             os.unlink(self._shared.path)
 
-    def joined(self) -> set[str]:
-        return {p.name for p in list(self._participants.values()) if p.name}
-
     # --- the server's thread -----------------------------------------------------------------
 
     def _serve(self) -> None:

@@ -265,13 +265,11 @@ POLL_INTERVAL = 0.001
 """Real seconds between looks for I/O (sockets, other threads) while virtual time runs as fast as it can."""
 
 
-class _VirtualTimeSelector(selectors.BaseSelector):
-    """Selector that advances virtual time instead of blocking on timers."""
+class DelegatingSelector(selectors.BaseSelector):
+    """A selector that hands its files to an inner one; subclasses decide how ``select`` waits."""
 
-    def __init__(self, clock: VirtualClock) -> None:
+    def __init__(self) -> None:
         self._inner = selectors.DefaultSelector()
-        self._clock = clock
-        self._polled = -math.inf  # real time of the last look for I/O
 
     def register(self, fileobj: Any, events: int, data: Any = None) -> selectors.SelectorKey:
         return self._inner.register(fileobj, events, data)
@@ -288,6 +286,15 @@ class _VirtualTimeSelector(selectors.BaseSelector):
     def close(self) -> None:
         self._inner.close()
 
+
+class _VirtualTimeSelector(DelegatingSelector):
+    """Selector that advances virtual time instead of blocking on timers."""
+
+    def __init__(self, clock: VirtualClock) -> None:
+        super().__init__()
+        self._clock = clock
+        self._polled = -math.inf  # real time of the last look for I/O
+
     def select(self, timeout: float | None = None) -> list[tuple[selectors.SelectorKey, int]]:
         speed = self._clock.speed
         if speed is not None:
@@ -296,9 +303,6 @@ class _VirtualTimeSelector(selectors.BaseSelector):
             if real_timeout and before_origin > 0:  # time stands still until the origin
                 real_timeout = None if math.isinf(before_origin) else real_timeout + before_origin
             return self._inner.select(real_timeout)
-        if (timeout is None or timeout > 0) and self._clock._inbox:
-            self._clock._release()  # the next delta cycle of this instant, before the time moves
-            return []
         if timeout is None:
             # Nothing is scheduled: only I/O or another thread can wake us.
             return self._inner.select(None)

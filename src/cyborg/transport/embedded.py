@@ -294,11 +294,7 @@ class _EmbeddedSubscription(Subscription[M]):
         return self._queue.dropped
 
     def _enqueue(self, message: Message, info: MessageInfo) -> None:
-        clock = self._queue._clock
-        if clock.delivers_in_deltas:
-            clock.deliver(self.topic, info.sender, self._queue.put, cast(M, message), info)
-        else:
-            self._queue.put(cast(M, message), info)
+        self._queue.put(cast(M, message), info)
 
     def unsubscribe(self) -> None:
         """Deliver nothing more and leave the topic."""
@@ -449,24 +445,13 @@ class _EmbeddedActionServer(ActionServer[G, R, F]):
             if goal.result is None:
                 goal.result = self.action_type.result()
         client = goal.client
-        if client is None:
-            return
-        clock = self.node.clock
-        if clock.delivers_in_deltas:
-            leg = "accept" if status is GoalStatus.ACTIVE else "result" if status.is_terminal else "status"
-            clock.deliver(f"{self.name}#{leg}", "", client.update_status, status, goal.result, goal.text)
-        else:
-            clock.loop.call_soon(client.update_status, status, goal.result, goal.text)
+        if client is not None:
+            self.node.clock.loop.call_soon(client.update_status, status, goal.result, goal.text)
 
     def _send_feedback(self, goal: _Goal[G, R, F], feedback: F) -> None:
         client = goal.client
-        if client is None:
-            return
-        clock = self.node.clock
-        if clock.delivers_in_deltas:
-            clock.deliver(f"{self.name}#feedback", "", client.deliver_feedback, _own(feedback))
-        else:
-            clock.loop.call_soon(client.deliver_feedback, _own(feedback))
+        if client is not None:
+            self.node.clock.loop.call_soon(client.deliver_feedback, _own(feedback))
 
     def shutdown(self) -> None:
         """Withdraw the action: the goals it holds end LOST at their clients."""
@@ -575,11 +560,7 @@ class _EmbeddedClientGoalHandle(ClientGoal[G, R, F]):
         server = self._client._server()
         if server is None:
             return
-        clock = self._client._node.clock
-        if clock.delivers_in_deltas:
-            clock.deliver(f"{server.name}#cancel", "", server._receive_cancel, self._goal.goal_id)
-        else:
-            clock.loop.call_soon(server._receive_cancel, self._goal.goal_id)
+        self._client._node.clock.loop.call_soon(server._receive_cancel, self._goal.goal_id)
 
 
 class _EmbeddedActionClient(ActionClient[G, R, F]):
@@ -629,8 +610,6 @@ class _EmbeddedActionClient(ActionClient[G, R, F]):
         loop = self._node.clock.loop
         if server is None:
             loop.call_soon(handle.update_status, GoalStatus.LOST, None, f"no action server at {self.name}")
-        elif self._node.clock.delivers_in_deltas:
-            self._node.clock.deliver(f"{self.name}#goal", self._node.name, server._receive_goal, record)
         else:
             loop.call_soon(server._receive_goal, record)
         return handle

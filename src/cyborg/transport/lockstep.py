@@ -39,7 +39,7 @@ from datetime import datetime
 from typing import Any
 
 from cyborg.errors import CyborgError
-from cyborg.transport.clock import DEFAULT_VIRTUAL_START, NS, VirtualClock, on_grid
+from cyborg.transport.clock import DEFAULT_VIRTUAL_START, NS, DelegatingSelector, VirtualClock, on_grid
 from cyborg.transport.ledger import Ledger
 
 __all__ = ["LockstepClock", "SharedTime"]
@@ -158,28 +158,13 @@ class _Link:
         self.sock.close()
 
 
-class _LockstepSelector(selectors.BaseSelector):
+class _LockstepSelector(DelegatingSelector):
     """Runs what is due now; when the loop would wait, reports idle and waits for I/O or a grant."""
 
     def __init__(self, clock: LockstepClock) -> None:
-        self._inner = selectors.DefaultSelector()
+        super().__init__()
         self._clock = clock
         self._link_key: selectors.SelectorKey | None = None
-
-    def register(self, fileobj: Any, events: int, data: Any = None) -> selectors.SelectorKey:
-        return self._inner.register(fileobj, events, data)
-
-    def unregister(self, fileobj: Any) -> selectors.SelectorKey:
-        return self._inner.unregister(fileobj)
-
-    def modify(self, fileobj: Any, events: int, data: Any = None) -> selectors.SelectorKey:
-        return self._inner.modify(fileobj, events, data)
-
-    def get_map(self) -> Mapping[Any, selectors.SelectorKey]:
-        return self._inner.get_map()
-
-    def close(self) -> None:
-        self._inner.close()
 
     def watch(self, link: _Link) -> None:
         link.sock.setblocking(False)
