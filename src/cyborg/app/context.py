@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from cyborg.app.registry import KindRegistry
     from cyborg.maps import OccupancyMap
 
-__all__ = ["BuildContext", "calendar_of", "heard_by"]
+__all__ = ["BuildContext", "ModuleContext", "calendar_of", "heard_by"]
 
 
 @dataclass
@@ -31,7 +31,8 @@ class BuildContext:
     """What module factories may use besides their node (a :class:`cyborg.modules.BuildContext`)."""
 
     data_dir: Path
-    rng: random.Random = field(default_factory=lambda: random.Random(0))
+    seed: int = 0
+    """Seeds the robot's random source and each module's own (:meth:`for_module`)."""
     map_path: Path | None = None
     heard: Callable[[], Listening] | None = field(default=None, repr=False)
     """Gathers what the configured modules listen for (called on the first :meth:`listening`)."""
@@ -41,6 +42,20 @@ class BuildContext:
     """The robot base's interface, unless a module's settings name one (nav2's on ROS 2)."""
     _map: OccupancyMap | None = field(default=None, repr=False)
     _listening: Listening | None = field(default=None, repr=False)
+    _rng: random.Random | None = field(default=None, repr=False)
+
+    @property
+    def rng(self) -> random.Random:
+        """The robot's random source, seeded with :attr:`seed` (a module draws from its own)."""
+        if self._rng is None:
+            self._rng = random.Random(self.seed)
+        return self._rng
+
+    def for_module(self, name: str) -> ModuleContext:
+        """What module ``name``'s factory builds with: this context, and a random source of the
+        module's own, seeded from :attr:`seed` and the name. A module so draws the same numbers
+        whether the robot runs in one process or as one ROS node per part."""
+        return ModuleContext(self, random.Random(f"{self.seed}:{name}"))
 
     def occupancy_map(self) -> OccupancyMap:
         """The map of the world (``--map``, else Glassgården if found, else the campus), loaded once."""
@@ -56,6 +71,28 @@ class BuildContext:
         if self._listening is None:
             self._listening = self.heard() if self.heard is not None else Listening()
         return self._listening
+
+
+@dataclass(frozen=True)
+class ModuleContext:
+    """One module's view of a :class:`BuildContext`: the robot's folder, map and ears, its own random source."""
+
+    robot: BuildContext
+    rng: random.Random
+
+    @property
+    def data_dir(self) -> Path:
+        return self.robot.data_dir
+
+    @property
+    def base_api(self) -> BaseApi:
+        return self.robot.base_api
+
+    def occupancy_map(self) -> OccupancyMap:
+        return self.robot.occupancy_map()
+
+    def listening(self) -> Listening:
+        return self.robot.listening()
 
 
 def heard_by(config: LoadedConfig, kinds: KindRegistry) -> Callable[[], Listening]:

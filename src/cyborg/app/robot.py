@@ -171,7 +171,7 @@ def build_robot(
     transport: Transport,
     *,
     data_dir: Path,
-    rng: random.Random | None = None,
+    seed: int = 0,
     map_path: Path | None = None,
     kinds: KindRegistry | None = None,
 ) -> Robot:
@@ -182,9 +182,7 @@ def build_robot(
     """
     registry = kinds or module_kinds()
     store, controller, emotion, motivator = build_controller(config, transport, data_dir)
-    place = BuildContext(
-        data_dir=data_dir, rng=rng or random.Random(0), map_path=map_path, heard=heard_by(config, registry)
-    )
+    place = BuildContext(data_dir=data_dir, seed=seed, map_path=map_path, heard=heard_by(config, registry))
     robot = Robot(transport, config, controller, emotion, motivator, store, place)
     try:
         for name, raw in config.model.modules.items():
@@ -194,7 +192,7 @@ def build_robot(
                 kind,
                 transport.node(name),
                 settings,
-                place,
+                place.for_module(name),
                 source=config.source,
                 where=config.where("modules", name),
             )
