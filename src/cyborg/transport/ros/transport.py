@@ -40,6 +40,7 @@ from cyborg.transport.base import (
     normalize_node_name,
 )
 from cyborg.transport.clock import Clock
+from cyborg.transport.lockstep import LockstepClock
 from cyborg.transport.messages import ActionType, ServiceType
 from cyborg.transport.ros import patches
 from cyborg.transport.ros.actions import RosActionClient, RosActionServer
@@ -69,8 +70,19 @@ class RosTransport(Transport):
 
     def _ensure_init(self, first: str) -> None:
         if not rospy.core.is_initialized():
-            rospy.init_node(self.process_name or first, anonymous=False, disable_signals=True)
+            lockstep = isinstance(self.clock, LockstepClock)
+            # In lockstep rospy's time is set from the granted time in this process: a /clock
+            # subscription in every node would wake every process at every step of the time.
+            rospy.init_node(
+                self.process_name or first, anonymous=False, disable_signals=True, disable_rostime=lockstep
+            )
+            if isinstance(self.clock, LockstepClock):
+                self.clock.on_advance.append(self._set_rostime)
+                self._set_rostime()
         WATCH.start(self)
+
+    def _set_rostime(self) -> None:
+        rospy.rostime._set_rostime(rospy.Time.from_sec(self.clock.now()))
 
     @property
     def ros_name(self) -> str:
