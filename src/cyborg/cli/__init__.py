@@ -111,6 +111,14 @@ class LazyGroup(click.Group):
             "cyborg.cli.recordings:replay",
             "Serve the dashboard on the recording FILE: a time slider, play/pause and speed.",
         ),
+        "doctor": (
+            "cyborg.cli.doctor:doctor",
+            "Check this machine (and with --ros/--ros2 the running graph) against the configuration.",
+        ),
+        "service": (
+            "cyborg.cli.service:service_group",
+            "Start the robot when the computer boots: install, status or uninstall a systemd unit.",
+        ),
         "launch": (
             "cyborg.cli.ros:launch_command",
             "Start the whole robot over ROS 1 (a master if none runs) or ROS 2 (--ros2), a process a part.",

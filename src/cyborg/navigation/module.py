@@ -19,7 +19,6 @@ from cyborg.errors import CyborgError
 from cyborg.modules.behaviour import Abort, BehaviourModule, GoalContext
 from cyborg.modules.speech import estimated_duration
 from cyborg.navigation.base_link import base_link
-from cyborg.navigation.watchdog import TripWatch
 from cyborg.navigation.behaviour import (
     ANGRY,
     RESPONSE_FOR_TALK,
@@ -39,6 +38,7 @@ from cyborg.navigation.database import NavigationDatabase
 from cyborg.navigation.dialogue import Answer, Reply, ReplyKind, Request, after_answer, reply_to
 from cyborg.navigation.keywords import Intent, detect_answer, detect_navigation
 from cyborg.navigation.models import CalendarEvent, Location, ResponseType
+from cyborg.navigation.watchdog import TripWatch
 from cyborg.transport import topics
 from cyborg.transport.base import GoalStatus, MessageInfo, Node
 from cyborg.transport.messages import PoseWithCovarianceStamped, SystemState
