@@ -54,8 +54,21 @@ POSE_WINDOW = 1.0
 MIN_FREE_MB = 200.0
 """Free space the data folder needs (a day of recordings, the databases)."""
 CLOCK = "/clock"
-OURS = ("cyborg_doctor", "cyborg_tool", "rosout", "rosarnl_node_clock", "_")
-"""Name starts of nodes that are the tools' own or the middleware's: never "unused"."""
+DISCOVERY_WAIT = 8.0
+"""ROS 2: seconds the doctor waits for discovery to show the controller (a graph of 30 nodes took
+5 s to show on a loaded 2-core machine)."""
+OURS = (
+    "cyborg_doctor",
+    "cyborg_tool",
+    "rosout",
+    "rosarnl_node_clock",
+    "_",
+    "cyborg_emotion",
+    "cyborg_motivator",
+    "cyborg_parameter",
+)
+"""Name starts of nodes that are the tools', the controller's own (its emotion system, motivator
+and parameters are nodes of their own on ROS 2) or the middleware's: never "unused"."""
 
 
 class CheckStatus(enum.StrEnum):
@@ -282,10 +295,10 @@ class GraphDoctor:
         return reach
 
     async def _discover(self) -> None:
-        """ROS 2: wait (up to WAIT) until discovery shows the controller (or anything of ours)."""
+        """ROS 2: wait (up to DISCOVERY_WAIT) until discovery shows the controller."""
         if not self.ros2:
             return
-        deadline = time.monotonic() + WAIT
+        deadline = time.monotonic() + DISCOVERY_WAIT
         while time.monotonic() < deadline:
             if CONTROLLER in self.graph().nodes:
                 await asyncio.sleep(0.3)  # the rest of the graph arrives with it
