@@ -57,7 +57,9 @@ class BlindBase(SimulatedBase):
 def faulty(cls: type[SimulatedBase]) -> dict[str, ModuleKind[typing.Any]]:
     def build(node: Node, settings: SimulatedBaseSettings, robot: BuildContext) -> SimulatedBase:
         occupancy = robot.occupancy_map()
-        return cls(node, occupancy, rng=robot.rng, speed=settings.speed, planner=planner_for(occupancy.source))
+        return cls(
+            node, occupancy, rng=robot.rng, speed=settings.speed, planner=planner_for(occupancy.source)
+        )
 
     return {"simulated_base": ModuleKind(SimulatedBaseSettings, build)}
 

@@ -205,7 +205,9 @@ def test_ros2_real_robot_guides_a_person_with_an_rclpy_base(
         speech.publish(String("where is the cafeteria"))
         wait("the offer", lambda: any("show you" in s for s in said[heard:]), 20)
         speech.publish(String("yes"))
-        wait("the trip", lambda: ("navigation_moving", "succeeded", "navigation_talking") in states[mark:], 40)
+        wait(
+            "the trip", lambda: ("navigation_moving", "succeeded", "navigation_talking") in states[mark:], 40
+        )
         assert ("navigation_planning", "navigation_start_moving", "navigation_moving") in states[mark:]
         assert math.dist(poses[-1], cafeteria.position) < 0.5, poses[-1]
     finally:

@@ -7,11 +7,15 @@ import getpass
 import os
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
-from cyborg.cli.common import check_port, config_option, data_dir_option, fail, load_or_default
+from cyborg.cli.common import check_port, config_option, data_dir_option, fail, load_or_default, ros2_option
 from cyborg.errors import CyborgError
+
+if TYPE_CHECKING:
+    from cyborg.run.middleware import Middleware
 
 _user_help = "a user unit (~/.config/systemd/user; runs while you are logged in, or always after `loginctl enable-linger`)"
 
@@ -24,7 +28,7 @@ def service_group() -> None:
 @service_group.command("install")
 @config_option
 @data_dir_option()
-@click.option("--ros2", is_flag=True, help="launch the robot over ROS 2 (default ROS 1)")
+@ros2_option("launch the robot over ROS 2 (default ROS 1)")
 @click.option(
     "--port", default=8642, show_default=True, type=int, callback=check_port, help="port of the dashboard"
 )
@@ -39,7 +43,7 @@ def service_group() -> None:
 def install(
     config_path: Path | None,
     data_dir: Path | None,
-    ros2: bool,
+    middleware: Middleware,
     port: int,
     user_unit: bool,
     no_start: bool,
@@ -58,7 +62,7 @@ def install(
         folder = data_dir or default_data_dir()
         owner = None if user_unit else (os.environ.get("SUDO_USER") or getpass.getuser())
         text = unit_text(
-            launch_command(Path(config.source), folder, ros2, port),
+            launch_command(Path(config.source), folder, middleware, port),
             environment=carried_environment(folder),
             user=owner,
         )

@@ -94,7 +94,6 @@ class Microphone:
         self._stream.close()
 
 
-
 def probe_microphone(device: str | int | None = None) -> str:
     """The name of the input device the robot would listen to; a HearingError naming the fix when
     there is none. It is looked up, not opened: the ears' node may hold it open right now."""

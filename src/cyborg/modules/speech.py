@@ -47,7 +47,9 @@ def sound_failure(returncode: int | None, stderr: str) -> str | None:
     """What went wrong when espeak-ng spoke (None: it played). espeak-ng exits 0 even when it cannot
     open the sound device; it then says ``error:`` (and ALSA explains on stderr)."""
     lines = [line.strip() for line in stderr.splitlines() if line.strip()]
-    errors = [line for line in lines if line.lower().startswith(("error", "alsa lib")) or "pcm" in line.lower()]
+    errors = [
+        line for line in lines if line.lower().startswith(("error", "alsa lib")) or "pcm" in line.lower()
+    ]
     if not returncode and not errors:
         return None
     detail = errors[-1] if errors else f"exit code {returncode}"
@@ -102,7 +104,9 @@ class TextToSpeech:
         """Why the last sentence was not heard (no sound device), until the speaker works again."""
         self._sound_retry_at = -float("inf")
         if play_audio and not self.espeak:
-            self.sound_problem = "espeak-ng is not installed; fix: run scripts/setup (or apt-get install espeak-ng)"
+            self.sound_problem = (
+                "espeak-ng is not installed; fix: run scripts/setup (or apt-get install espeak-ng)"
+            )
             log.warning("the robot cannot speak aloud: %s", self.sound_problem)
         self.wav_dir = wav_dir
         if wav_dir is not None:

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import asyncio
 import enum
+import functools
 import json
 import os
 import shutil
@@ -189,10 +190,10 @@ def machine_checks(needs: Needs, data_dir: Path) -> list[Check]:
     checks = [_timed_now(lambda: _data_folder(data_dir))]
     for name, settings in needs.of_kind("tts"):
         if settings.play_audio is not False:
-            checks.append(_timed_now(lambda name=name: _speaker(name)))
+            checks.append(_timed_now(functools.partial(_speaker, name)))
     for name, settings in needs.of_kind("speech_input"):
         if settings.source == "microphone":
-            checks.append(_timed_now(lambda name=name, s=settings: _microphone(name, s.device)))
+            checks.append(_timed_now(functools.partial(_microphone, name, settings.device)))
     return checks
 
 
@@ -340,7 +341,7 @@ class GraphDoctor:
 
     def _base_waits(self, api: BaseApi) -> list[Awaitable[Judge]]:
         fix = "start the base's node (ROSARNL on the Cyborg: docs/robot.md)"
-        waits = [self._pose(fix)]
+        waits: list[Awaitable[Judge]] = [self._pose(fix)]
         if api is BaseApi.NAV2:
             waits.append(self._base_action(topics.NAVIGATE_TO_POSE, NavigateToPoseAction, fix))
         else:

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from cyborg.errors import CyborgError
+from cyborg.run.middleware import Middleware
 
 __all__ = ["SYSTEMD_RUN_DIR", "Service", "require_systemd", "unit_text"]
 
@@ -90,18 +91,20 @@ def unit_text(
     return "\n".join(lines)
 
 
-def launch_command(config: Path, data_dir: Path, ros2: bool, port: int) -> list[str]:
+def launch_command(config: Path, data_dir: Path, middleware: Middleware, port: int) -> list[str]:
     """``cyborg launch`` by this Python, with absolute paths (a unit has no working directory)."""
     command = [sys.executable, "-m", "cyborg.cli", "launch", "--config", str(config.resolve())]
     command += ["--db", str(data_dir.resolve()), "--port", str(port)]
-    return [*command, "--ros2"] if ros2 else command
+    return [*command, *middleware.node_arguments]
 
 
 def carried_environment(data_dir: Path, source: Mapping[str, str] | None = None) -> dict[str, str]:
     """What the unit's process needs of this shell's environment."""
     env = os.environ if source is None else source
     carried = {
-        key: value for key, value in env.items() if value and (key in CARRIED or key.startswith(CARRIED_PREFIXES))
+        key: value
+        for key, value in env.items()
+        if value and (key in CARRIED or key.startswith(CARRIED_PREFIXES))
     }
     carried["PATH"] = os.pathsep.join(
         [str(Path(sys.executable).parent), "/usr/local/bin", "/usr/bin", "/bin"]

@@ -33,7 +33,8 @@ def ros1_graph(uri: str | None = None) -> GraphView:
     """The graph of the master at ``uri`` (default ROS_MASTER_URI); raises OSError and
     xmlrpc errors when the master does not answer."""
     master = master_proxy(uri)
-    code, message, state = master.getSystemState(CALLER)  # type: ignore[misc]
+    reply: Any = master.getSystemState(CALLER)
+    code, message, state = reply
     if code != 1:
         raise OSError(f"the ROS master refused getSystemState: {message}")
     publishes: dict[str, set[str]] = defaultdict(set)
@@ -47,7 +48,8 @@ def ros1_graph(uri: str | None = None) -> GraphView:
 
     def lookup(name: str) -> bool:
         try:
-            code, _, node_uri = master_proxy(uri).lookupNode(CALLER, "/" + name)  # type: ignore[misc]
+            found: Any = master_proxy(uri).lookupNode(CALLER, "/" + name)
+            code, _, node_uri = found
         except UNREACHABLE:
             return False
         return code == 1 and _answers(node_uri)
