@@ -20,8 +20,9 @@ from cyborg.errors import CyborgError
 @click.option("--ros2", "graph", flag_value="ros2", help="also check the ROS 2 graph of ROS_DOMAIN_ID")
 @click.option("--json", "as_json", is_flag=True, help="print the checks as JSON (for scripts)")
 def doctor(config_path: Path | None, data_dir: Path | None, graph: str | None, as_json: bool) -> None:
-    """Check this machine (and with --ros/--ros2 the running graph) against the configuration:
-    one line per check, passed or failed with the fix; exit 0 only when all pass."""
+    """Check this machine (and with --ros/--ros2 the running graph) against the configuration.
+
+    One line per check, passed or failed with the fix; exit 0 only when all pass."""
     from cyborg.run.middleware import ROS1, ROS2
 
     middleware = {"ros1": ROS1, "ros2": ROS2}.get(graph or "")

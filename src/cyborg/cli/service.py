@@ -22,7 +22,9 @@ _user_help = "a user unit (~/.config/systemd/user; runs while you are logged in,
 
 @click.group("service")
 def service_group() -> None:
-    """Start the robot when the computer boots: a systemd unit that runs `cyborg launch`."""
+    """Start the robot when the computer boots: install, status or uninstall a systemd unit.
+
+    The unit runs `cyborg launch` (docs/robot.md)."""
 
 
 @service_group.command("install")
