@@ -40,7 +40,9 @@ def test_the_bring_up_guide_commands_that_can_run_here_do(tmp_path: Path) -> Non
     done = subprocess.run(
         ["bash", "-c", script], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=180
     )
-    assert done.returncode == 0, f"a command of {DOC.name} failed:\n{done.stdout[-3000:]}\n{done.stderr[-3000:]}"
+    assert done.returncode == 0, (
+        f"a command of {DOC.name} failed:\n{done.stdout[-3000:]}\n{done.stderr[-3000:]}"
+    )
     out = done.stdout
     assert "robot.yaml: valid" in out and "all checks passed" in out
     assert "cafeteria" in out  # the imported places, and the lunch at the cafeteria

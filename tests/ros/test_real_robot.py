@@ -173,8 +173,12 @@ def test_the_real_robot_guides_a_person_with_a_rospy_base_and_the_doctor_names_w
     speech.publish(String(data="yes"))
     changes.wait_state("navigation_moving", event="navigation_start_moving", after=mark, timeout=20)
     changes.wait_state("navigation_talking", event="succeeded", after=mark, timeout=30)
-    last = poses.heard[-1].message.pose.pose.position
-    assert math.dist((last.x, last.y), cafeteria.position) < 0.5, "the base did not get to the cafeteria"
+
+    def at_cafeteria(heard: Any) -> bool:
+        position = heard.message.pose.pose.position
+        return math.dist((position.x, position.y), cafeteria.position) < 0.5
+
+    poses.wait_for(at_cafeteria, timeout=10, what="the base's pose at the cafeteria")
     assert {h.sender for h in spoken.since(said)} == {"cyborg_tts"}
 
     # Each part taken away is named by the doctor, each run well within 10 s.
@@ -189,7 +193,7 @@ def test_the_real_robot_guides_a_person_with_a_rospy_base_and_the_doctor_names_w
         assert named in failed, failed
         assert "fix: start" in failed[named] or "fix: start the base" in failed[named], failed[named]
         # Its own time (joining the graph and every check; the interpreter's start is the machine's).
-        spent = sum(c["seconds"] for c in report["checks"])
+        spent = report["seconds"]
         assert spent < 10.0, f"the doctor took {spent:.1f} s to name {victim.name}"
         print(f"doctor without {victim.name}: {spent:.1f} s of checks, {took:.1f} s in all")
     assert "configured nodes" in failed and "cyborg_joke" in failed["configured nodes"]

@@ -109,6 +109,8 @@ class DoctorReport:
     """Every check, in the order they are printed."""
 
     checks: list[Check] = field(default_factory=list)
+    seconds: float = 0.0
+    """How long the doctor took in all (its graph checks run side by side)."""
 
     @property
     def passed(self) -> bool:
@@ -120,13 +122,16 @@ class DoctorReport:
     def text(self) -> str:
         failed = len(self.failed())
         summary = "all checks passed" if not failed else f"{failed} of {len(self.checks)} checks failed"
+        summary += f" ({self.seconds:.1f} s)"
         return "\n".join([*(check.line() for check in self.checks), summary])
 
     def to_json(self) -> str:
         checks = [
             {**asdict(c), "status": c.status.value, "seconds": round(c.seconds, 3)} for c in self.checks
         ]
-        return json.dumps({"passed": self.passed, "checks": checks}, indent=2)
+        return json.dumps(
+            {"passed": self.passed, "seconds": round(self.seconds, 3), "checks": checks}, indent=2
+        )
 
 
 Judge = Callable[[GraphView], Check]
@@ -474,6 +479,13 @@ class GraphDoctor:
 
 def run_doctor(config: LoadedConfig, middleware: Middleware | None, data_dir: Path) -> DoctorReport:
     """Check the machine, and with ``middleware`` its graph, against ``config``."""
+    started = time.monotonic()
+    report = _checks(config, middleware, data_dir)
+    report.seconds = time.monotonic() - started
+    return report
+
+
+def _checks(config: LoadedConfig, middleware: Middleware | None, data_dir: Path) -> DoctorReport:
     report = DoctorReport()
     started = time.monotonic()
     try:
