@@ -15,10 +15,13 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from tests.support.paths import ROOT
 from tests.support.sound import alsa_home
 
 DOC = ROOT / "docs" / "robot.md"
+pytestmark = pytest.mark.slow  # a dozen `cyborg` processes: about 15 s
 
 
 def sh_blocks(text: str) -> list[str]:
