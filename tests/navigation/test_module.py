@@ -116,11 +116,12 @@ class Cyborg:
         seed: int = 1,
         map_path: Path | None = None,
         kinds: dict[str, ModuleKind[typing.Any]] | None = None,
+        config: LoadedConfig | None = None,
     ) -> None:
         self.clock = clock
         self.transport = EmbeddedTransport(clock)
         self.robot = build_robot(
-            small_config(),
+            config or small_config(),
             self.transport,
             data_dir=data_dir,
             seed=seed,

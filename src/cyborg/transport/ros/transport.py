@@ -40,6 +40,7 @@ from cyborg.transport.base import (
     normalize_node_name,
 )
 from cyborg.transport.clock import Clock
+from cyborg.transport.graph import GraphView
 from cyborg.transport.lockstep import LockstepClock
 from cyborg.transport.messages import ActionType, ServiceType
 from cyborg.transport.ros import patches
@@ -109,6 +110,12 @@ class RosTransport(Transport):
         from cyborg.transport.ros.connections import wait_for_connections
 
         return [f"{missing} on {missing.topic}" for missing in wait_for_connections(timeout)]
+
+    def graph(self) -> GraphView:
+        """The master's graph, each node asked whether it answers (see :mod:`.graph`)."""
+        from cyborg.transport.ros.graph import ros1_graph
+
+        return ros1_graph()
 
     def subscribers_of(self, topic: str) -> list[str]:
         """The nodes the master lists as subscribers of ``topic`` (empty if it does not answer)."""

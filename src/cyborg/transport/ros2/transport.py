@@ -64,6 +64,7 @@ from cyborg.transport.base import (
     Transport,
 )
 from cyborg.transport.clock import Clock
+from cyborg.transport.graph import GraphNode, GraphView
 from cyborg.transport.lockstep import LockstepClock
 from cyborg.transport.messages import ActionType, ServiceType
 from cyborg.transport.ros2.actions import Ros2ActionClient, Ros2ActionServer
@@ -298,6 +299,29 @@ class Ros2Transport(Transport):
     def wake(self) -> None:
         """Wake the executor, so that it takes up what another thread made or finished."""
         self.executor.wake()
+
+    def graph(self) -> GraphView:
+        """Every node discovery shows now (this process's hidden probe left out), with what it
+        publishes, subscribes and serves; actions show as their hidden ``_action`` topics and services."""
+        probe = self._graph_probe()
+        nodes: dict[str, GraphNode] = {}
+        for name, namespace in probe.get_node_names_and_namespaces():
+            if (name, namespace) == (probe.get_name(), probe.get_namespace()):
+                continue
+            try:
+                pubs = probe.get_publisher_names_and_types_by_node(name, namespace)
+                subs = probe.get_subscriber_names_and_types_by_node(name, namespace)
+                srvs = probe.get_service_names_and_types_by_node(name, namespace)
+            except Exception:  # gone between the two calls (rclpy raises NodeNameNonExistentError)
+                continue
+            full = f"{namespace.rstrip('/')}/{name}".lstrip("/")
+            nodes[full] = GraphNode(
+                full,
+                frozenset(t for t, _ in pubs),
+                frozenset(t for t, _ in subs),
+                frozenset(t for t, _ in srvs),
+            )
+        return GraphView(nodes)
 
     def subscribers_of(self, topic: str) -> list[str]:
         """The nodes the graph knows as subscribers of ``topic`` (discovery may lag a moment)."""
