@@ -254,6 +254,11 @@ class Launch:
                     f"({server.deltas} of them delta cycles); nodes woken most: "
                     + ", ".join(f"{name} {count}" for name, count in server.woken.most_common(4))
                     + (f"; written off: {dict(server.written_off)}" if server.written_off else "")
+                    + (
+                        f"; not lockstepped: {', '.join(sorted(server.foreign_seen))}"
+                        if server.foreign_seen
+                        else ""
+                    )
                 )
             if self._graph is not None:
                 self._graph.close()
