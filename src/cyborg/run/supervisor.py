@@ -33,7 +33,7 @@ from cyborg.app.parts import API, CONTROLLER
 from cyborg.errors import CyborgError
 from cyborg.run.lockstep import TimeServer
 from cyborg.run.middleware import ROS1, LaunchGraph, Middleware, exit_description
-from cyborg.run.simtime import EPOCH_MARGIN, READY_TIMEOUT, Rendezvous, clock_owner_of
+from cyborg.run.simtime import EPOCH_MARGIN, READY_TIMEOUT, Rendezvous, check_virtual_time, clock_owner_of
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, NS
 
 __all__ = ["Launch", "launch"]
@@ -78,6 +78,10 @@ class Launch:
     _started_at: dict[str, float] = field(default_factory=dict)
     _respawn_delay: dict[str, float] = field(default_factory=dict)
     _respawn_at: dict[str, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.speed is not None or self.lockstep:
+            check_virtual_time(self.config)
 
     def command(self, name: str, clock_owner: str | None, *, fresh: bool = True) -> list[str]:
         """The command line of part ``name``'s process."""
