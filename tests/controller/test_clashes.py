@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import random
 from pathlib import Path
 
 import pytest
@@ -10,6 +11,8 @@ from click.testing import CliRunner
 from cyborg.app.config import parse_config
 from cyborg.cli import cli
 from cyborg.controller.clashes import explore
+from cyborg.controller.machine import ABORTED, SUCCEEDED
+from cyborg.controller.regions import Regions
 from cyborg.errors import ConfigError
 
 # The behaviour region needs two steps to reach music (idle -> chat -> music) or one via
@@ -143,3 +146,55 @@ def test_cyborg_validate_reports_the_clash_and_exits_one(tmp_path: Path) -> None
         "parallel state(s): 9 combinations of their regions' states reachable, no exclusive clash"
         in result.output
     )
+
+
+def _naive_reachable(text: str) -> set[tuple[str, ...]]:
+    """Every configuration reached by stepping with Regions.step, the controller's own rule."""
+    machine = parse_config(text).machine
+    regions = Regions(machine)
+    start = regions.configuration(machine.enter(machine.initial))
+    seen, queue = {start}, [start]
+    events = {e for leaf in machine.leaves() for e in machine.transitions_of(leaf.name)} | {
+        SUCCEEDED,
+        ABORTED,
+    }
+    while queue:
+        config = queue.pop()
+        steps = [regions.step(config, e) for e in events]
+        for leaf in config:
+            steps += [
+                regions.step(config, r, leaf) or regions.step(config, ABORTED, leaf)
+                for r in (SUCCEEDED, ABORTED)
+            ]
+        for step in steps:
+            if step is not None and step.leaves not in seen:
+                seen.add(step.leaves)
+                queue.append(step.leaves)
+    return seen
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_the_check_reaches_exactly_what_the_controller_can(seed: int) -> None:
+    rng = random.Random(seed)
+    alphabet = ["a", "b", "c", "d", "stop", "aborted", "succeeded"]
+
+    def region(prefix: str, count: int, priority: int) -> str:
+        lines = [f"      {prefix}:", f"        priority: {priority}", "        states:"]
+        for i in range(count):
+            targets = [f"{prefix}{rng.randrange(count)}" for _ in range(3)]
+            if rng.random() < 0.2:
+                targets[0] = "idle"  # a region's transition out of the parallel state
+            events = rng.sample(alphabet, 3)
+            moves = ", ".join(f"{e}: {t}" for e, t in zip(events, targets, strict=True))
+            lines.append(f"          {prefix}{i}: {{action: m/{prefix}{i}, transitions: {{{moves}}}}}")
+        return "\n".join(lines)
+
+    text = (
+        "states:\n  idle: {action: m/idle, transitions: {go: busy, a: x1, aborted: idle}}\n"
+        "  busy:\n    parallel: true\n    transitions: {stop: idle, aborted: idle}\n    states:\n"
+        f"{region('x', 6, 1)}\n{region('y', 5, 2)}\n{region('z', 3, 3)}\n"
+    )
+    expected = _naive_reachable(text)
+    found = explore(parse_config(text).machine)
+    assert found.configurations == len(expected)
+    assert found.parallel_configurations == sum(1 for c in expected if len(c) > 1)

@@ -10,6 +10,7 @@ first, so the trace reported for each clash is a shortest one. Pure: no I/O.
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 from cyborg.controller.machine import ABORTED, SUCCEEDED, MachineSpec, ResourcePolicy
@@ -55,53 +56,133 @@ class Exploration:
 def explore(machine: MachineSpec, regions: Regions | None = None) -> Exploration:
     """Every reachable configuration, and each distinct exclusive clash with a shortest trace."""
     regions = regions or Regions(machine)
-    start = regions.configuration(machine.enter(machine.initial))
     if not regions.parallels:
         return Exploration(configurations=len(machine.reachable()), parallel_configurations=0, clashes=())
-    events = {leaf.name: tuple(machine.transitions_of(leaf.name)) for leaf in machine.leaves()}
-    came_from: dict[_Config, tuple[_Config, str] | None] = {start: None}
+    tables = _Tables(machine, regions)
+    start = regions.configuration(machine.enter(machine.initial))
+    came_from: dict[_Config, tuple[_Config, str, str | None] | None] = {start: None}
     queue: deque[_Config] = deque([start])
     clashes: dict[tuple[str, _Config], Clash] = {}
     in_parallel = 0
-    while queue:
-        config = queue.popleft()
-        if len(config) > 1 or regions.parallel_of(config[0]) is not None:
+    exclusive = tables.exclusive
+    for config in _drain(queue):
+        if len(config) > 1:
             in_parallel += 1
-            _record_clashes(machine, regions, config, came_from, clashes)
-        for label, following in _successors(regions, config, events):
-            if following not in came_from:
-                came_from[following] = (config, label)
-                queue.append(following)
+            held: set[str] = set()
+            for leaf in config:
+                mine = exclusive.get(leaf)
+                if mine:
+                    if not held.isdisjoint(mine):
+                        _record_clashes(machine, regions, config, came_from, clashes)
+                        break
+                    held |= mine
+            for event, source, following in tables.successors(config):
+                if following not in came_from:
+                    came_from[following] = (config, event, source)
+                    queue.append(following)
+        else:
+            for event, following in tables.plain[config[0]]:
+                if following not in came_from:
+                    came_from[following] = (config, event, None)
+                    queue.append(following)
     return Exploration(len(came_from), in_parallel, tuple(clashes.values()))
 
 
-def _successors(
-    regions: Regions, config: _Config, events: dict[str, tuple[str, ...]]
-) -> list[tuple[str, _Config]]:
-    out: list[tuple[str, _Config]] = []
-    seen: set[str] = set()
-    for leaf in config:
-        for event in events[leaf]:
-            if event in seen:
+def _drain(queue: deque[_Config]) -> Iterator[_Config]:
+    while queue:
+        yield queue.popleft()
+
+
+class _Tables:
+    """Each leaf's moves, precomputed so that stepping a configuration is a few dictionary lookups.
+
+    They give what :meth:`Regions.step` gives (tests/controller/test_clashes.py compares them).
+    """
+
+    def __init__(self, machine: MachineSpec, regions: Regions) -> None:
+        self.plain: dict[str, list[tuple[str, _Config]]] = {}
+        # leaf in a region -> event -> its region's next leaf (str), or the configuration left for (tuple)
+        self.inner: dict[str, dict[str, str | _Config]] = {}
+        self.outer: dict[str, dict[str, _Config]] = {}  # parallel state -> event -> configuration
+        self.exclusive: dict[str, frozenset[str]] = {}
+        for leaf in machine.leaves():
+            name = leaf.name
+            parallel = regions.parallel_of(name)
+            if parallel is None:
+                self.plain[name] = [
+                    (event, regions.configuration(target))
+                    for event, target in machine.transitions_of(name).items()
+                ]
                 continue
-            seen.add(event)
-            step = regions.step(config, event)
-            if step is not None:
-                out.append((event, step.leaves))
-    if len(config) > 1:  # a module's result goes to its own region only (elsewhere it is an event above)
-        for leaf in config:
+            region = regions.region_of(name)
+            assert region is not None
+            table: dict[str, str | _Config] = {}
+            for event, target in regions.inner_transitions(name).items():
+                entered = machine.enter(target)
+                table[event] = entered if regions.inside(target, region) else regions.configuration(entered)
+            self.inner[name] = table
+            self.exclusive[name] = frozenset(
+                r for r in regions.inner_resources(name) if machine.policy(r) is ResourcePolicy.EXCLUSIVE
+            )
+            if parallel not in self.outer:
+                self.outer[parallel] = {
+                    event: regions.configuration(machine.enter(target))
+                    for event, target in regions.outer_transitions(parallel).items()
+                }
+        self.parallel_of = {leaf: regions.parallel_of(leaf) for leaf in self.inner}
+
+    def successors(self, config: _Config) -> list[tuple[str, str | None, _Config]]:
+        """(event, the leaf whose module's result it is or None, next configuration) of a parallel one."""
+        inner = [self.inner[leaf] for leaf in config]
+        outer = self.outer[self.parallel_of[config[0]]]  # type: ignore[index]
+        out: list[tuple[str, str | None, _Config]] = []
+        events: dict[str, None] = {}  # ordered: the traces found must not depend on string hashing
+        for table in inner:
+            events.update(dict.fromkeys(table))
+        events.update(dict.fromkeys(outer))
+        for event in events:
+            following = self._step(config, inner, outer, event)
+            if following is not None:
+                out.append((event, None, following))
+        for index, leaf in enumerate(config):  # a module's result goes to its own region only
+            own = [inner[index]]
             for result in (SUCCEEDED, ABORTED):
-                step = regions.step(config, result, leaf) or regions.step(config, ABORTED, leaf)
-                if step is not None:
-                    out.append((f"{leaf}: {result}", step.leaves))
-    return out
+                following = self._step(config, own, outer, result, index)
+                if following is None:
+                    following = self._step(config, own, outer, ABORTED, index)
+                if following is not None:
+                    out.append((result, leaf, following))
+        return out
+
+    @staticmethod
+    def _step(
+        config: _Config,
+        inner: list[dict[str, str | _Config]],
+        outer: dict[str, _Config],
+        event: str,
+        only: int | None = None,
+    ) -> _Config | None:
+        moved: list[str] | None = None
+        for position, table in enumerate(inner):
+            target = table.get(event)
+            if target is None:
+                continue
+            if isinstance(target, tuple):
+                return target  # the highest-priority region leaving the parallel state wins
+            index = position if only is None else only
+            if moved is None:
+                moved = list(config)
+            moved[index] = target
+        if moved is not None:
+            return tuple(moved)
+        return outer.get(event)
 
 
 def _record_clashes(
     machine: MachineSpec,
     regions: Regions,
     config: _Config,
-    came_from: dict[_Config, tuple[_Config, str] | None],
+    came_from: dict[_Config, tuple[_Config, str, str | None] | None],
     clashes: dict[tuple[str, _Config], Clash],
 ) -> None:
     for resource, holding in regions.holders(config).items():
@@ -122,11 +203,13 @@ def _record_clashes(
         )
 
 
-def _trace(came_from: dict[_Config, tuple[_Config, str] | None], config: _Config) -> tuple[str, ...]:
+def _trace(
+    came_from: dict[_Config, tuple[_Config, str, str | None] | None], config: _Config
+) -> tuple[str, ...]:
     labels: list[str] = []
     link = came_from[config]
     while link is not None:
-        config, label = link
-        labels.append(label)
+        config, event, source = link
+        labels.append(event if source is None else f"{source}: {event}")
         link = came_from[config]
     return tuple(reversed(labels))

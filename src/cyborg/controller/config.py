@@ -173,6 +173,9 @@ MACHINE_KEYS = KeyRules(
 """Duplicate-key advice for the robot's YAML (a state twice, an event twice in a state...)."""
 
 
+MAX_CLASHES_SHOWN = 20
+"""Exclusive-resource clashes listed one by one (the shortest traces first); the rest are counted."""
+
 # --- the machine ----------------------------------------------------------------------
 
 
@@ -241,9 +244,15 @@ def build_machine(
         raise ConfigError(problems, source=source)
     clashes = explore(machine).clashes
     if clashes:
-        raise ConfigError(
-            [f"{where(states, clash.parallel)}{clash.describe()}" for clash in clashes], source=source
-        )
+        shown = [
+            f"{where(states, clash.parallel)}{clash.describe()}" for clash in clashes[:MAX_CLASHES_SHOWN]
+        ]
+        if len(clashes) > MAX_CLASHES_SHOWN:
+            shown.append(
+                f"... and {len(clashes) - MAX_CLASHES_SHOWN} more pairs of states clash on exclusive "
+                f"resources ({', '.join(sorted({c.resource for c in clashes}))}); fix: as above"
+            )
+        raise ConfigError(shown, source=source)
     reachable = machine.reachable()
     warnings = [
         f"{source}: {where(states, name)}state {name!r} is unreachable from {model.initial!r}: "

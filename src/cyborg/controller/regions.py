@@ -120,6 +120,18 @@ class Regions:
         mine = self._region_of[leaf]
         return tuple(leaf if r == mine else self.machine.enter(r) for r in self._regions[parallel])
 
+    def inner_transitions(self, leaf: str) -> dict[str, str]:
+        """Transitions of a region's ``leaf`` and its superstates up to the region: event -> target."""
+        return self._inner[leaf]
+
+    def inner_resources(self, leaf: str) -> dict[str, str]:
+        """Resources a region's ``leaf`` holds as that region's (its own and up to the region)."""
+        return self._inner_resources[leaf]
+
+    def outer_transitions(self, parallel: str) -> dict[str, str]:
+        """Transitions of ``parallel`` itself and its superstates: event -> target."""
+        return self._outer[parallel]
+
     def inside(self, state: str, region: str) -> bool:
         """Whether ``state`` is ``region`` or nested in it."""
         current: str | None = state

@@ -508,9 +508,8 @@ class Controller:
                     listener(change)
                 except Exception:
                     log.exception("state listener failed")
-        sent = await asyncio.gather(
-            *(self._send_goal(slots[i].leaf, event, previous[i], slots[i].seq) for i in indices)
-        )
+        sends = [self._send_goal(slots[i].leaf, event, previous[i], slots[i].seq) for i in indices]
+        sent = [await sends[0]] if len(sends) == 1 else await asyncio.gather(*sends)
         now = self.node.clock.monotonic()
         for i, handle in zip(indices, sent, strict=True):
             slots[i].sent_at = now
@@ -523,24 +522,30 @@ class Controller:
 
     async def _cancel_slots(self, slots: list[_Slot], indices: Iterable[int]) -> None:
         """Cancel these regions' goals at once; wait for them all, at most the preempt timeout."""
-        waiting: list[tuple[str, asyncio.Task[GoalStatus]]] = []
+        cancelled: list[tuple[str, _Handle]] = []
         for i in indices:
             slot = slots[i]
             slot.seq = 0  # its result no longer counts
             if slot.goal is not None and not slot.goal.status.is_terminal:
                 slot.goal.cancel()
-                waiting.append((slot.leaf, asyncio.ensure_future(slot.goal.wait())))
-        if not waiting:
+                cancelled.append((slot.leaf, slot.goal))
+        if not cancelled:
             return
-        _, pending = await asyncio.wait([task for _, task in waiting], timeout=self.machine.timeouts.preempt)
-        for leaf, task in waiting:
-            if task in pending:
+        preempt = self.machine.timeouts.preempt
+        if len(cancelled) == 1:
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(cancelled[0][1].wait(), preempt)
+        else:
+            waits = [asyncio.ensure_future(goal.wait()) for _, goal in cancelled]
+            for task in (await asyncio.wait(waits, timeout=preempt))[1]:
                 task.cancel()
+        for leaf, goal in cancelled:
+            if not goal.status.is_terminal:
                 self.stats.preempt_timeouts += 1
                 log.warning(
                     "module of %s did not acknowledge the cancel within %.1f s; handing over anyway",
                     leaf,
-                    self.machine.timeouts.preempt,
+                    preempt,
                 )
 
     def _share_mutes(self, mutes: list[Mute]) -> None:
