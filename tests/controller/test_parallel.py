@@ -8,12 +8,14 @@ arbitrated: the monitor's greet wins and music is muted.
 from __future__ import annotations
 
 import json
+from pathlib import Path
 from typing import Any
 
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from cyborg.app.config import parse_config
+from cyborg.app.config import load_config, packaged_config, parse_config
+from cyborg.app.robot import build_robot
 from cyborg.controller.runtime import Controller
 from cyborg.modules.behaviour import BehaviourModule, GoalContext
 from cyborg.modules.gatekeeper import Gatekeeper
@@ -264,3 +266,35 @@ def test_two_regions_wanting_the_speaker_never_both_pass(script: list[tuple[floa
 def _speaker_holder(config: tuple[str, ...]) -> str | None:
     """Who may speak: greet over music (the monitor region outranks the behaviour region)."""
     return "greet" if "greet" in config else "music" if "music" in config else None
+
+
+def test_the_packaged_monitor_robot_warns_about_the_battery_over_whatever_it_is_doing(
+    clock: VirtualClock, tmp_path: Path
+) -> None:
+    transport = EmbeddedTransport(clock)
+    robot = build_robot(load_config(packaged_config("monitor.yaml")), transport, data_dir=tmp_path)
+    listener = transport.node("listener")
+    said: list[tuple[float, str]] = []
+    dropped: list[dict[str, Any]] = []
+    listener.subscribe("/cyborg_tts/say", String, lambda m, i: said.append((clock.monotonic(), m.data)))
+    listener.subscribe(topics.GATEKEEPER_DROPPED, String, lambda m, i: dropped.append(json.loads(m.data)))
+    events = listener.publisher(topics.REGISTER_EVENT, String)
+
+    async def main() -> None:
+        await clock.sleep(5)  # nothing from the stand-ins yet (their first events come at 12 and 40 s)
+        events.publish(String("battery_low"))
+        await clock.sleep(1)
+        events.publish(String("music_play"))  # during the warning: the tune's sentence is muted
+        await clock.sleep(84)
+
+    robot.start()
+    try:
+        clock.run(main())
+    finally:
+        robot.close()
+    warnings = [at for at, text in said if "battery is getting low" in text]
+    assert warnings[0] == 5 and len(warnings) == 3  # ours, then the sensor stand-in's at 40 and 80 s
+    assert dropped[0]["sender"] == "cyborg_music" and dropped[0]["holder"] == "cyborg_battery"
+    assert any("little tune" in text for _, text in said) and any("cafeteria" in text for _, text in said)
+    assert {d["holder"] for d in dropped} == {"cyborg_battery"}
+    assert robot.controller.stats.resource_mutes >= 1
