@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 from cyborg.controller.machine import MachineSpec, ResourcePolicy
 
-__all__ = ["Mute", "Regions", "ResourcePolicy", "Step"]
+__all__ = ["Lanes", "Mute", "Regions", "ResourcePolicy", "Step"]
 
 
 @dataclass(frozen=True)
@@ -217,3 +217,50 @@ def _merged(machine: MachineSpec, name: str, stop: str | None, key: str) -> dict
         for k, v in values.items():
             merged.setdefault(k, v)
     return merged
+
+
+class Lanes:
+    """The active state of each region, followed from ``state_change`` messages alone.
+
+    A change into a region's state updates that region's lane (the others keep theirs); a change
+    into a state outside every parallel state ends the lanes. Works the same in process and over
+    ROS, where the controller's configuration is not on the wire (docs/parallel.md).
+    """
+
+    def __init__(self, regions: Regions) -> None:
+        self.regions = regions
+        self.parallel: str | None = None
+        self.states: dict[str, str] = {}  # region -> its active state
+        self.since: dict[str, float] = {}  # region -> when it entered that state
+
+    def on_change(self, state: str, now: float) -> None:
+        parallel = self.regions.parallel_of(state)
+        if parallel is None:
+            self.parallel, self.states, self.since = None, {}, {}
+            return
+        if parallel != self.parallel:
+            self.parallel, self.states, self.since = parallel, {}, {}
+        region = self.regions.region_of(state)
+        assert region is not None
+        self.states[region] = state
+        self.since[region] = now
+
+    def report(self, now: float) -> list[dict[str, object]]:
+        """One entry per region, highest priority first: its state, time in it, muted resources."""
+        if self.parallel is None:
+            return []
+        order = self.regions.regions(self.parallel)
+        leaves = tuple(self.states.get(r) or self.regions.machine.enter(r) for r in order)
+        _, mutes = self.regions.arbitrate(leaves)
+        states = self.regions.machine.states
+        return [
+            {
+                "region": region,
+                "priority": states[region].priority,
+                "state": self.states.get(region),
+                "seconds_in_state": round(now - self.since[region], 1) if region in self.since else None,
+                "muted": sorted(m.resource for m in mutes if m.region == region),
+                "holds": sorted(self.regions.inner_resources(leaf)),
+            }
+            for region, leaf in zip(order, leaves, strict=True)
+        ]
