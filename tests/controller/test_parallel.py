@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from cyborg.app.config import load_config, packaged_config, parse_config
 from cyborg.app.robot import build_robot
 from cyborg.controller.runtime import Controller
-from cyborg.modules.behaviour import BehaviourModule, GoalContext
+from cyborg.modules.behaviour import Abort, BehaviourModule, GoalContext
 from cyborg.modules.gatekeeper import Gatekeeper
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo
@@ -298,3 +298,50 @@ def test_the_packaged_monitor_robot_warns_about_the_battery_over_whatever_it_is_
     assert any("little tune" in text for _, text in said) and any("cafeteria" in text for _, text in said)
     assert {d["holder"] for d in dropped} == {"cyborg_battery"}
     assert robot.controller.stats.resource_mutes >= 1
+
+
+FLAKY_REGION = """
+initial: busy
+timeouts: {connect: 1.0, preempt: 0.5}
+states:
+  busy:
+    parallel: true
+    states:
+      steady:
+        priority: 1
+        states:
+          s1: {action: steady_node/run, transitions: {aborted: s1}}
+      flaky:
+        priority: 2
+        states:
+          f1: {action: flaky_node/run, transitions: {aborted: f1}}
+          f2: {action: nobody/here, transitions: {aborted: f1}}
+"""
+
+
+def test_a_region_whose_module_fails_at_once_is_retried_once_per_connect_timeout_and_spares_the_other(
+    clock: VirtualClock,
+) -> None:
+    transport = EmbeddedTransport(clock)
+    goals: list[tuple[str, float]] = []
+    steady = BehaviourModule(transport.node("steady_node"))
+    flaky = BehaviourModule(transport.node("flaky_node"))
+
+    async def forever(ctx: GoalContext) -> None:
+        goals.append(("s1", clock.monotonic()))
+        await ctx.wait_forever()
+
+    async def fails(ctx: GoalContext) -> None:
+        goals.append(("f1", clock.monotonic()))
+        raise Abort("no battery reading")
+
+    steady.serve("steady_node/run", forever)
+    flaky.serve("flaky_node/run", fails)
+    controller = Controller(transport.node("cyborg_controller"), parse_config(FLAKY_REGION).machine)
+    controller.start()
+    clock.run(clock.sleep(4.5))
+    assert [g for g, _ in goals].count("s1") == 1, "the steady region keeps its one goal"
+    tries = [at for g, at in goals if g == "f1"]
+    assert len(tries) == 5  # at 0, 1, 2, 3 and 4 s
+    assert all(b - a >= 1.0 for a, b in zip(tries, tries[1:], strict=False))
+    assert controller.stats.retries_delayed == 5  # each failure, the last one still waiting
