@@ -105,6 +105,7 @@ class _Tables:
         self.inner: dict[str, dict[str, str | _Config]] = {}
         self.outer: dict[str, dict[str, _Config]] = {}  # parallel state -> event -> configuration
         self.exclusive: dict[str, frozenset[str]] = {}
+        self.results: dict[str, list[tuple[str, str | _Config]]] = {}  # leaf -> its module's results
         for leaf in machine.leaves():
             name = leaf.name
             parallel = regions.parallel_of(name)
@@ -121,61 +122,54 @@ class _Tables:
                 entered = machine.enter(target)
                 table[event] = entered if regions.inside(target, region) else regions.configuration(entered)
             self.inner[name] = table
+            outer = self.outer.setdefault(
+                parallel,
+                {
+                    event: regions.configuration(machine.enter(target))
+                    for event, target in regions.outer_transitions(parallel).items()
+                },
+            )
+            results: list[tuple[str, str | _Config]] = []
+            for result in (SUCCEEDED, ABORTED):  # as Regions.step with the result's source, then 'aborted'
+                found = table.get(result) or outer.get(result) or table.get(ABORTED) or outer.get(ABORTED)
+                if found is not None:
+                    results.append((result, found))
+            self.results[name] = results
             self.exclusive[name] = frozenset(
                 r for r in regions.inner_resources(name) if machine.policy(r) is ResourcePolicy.EXCLUSIVE
             )
-            if parallel not in self.outer:
-                self.outer[parallel] = {
-                    event: regions.configuration(machine.enter(target))
-                    for event, target in regions.outer_transitions(parallel).items()
-                }
         self.parallel_of = {leaf: regions.parallel_of(leaf) for leaf in self.inner}
 
     def successors(self, config: _Config) -> list[tuple[str, str | None, _Config]]:
         """(event, the leaf whose module's result it is or None, next configuration) of a parallel one."""
-        inner = [self.inner[leaf] for leaf in config]
-        outer = self.outer[self.parallel_of[config[0]]]  # type: ignore[index]
         out: list[tuple[str, str | None, _Config]] = []
-        events: dict[str, None] = {}  # ordered: the traces found must not depend on string hashing
-        for table in inner:
-            events.update(dict.fromkeys(table))
-        events.update(dict.fromkeys(outer))
-        for event in events:
-            following = self._step(config, inner, outer, event)
-            if following is not None:
-                out.append((event, None, following))
-        for index, leaf in enumerate(config):  # a module's result goes to its own region only
-            own = [inner[index]]
-            for result in (SUCCEEDED, ABORTED):
-                following = self._step(config, own, outer, result, index)
-                if following is None:
-                    following = self._step(config, own, outer, ABORTED, index)
-                if following is not None:
-                    out.append((result, leaf, following))
-        return out
-
-    @staticmethod
-    def _step(
-        config: _Config,
-        inner: list[dict[str, str | _Config]],
-        outer: dict[str, _Config],
-        event: str,
-        only: int | None = None,
-    ) -> _Config | None:
-        moved: list[str] | None = None
-        for position, table in enumerate(inner):
-            target = table.get(event)
-            if target is None:
+        moves: dict[str, list[tuple[int, str | _Config]]] = {}  # in priority order: traces must not vary
+        for index, leaf in enumerate(config):
+            for event, target in self.inner[leaf].items():
+                taken = moves.get(event)
+                if taken is None:
+                    moves[event] = [(index, target)]
+                else:
+                    taken.append((index, target))
+        for event, taken in moves.items():
+            exit_to = next((t for _, t in taken if isinstance(t, tuple)), None)
+            if exit_to is not None:  # the highest-priority region leaving the parallel state wins
+                out.append((event, None, exit_to))
                 continue
-            if isinstance(target, tuple):
-                return target  # the highest-priority region leaving the parallel state wins
-            index = position if only is None else only
-            if moved is None:
-                moved = list(config)
-            moved[index] = target
-        if moved is not None:
-            return tuple(moved)
-        return outer.get(event)
+            moved = list(config)
+            for index, target in taken:
+                moved[index] = target  # type: ignore[assignment]  # a leaf, not an exit
+            out.append((event, None, tuple(moved)))
+        for event, target in self.outer[self.parallel_of[config[0]]].items():  # type: ignore[index]
+            if event not in moves:
+                out.append((event, None, target))
+        for index, leaf in enumerate(config):  # a module's result goes to its own region only
+            for result, result_target in self.results[leaf]:
+                if isinstance(result_target, tuple):
+                    out.append((result, leaf, result_target))
+                else:
+                    out.append((result, leaf, (*config[:index], result_target, *config[index + 1 :])))
+        return out
 
 
 def _record_clashes(
