@@ -202,7 +202,9 @@ def main() -> None:
     print("\n| handover | n | p50 | p99 |")
     print("|---|---|---|---|")
     for kind, values in result.items():
-        print(f"| {kind} | {len(values)} | {percentile(values, 50):.3f} ms | {percentile(values, 99):.3f} ms |")
+        print(
+            f"| {kind} | {len(values)} | {percentile(values, 50):.3f} ms | {percentile(values, 99):.3f} ms |"
+        )
     ratio = percentile(result["parallel"], 99) / percentile(result["plain"], 99)
     print(f"\nparallel / plain p99: {ratio:.2f}x")
 

@@ -7,6 +7,7 @@ arbitrated: the monitor's greet wins and music is muted.
 
 from __future__ import annotations
 
+import itertools
 import json
 from pathlib import Path
 from typing import Any
@@ -72,11 +73,14 @@ class World:
         self.seconds = seconds or {}
         self.speak_every = speak_every
         self.modules: list[BehaviourModule] = []
+        self.music_muted: list[frozenset[str]] = []
         for name in NODES:
             module = BehaviourModule(self.transport.node(name))
             speaker = module.node.publisher("/speaker_in", String)
             label = name.removesuffix("_node")
             module.serve(f"{name}/run", self._serve(label, speaker), honour_cancel=label not in stubborn)
+            if name == "music_node":
+                module.on_muted(self.music_muted.append)
             if name == "idle_node":
                 module.serve("idle_node/finished", self._serve("finished", speaker))
             self.modules.append(module)
@@ -175,6 +179,7 @@ def test_the_muted_module_is_not_heard_while_the_higher_priority_one_speaks(cloc
     world.run(until=0.5)  # greet succeeded (0.5 s): back to ok, music is heard again
     assert {who for at, who in world.heard if at > back} == {"music"}
     assert world.gatekeeper.stats.dropped_by_sender["music_node"] >= 3
+    assert world.music_muted == [frozenset({"speaker"}), frozenset()], "music learnt it was muted, then heard"
 
 
 def test_an_event_moves_every_region_that_takes_it_and_no_other(clock: VirtualClock) -> None:
@@ -343,5 +348,5 @@ def test_a_region_whose_module_fails_at_once_is_retried_once_per_connect_timeout
     assert [g for g, _ in goals].count("s1") == 1, "the steady region keeps its one goal"
     tries = [at for g, at in goals if g == "f1"]
     assert len(tries) == 5  # at 0, 1, 2, 3 and 4 s
-    assert all(b - a >= 1.0 for a, b in zip(tries, tries[1:], strict=False))
+    assert all(b - a >= 1.0 for a, b in itertools.pairwise(tries))
     assert controller.stats.retries_delayed == 5  # each failure, the last one still waiting
