@@ -488,6 +488,10 @@
     if (!s.state) return;
     const node = document.getElementById(`state:${s.state}`);
     if (node) node.classList.add("active");
+    // In a parallel state every region's state is in control (the lanes come with /api/health).
+    for (const lane of dash.health?.regions || []) {
+      if (lane.state) document.getElementById(`state:${lane.state}`)?.classList.add("active");
+    }
     for (let parent = dash.parents[s.state]; parent; parent = dash.parents[parent]) {
       const cluster = document.getElementById(`super:${parent}`);
       if (cluster) cluster.classList.add("active-parent");
@@ -599,7 +603,10 @@
       stats.append(chip);
     }
 
+    const lanesBefore = JSON.stringify(dash.lanes || []);
     renderRegions(health.regions || []);
+    dash.lanes = (health.regions || []).map((lane) => lane.state);
+    if (JSON.stringify(dash.lanes) !== lanesBefore && dash.status) highlightGraph();
 
     // A module that reports when its last feedback came shows its age; the others show when they were active.
     const withFeedback = health.modules.some((m) => m.seconds_since_feedback != null);
