@@ -216,27 +216,31 @@ def test_leaving_cancels_every_region_at_once_within_the_preempt_limit_even_if_o
     assert "greet stop" in world.log and "music stop" not in world.log
 
 
-def _finish_as_the_preempt_arrives() -> list[tuple[str, str, str]]:
+def _finish_as_the_preempt_arrives(after: float) -> list[tuple[str, str, str]]:
+    """greet's module ends 1 s after it started; ``stop`` (leave the parallel state) comes ``after`` that."""
     clock = VirtualClock()
     try:
         world = World(clock, seconds={"greet": 1.0})
         world.run((0.1, "go"), (0.1, "hello"), until=0.0)
         started = clock.monotonic()
-        clock.loop.call_at(started + 1.0, world.send, "stop")  # as greet's goal ends
+        clock.loop.call_at(started + 1.0 + after, world.send, "stop")
         world.run(until=2.0)
         assert world.controller.active_states == ("idle",)
-        assert world.log[-1] == "idle start"
-        return world.changes
+        assert world.log[-1] == "idle start" and world.log.count("idle start") == 2
+        return world.changes[4:]
     finally:
         clock.close()
 
 
 def test_a_preempt_arriving_as_a_region_finishes_ends_one_way_every_time() -> None:
-    first = _finish_as_the_preempt_arrives()
-    assert [c for c in first if c[2] == "idle"][1:] and first[-1][2] == "idle"
-    assert sum(1 for c in first if c[1] == "stop") == 1
+    result_first = [("greet", "succeeded", "ok"), ("ok", "stop", "idle")]
+    preempt_first = [("greet", "stop", "idle")]  # greet's result, come too late, is ignored
+    assert _finish_as_the_preempt_arrives(0.001) == result_first
+    assert _finish_as_the_preempt_arrives(-0.001) == preempt_first
+    same_instant = _finish_as_the_preempt_arrives(0.0)
+    assert same_instant in (result_first, preempt_first)
     for _ in range(3):
-        assert _finish_as_the_preempt_arrives() == first
+        assert _finish_as_the_preempt_arrives(0.0) == same_instant
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
