@@ -54,6 +54,9 @@ def test_each_region_has_a_lane_and_the_muted_one_says_so_in_process_and_from_st
                     ("monitor", 10, []),
                     ("behaviour", 1, []),
                 ]
+                async with session.get(here + "/api/status") as response:
+                    valid = (await response.json())["valid_events"]
+                assert {"battery_low", "music_play", "joke_tell"} <= set(valid), "any region's events"
                 events.publish(String("battery_low"))
                 await lanes(here, {"monitor": "battery_warning", "behaviour": "idle"})
                 events.publish(String("joke_tell"))
