@@ -198,3 +198,14 @@ def test_the_check_reaches_exactly_what_the_controller_can(seed: int) -> None:
     found = explore(parse_config(text).machine)
     assert found.configurations == len(expected)
     assert found.parallel_configurations == sum(1 for c in expected if len(c) > 1)
+
+
+def test_a_policy_for_a_resource_no_state_grants_is_a_warning_with_the_likely_name() -> None:
+    loaded = parse_config(
+        "resource_policy: {speakr: arbitrated}\n"
+        "states:\n  idle: {action: a/b, transitions: {aborted: idle}, resources: {speaker: n}}\n"
+    )
+    assert loaded.warnings == [
+        "<config>: line 1: resource_policy names 'speakr', which no state grants (did you mean "
+        "'speaker'?); fix: correct its spelling or remove it"
+    ]
