@@ -203,17 +203,21 @@ def test_a_modules_result_moves_only_its_own_region(clock: VirtualClock) -> None
 def test_leaving_cancels_every_region_at_once_within_the_preempt_limit_even_if_one_ignores_it(
     clock: VirtualClock,
 ) -> None:
-    world = World(clock, stubborn=frozenset({"music"}))
-    world.run((0.1, "go"), (0.1, "hello"))
-    left_at = clock.monotonic()
-    world.send("stop")
-    entered: list[float] = []
-    world.controller.add_state_listener(lambda change: entered.append(clock.monotonic()))
-    world.run(until=3 * PREEMPT)
-    assert world.changes[-1] == ("greet", "stop", "idle")
-    assert entered[0] - left_at <= PREEMPT + 0.01, "both regions waited for together, not one after the other"
-    assert world.controller.stats.preempt_timeouts == 1  # music ignored the cancel
-    assert "greet stop" in world.log and "music stop" not in world.log
+    for stubborn, timeouts in ((frozenset({"music"}), 1), (frozenset({"music", "greet"}), 2)):
+        world = World(clock, stubborn=stubborn)
+        world.run((0.1, "go"), (0.1, "hello"))
+        left_at = clock.monotonic()
+        world.send("stop")
+        entered: list[float] = []
+        world.controller.add_state_listener(lambda change, entered=entered: entered.append(clock.monotonic()))
+        world.run(until=3 * PREEMPT)
+        assert world.changes[-1] == ("greet", "stop", "idle")
+        assert entered[0] - left_at <= PREEMPT + 0.01, (
+            "the regions waited for together, not one after the other"
+        )
+        assert world.controller.stats.preempt_timeouts == timeouts  # one per module that ignored the cancel
+        assert ("greet stop" in world.log) == ("greet" not in stubborn) and "music stop" not in world.log
+        world.transport.shutdown()
 
 
 def _finish_as_the_preempt_arrives(after: float) -> list[tuple[str, str, str]]:
