@@ -200,24 +200,28 @@ def test_a_modules_result_moves_only_its_own_region(clock: VirtualClock) -> None
     assert world.log.count("music start") == 1  # never restarted
 
 
+def _leave_busy(clock: VirtualClock, stubborn: frozenset[str]) -> tuple[World, float]:
+    """Enter busy (greet and music), send stop: the world and how long until idle was entered."""
+    world = World(clock, stubborn=stubborn)
+    world.run((0.1, "go"), (0.1, "hello"))
+    left_at = clock.monotonic()
+    world.send("stop")
+    entered: list[float] = []
+    world.controller.add_state_listener(lambda change: entered.append(clock.monotonic()))
+    world.run(until=3 * PREEMPT)
+    world.transport.shutdown()
+    return world, entered[0] - left_at
+
+
 def test_leaving_cancels_every_region_at_once_within_the_preempt_limit_even_if_one_ignores_it(
     clock: VirtualClock,
 ) -> None:
     for stubborn, timeouts in ((frozenset({"music"}), 1), (frozenset({"music", "greet"}), 2)):
-        world = World(clock, stubborn=stubborn)
-        world.run((0.1, "go"), (0.1, "hello"))
-        left_at = clock.monotonic()
-        world.send("stop")
-        entered: list[float] = []
-        world.controller.add_state_listener(lambda change, entered=entered: entered.append(clock.monotonic()))
-        world.run(until=3 * PREEMPT)
+        world, took = _leave_busy(clock, stubborn)
         assert world.changes[-1] == ("greet", "stop", "idle")
-        assert entered[0] - left_at <= PREEMPT + 0.01, (
-            "the regions waited for together, not one after the other"
-        )
+        assert took <= PREEMPT + 0.01, "the regions are waited for together, not one after the other"
         assert world.controller.stats.preempt_timeouts == timeouts  # one per module that ignored the cancel
         assert ("greet stop" in world.log) == ("greet" not in stubborn) and "music stop" not in world.log
-        world.transport.shutdown()
 
 
 def _finish_as_the_preempt_arrives(after: float) -> list[tuple[str, str, str]]:
