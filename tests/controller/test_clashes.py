@@ -10,7 +10,7 @@ from click.testing import CliRunner
 
 from cyborg.app.config import parse_config
 from cyborg.cli import cli
-from cyborg.controller.clashes import explore
+from cyborg.controller.clashes import _Tables, explore
 from cyborg.controller.machine import ABORTED, SUCCEEDED
 from cyborg.controller.regions import Regions
 from cyborg.errors import ConfigError
@@ -148,33 +148,24 @@ def test_cyborg_validate_reports_the_clash_and_exits_one(tmp_path: Path) -> None
     )
 
 
-def _naive_reachable(text: str) -> set[tuple[str, ...]]:
-    """Every configuration reached by stepping with Regions.step, the controller's own rule."""
-    machine = parse_config(text).machine
-    regions = Regions(machine)
-    start = regions.configuration(machine.enter(machine.initial))
-    seen, queue = {start}, [start]
-    events = {e for leaf in machine.leaves() for e in machine.transitions_of(leaf.name)} | {
-        SUCCEEDED,
-        ABORTED,
-    }
-    while queue:
-        config = queue.pop()
-        steps = [regions.step(config, e) for e in events]
-        for leaf in config:
-            steps += [
-                regions.step(config, r, leaf) or regions.step(config, ABORTED, leaf)
-                for r in (SUCCEEDED, ABORTED)
-            ]
-        for step in steps:
-            if step is not None and step.leaves not in seen:
-                seen.add(step.leaves)
-                queue.append(step.leaves)
-    return seen
+def _stepped(regions: Regions, config: tuple[str, ...]) -> set[tuple[str, str | None, tuple[str, ...]]]:
+    """Every (event, source, next configuration) from ``config`` by Regions.step, the controller's own rule."""
+    machine = regions.machine
+    out: set[tuple[str, str | None, tuple[str, ...]]] = set()
+    for event in {e for leaf in config for e in machine.transitions_of(leaf)}:
+        step = regions.step(config, event)
+        if step is not None:
+            out.add((event, None, step.leaves))
+    for leaf in config:
+        for result in (SUCCEEDED, ABORTED):
+            step = regions.step(config, result, leaf) or regions.step(config, ABORTED, leaf)
+            if step is not None:
+                out.add((result, leaf, step.leaves))
+    return out
 
 
-@pytest.mark.parametrize("seed", range(5))
-def test_the_check_reaches_exactly_what_the_controller_can(seed: int) -> None:
+@pytest.mark.parametrize(("seed", "count"), [(seed, count) for seed in range(4) for count in (2, 3)])
+def test_the_check_reaches_exactly_what_the_controller_can(seed: int, count: int) -> None:
     rng = random.Random(seed)
     alphabet = ["a", "b", "c", "d", "stop", "aborted", "succeeded"]
 
@@ -192,12 +183,31 @@ def test_the_check_reaches_exactly_what_the_controller_can(seed: int) -> None:
     text = (
         "states:\n  idle: {action: m/idle, transitions: {go: busy, a: x1, aborted: idle}}\n"
         "  busy:\n    parallel: true\n    transitions: {stop: idle, aborted: idle}\n    states:\n"
-        f"{region('x', 6, 1)}\n{region('y', 5, 2)}\n{region('z', 3, 3)}\n"
+        f"{region('x', 6, 1)}\n{region('y', 5, 2)}\n" + (f"{region('z', 3, 3)}\n" if count == 3 else "")
     )
-    expected = _naive_reachable(text)
-    found = explore(parse_config(text).machine)
-    assert found.configurations == len(expected)
-    assert found.parallel_configurations == sum(1 for c in expected if len(c) > 1)
+    machine = parse_config(text).machine
+    regions = Regions(machine)
+    tables = _Tables(machine, regions)
+    start = regions.configuration(machine.enter(machine.initial))
+    seen, queue = {start}, [start]
+    while queue:  # every reachable configuration: the check's moves are exactly the controller's
+        config = queue.pop()
+        expected = _stepped(regions, config)
+        if len(config) > 1:
+            found = set(tables.successors(config))
+            assert {(e, src, nxt) for e, src, nxt in found if src is not None} == {
+                m for m in expected if m[1] is not None
+            }, config
+            assert {(e, nxt) for e, src, nxt in found if src is None} == {
+                (e, nxt) for e, src, nxt in expected if src is None
+            }, config
+        for _, _, following in expected:
+            if following not in seen:
+                seen.add(following)
+                queue.append(following)
+    exploration = explore(machine)
+    assert exploration.configurations == len(seen)
+    assert exploration.parallel_configurations == sum(1 for c in seen if len(c) > 1) > 10
 
 
 def test_a_policy_for_a_resource_no_state_grants_is_a_warning_with_the_likely_name() -> None:

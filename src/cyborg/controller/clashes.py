@@ -142,6 +142,8 @@ class _Tables:
 
     def successors(self, config: _Config) -> list[tuple[str, str | None, _Config]]:
         """(event, the leaf whose module's result it is or None, next configuration) of a parallel one."""
+        if len(config) == 2:
+            return self._pair_successors(config)
         out: list[tuple[str, str | None, _Config]] = []
         moves: dict[str, list[tuple[int, str | _Config]]] = {}  # in priority order: traces must not vary
         for index, leaf in enumerate(config):
@@ -169,6 +171,33 @@ class _Tables:
                     out.append((result, leaf, result_target))
                 else:
                     out.append((result, leaf, (*config[:index], result_target, *config[index + 1 :])))
+        return out
+
+    def _pair_successors(self, config: _Config) -> list[tuple[str, str | None, _Config]]:
+        """:meth:`successors` of two regions, the common case, without the general bookkeeping."""
+        first, second = config
+        mine, theirs = self.inner[first], self.inner[second]
+        out: list[tuple[str, str | None, _Config]] = []
+        for event, target in mine.items():
+            other = theirs.get(event)
+            if isinstance(target, tuple):
+                out.append((event, None, target))
+            elif other is None:
+                out.append((event, None, (target, second)))
+            elif isinstance(other, tuple):
+                out.append((event, None, other))
+            else:
+                out.append((event, None, (target, other)))
+        for event, other in theirs.items():
+            if event not in mine:
+                out.append((event, None, other if isinstance(other, tuple) else (first, other)))
+        for event, exit_to in self.outer[self.parallel_of[first]].items():  # type: ignore[index]
+            if event not in mine and event not in theirs:
+                out.append((event, None, exit_to))
+        for result, target in self.results[first]:
+            out.append((result, first, target if isinstance(target, tuple) else (target, second)))
+        for result, target in self.results[second]:
+            out.append((result, second, target if isinstance(target, tuple) else (first, target)))
         return out
 
 
