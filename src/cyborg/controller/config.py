@@ -242,7 +242,7 @@ def build_machine(
         problems.extend(check(machine))
     if problems:
         raise ConfigError(problems, source=source)
-    clashes = explore(machine).clashes
+    clashes = explore(machine).clashes if any(state.parallel for state in states.values()) else ()
     if clashes:
         shown = [
             f"{where(states, clash.parallel)}{clash.describe()}" for clash in clashes[:MAX_CLASHES_SHOWN]
