@@ -40,3 +40,10 @@ MAX_EVENT_DAYS = 366
 
 MAX_OCCURRENCES_PER_QUERY = 1_000
 """Most occurrences of one recurring event that one calendar query expands."""
+
+MAX_RULE_STEPS = 200_000
+"""Most steps (periods of its FREQ that dateutil looks at) one expansion of a calendar rule may take."""
+
+MAX_RULE_SECONDS = 0.5
+"""Most CPU time one expansion of a calendar rule may take (a sparse FREQ=SECONDLY rule steps through
+every day of the years between its occurrences)."""
