@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 import click
 
 from cyborg.errors import CyborgError
-from cyborg.limits import MAX_SCRIPT_SECONDS, MAX_SPEED
+from cyborg.limits import MAX_SCRIPT_SECONDS, MAX_SPEED, MIN_SPEED
 from cyborg.web.access import TOKEN_ENV, Access, allowed_origins
 
 if TYPE_CHECKING:
@@ -74,6 +74,13 @@ def parse_speed(value: str | None) -> float | str | None:
         )
     if speed <= 0:
         raise click.BadParameter(f"{value!r} must be positive")
+    if speed < MIN_SPEED:
+        raise click.BadParameter(
+            f"{value!r} is too slow to be of use (at least {MIN_SPEED:g}: one virtual second in "
+            f"{1 / MIN_SPEED:g} real ones); fix: use e.g. --speed 0.5 for slow motion, or leave --speed out "
+            "for real time",
+            param_hint="--speed",
+        )
     return speed
 
 

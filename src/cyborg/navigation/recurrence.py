@@ -10,7 +10,7 @@ matches it, occurrences do not overlap) and each query starts the rule a whole n
 periods before its window instead of at the event's first start, so "every second since
 1970" costs as little as "every Wednesday"; a query also stops after a bounded number of
 occurrences (:mod:`cyborg.limits`). Every expansion runs under a budget of steps and CPU time
-(:func:`bounded`): dateutil walks a sparse sub-daily rule (``FREQ=SECONDLY;BYMONTH=2;BYMONTHDAY=29``)
+(:class:`Budget`): dateutil walks a sparse sub-daily rule (``FREQ=SECONDLY;BYMONTH=2;BYMONTHDAY=29``)
 day by day through the years between its occurrences, which no count of occurrences bounds. A rule
 stored before these checks that fails them is skipped with a logged warning, never expanded.
 
@@ -41,6 +41,7 @@ from cyborg.limits import (
     MAX_RULE_COUNT,
     MAX_RULE_SECONDS,
     MAX_RULE_STEPS,
+    MAX_RULE_TOTAL_SECONDS,
 )
 
 RULE_EXAMPLE = "FREQ=WEEKLY;BYDAY=WE or FREQ=DAILY;COUNT=5"
@@ -66,36 +67,54 @@ log = logging.getLogger(__name__)
 # --- the work budget ------------------------------------------------------------------------
 
 
-@contextlib.contextmanager
-def bounded(what: str) -> Iterator[None]:
-    """Raise RuleTooCostly inside the block once it has taken MAX_RULE_STEPS steps or MAX_RULE_SECONDS.
+class Budget:
+    """The work one expansion of a rule may take: MAX_RULE_STEPS steps and MAX_RULE_SECONDS of CPU time
+    between two occurrences (:meth:`reset` at each), and MAX_RULE_TOTAL_SECONDS in all.
 
     A step is a Python call or generator resumption in this thread (dateutil takes one per period
     of the rule it looks at); the time is this thread's CPU time, so a loaded machine does not
-    turn a usable rule into a refused one. Blocks nest: the inner one keeps the outer's budget.
+    turn a usable rule into a refused one.
     """
-    previous = sys.gettrace()
-    if getattr(previous, "_cyborg_budget", False):
-        yield
-        return
-    deadline = _time.thread_time() + MAX_RULE_SECONDS
-    steps = 0
 
-    def count(frame: object, event: str, arg: object) -> None:
-        nonlocal steps
-        steps += 1
-        if steps > MAX_RULE_STEPS or _time.thread_time() > deadline:
+    def __init__(self, what: str) -> None:
+        self.what = what
+        self._end = _time.thread_time() + MAX_RULE_TOTAL_SECONDS
+        self.reset()
+
+    def reset(self) -> None:
+        """An occurrence was found: the next gap gets a budget of its own."""
+        self._steps = 0
+        self._deadline = min(self._end, _time.thread_time() + MAX_RULE_SECONDS)
+
+    def __call__(self, frame: object, event: str, arg: object) -> None:
+        self._steps += 1
+        now = _time.thread_time()
+        if now > self._end:
             raise RuleTooCostly(
-                f"{what} takes over {MAX_RULE_STEPS:,} steps or {MAX_RULE_SECONDS} s of work (a sub-daily "
-                "FREQ whose BY... parts skip most days is walked through day by day); fix: use the coarsest "
-                "FREQ that says the same, with the same BY... parts (FREQ=DAILY;BYHOUR=23 rather than "
-                "FREQ=SECONDLY;BYHOUR=23, FREQ=YEARLY;BYMONTH=2;BYMONTHDAY=29 rather than FREQ=HOURLY;...)"
+                f"{self.what} takes over {MAX_RULE_TOTAL_SECONDS} s of work; fix: {_COARSER}"
+            )
+        if self._steps > MAX_RULE_STEPS or now > self._deadline:
+            raise RuleTooCostly(
+                f"{self.what} takes over {MAX_RULE_STEPS:,} steps or {MAX_RULE_SECONDS} s of work from one "
+                f"occurrence to the next; fix: {_COARSER}"
             )
 
-    count._cyborg_budget = True  # type: ignore[attr-defined]
-    sys.settrace(count)
+
+_COARSER = (
+    "use the coarsest FREQ that says the same, with the same BY... parts (FREQ=DAILY;BYHOUR=23 rather than "
+    "FREQ=SECONDLY;BYHOUR=23, FREQ=YEARLY;BYMONTH=2;BYMONTHDAY=29;BYHOUR=23 rather than FREQ=SECONDLY;...): "
+    "a sub-daily FREQ is walked through day by day, also on the days its BY... parts skip"
+)
+
+
+@contextlib.contextmanager
+def bounded(what: str) -> Iterator[Budget]:
+    """Raise RuleTooCostly inside the block once it goes over its :class:`Budget` (which it yields)."""
+    budget = Budget(what)
+    previous = sys.gettrace()
+    sys.settrace(budget)
     try:
-        yield
+        yield budget
     finally:
         sys.settrace(previous)
 
@@ -242,9 +261,15 @@ def check_expansion(recurrence: str, start: datetime, length: timedelta | None =
             f"one occurrence lasts {length}, over the limit of {MAX_EVENT_DAYS} days; fix: check the end "
             "(or DTEND/DURATION) of the event"
         )
-    probe = _far_probe(rule_text, start)
-    with bounded("finding its first occurrences"):
-        first = list(itertools.islice(probe, _OVERLAP_SAMPLE + 1))
+    if _dates_never_match(rule_text, start):
+        first = []
+    else:
+        probe = _far_probe(rule_text, start)
+        first = []
+        with bounded("finding its first occurrences") as budget:
+            for occurrence in itertools.islice(probe, _OVERLAP_SAMPLE + 1):
+                first.append(occurrence)
+                budget.reset()
     if not first:
         raise RuleTooCostly(
             "no date matches all of its BY... parts, so it never repeats; fix: correct them (e.g. BYMONTH=2 "
@@ -279,6 +304,26 @@ def _far_probe(rule_text: str, start: datetime) -> rrule:
     rule = rrulestr(";".join(f"{k}={v}" for k, v in parts.items()), dtstart=far)
     assert isinstance(rule, rrule)
     return rule
+
+
+_DATE_PARTS = ("BYMONTH", "BYMONTHDAY", "BYYEARDAY", "BYDAY")
+
+
+def _dates_never_match(rule_text: str, start: datetime) -> bool:
+    """True if a daily or sub-daily rule's date parts match no day in 400 years.
+
+    The same parts under FREQ=YEARLY pick the same days with one step a year, where the rule's own
+    FREQ would walk every day of the 400 years to find that none matches.
+    """
+    parts = _rule_parts(rule_text)
+    if parts.get("FREQ") not in ("DAILY", "HOURLY", "MINUTELY", "SECONDLY"):
+        return False
+    dates = {k: v for k, v in parts.items() if k in _DATE_PARTS}
+    if not dates or any(c.isdigit() for c in dates.get("BYDAY", "").replace(",", "")):
+        return False
+    yearly = ";".join(["FREQ=YEARLY", *(f"{k}={v}" for k, v in dates.items())])
+    probe = _far_probe(yearly, start.replace(hour=0, minute=0, second=0, microsecond=0))
+    return next(iter(probe), None) is None
 
 
 def build_rule_set(recurrence: str, start: datetime) -> rruleset:
@@ -347,8 +392,9 @@ def _starts(recurrence: str, start: datetime, lower: datetime, upper: datetime) 
         return [occ for occ in seen[2] if lower <= occ < upper]
     found: list[datetime] = []
     after: datetime | None = None
-    with bounded("finding its occurrences"):
+    with bounded("finding its occurrences") as budget:
         for scanned, occ in enumerate(_rules_near(recurrence, start, lower).xafter(lower, inc=True), start=1):
+            budget.reset()
             if occ >= upper:
                 after = occ
                 break
@@ -399,8 +445,11 @@ def _rules_near(recurrence: str, start: datetime, lower: datetime) -> rruleset:
 def _last_of_count(rule_text: str, start: datetime) -> datetime:
     """The last occurrence of a rule with COUNT (at most MAX_RULE_COUNT of them)."""
     rule = rrulestr(rule_text, dtstart=start)
-    with bounded("finding its last occurrence"):
-        tail = collections.deque(itertools.islice(rule, MAX_RULE_COUNT), maxlen=1)
+    tail: collections.deque[datetime] = collections.deque(maxlen=1)
+    with bounded("finding its last occurrence") as budget:
+        for occurrence in itertools.islice(rule, MAX_RULE_COUNT):
+            tail.append(occurrence)
+            budget.reset()
     return tail[0] if tail else start
 
 
