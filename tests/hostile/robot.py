@@ -49,7 +49,9 @@ class ServedRobot:
             return self.process.wait(timeout=timeout)
         except subprocess.TimeoutExpired:
             self.kill()
-            raise AssertionError(f"SIGTERM did not stop the robot within {timeout} s:\n{self.text()[-3000:]}")
+            raise AssertionError(
+                f"SIGTERM did not stop the robot within {timeout} s:\n{self.text()[-3000:]}"
+            ) from None
 
     def kill(self) -> None:
         if self.process.poll() is None:

@@ -166,7 +166,11 @@ class KindRegistry:
                 _make_importable(dist)
             loaded = entry.load()
         except (Exception, SystemExit) as exc:  # SystemExit: a module that calls sys.exit() when imported
-            reason = f"it called sys.exit({exc.code!r}) while being imported" if isinstance(exc, SystemExit) else repr(exc)
+            reason = (
+                f"it called sys.exit({exc.code!r}) while being imported"
+                if isinstance(exc, SystemExit)
+                else repr(exc)
+            )
             raise ConfigError(
                 f"module kind {name!r} from {_origin(entry)} could not be imported: {reason}; "
                 "fix: repair or reinstall that package",

@@ -123,7 +123,9 @@ class _ValueNotBuilt(Exception):
     """A scalar YAML reads as a date or a number that Python cannot build (``2026-13-01``, 5,000 digits)."""
 
 
-def _checked(build: Callable[[Any, yaml.ScalarNode], Any], what: str, fix: str) -> Callable[[Any, yaml.ScalarNode], Any]:
+def _checked(
+    build: Callable[[Any, yaml.ScalarNode], Any], what: str, fix: str
+) -> Callable[[Any, yaml.ScalarNode], Any]:
     def construct(loader: Any, node: yaml.ScalarNode) -> Any:
         try:
             return build(loader, node)
@@ -156,7 +158,7 @@ for _loader in (_SafeLoader, _CSafeLoader):
     _loader.add_constructor(_TIMESTAMP, _checked(yaml.SafeLoader.construct_yaml_timestamp, "date", _DATE_FIX))
     _loader.add_constructor(_INT, _checked(yaml.SafeLoader.construct_yaml_int, "whole number", _INT_FIX))
 
-Loader = _SafeLoader | _CSafeLoader
+Loader = yaml.SafeLoader | yaml.CSafeLoader
 
 
 def load_yaml(text: str, source: str, keys: KeyRules = PLAIN_KEYS) -> Any:

@@ -90,9 +90,7 @@ class Budget:
         self._steps += 1
         now = _time.thread_time()
         if now > self._end:
-            raise RuleTooCostly(
-                f"{self.what} takes over {MAX_RULE_TOTAL_SECONDS} s of work; fix: {_COARSER}"
-            )
+            raise RuleTooCostly(f"{self.what} takes over {MAX_RULE_TOTAL_SECONDS} s of work; fix: {_COARSER}")
         if self._steps > MAX_RULE_STEPS or now > self._deadline:
             raise RuleTooCostly(
                 f"{self.what} takes over {MAX_RULE_STEPS:,} steps or {MAX_RULE_SECONDS} s of work from one "
@@ -261,11 +259,9 @@ def check_expansion(recurrence: str, start: datetime, length: timedelta | None =
             f"one occurrence lasts {length}, over the limit of {MAX_EVENT_DAYS} days; fix: check the end "
             "(or DTEND/DURATION) of the event"
         )
-    if _dates_never_match(rule_text, start):
-        first = []
-    else:
+    first: list[datetime] = []
+    if not _dates_never_match(rule_text, start):
         probe = _far_probe(rule_text, start)
-        first = []
         with bounded("finding its first occurrences") as budget:
             for occurrence in itertools.islice(probe, _OVERLAP_SAMPLE + 1):
                 first.append(occurrence)
@@ -360,7 +356,12 @@ def occurrences_between(
             starts = _starts(recurrence, start, window_start - length - timedelta(seconds=1), window_end)
         except RuleTooCostly as exc:
             _TOO_COSTLY.add((recurrence, start))
-            log.warning("calendar: skipping the event starting %s from now on: recurrence %r: %s", start, recurrence, exc)
+            log.warning(
+                "calendar: skipping the event starting %s from now on: recurrence %r: %s",
+                start,
+                recurrence,
+                exc,
+            )
             return []
     found = []
     for occ in starts:

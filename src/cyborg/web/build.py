@@ -94,6 +94,7 @@ def serve_api(
                 "gatekeepers": {name: g.report() for name, g in gatekeepers.items()},
                 "emotion_enabled": robot.emotion.enabled,
                 "storage": robot.store.save_status.as_json(),
+                "blocked": robot.loop_blocked(),
             },
             settle=robot.store.flush,
         )

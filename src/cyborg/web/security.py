@@ -273,7 +273,9 @@ class Guard:
                 "limit; fix: send the whole (small) body at once"
             )
             raise web.HTTPRequestTimeout(
-                text=json.dumps({"error": problem}), content_type="application/json", headers={"Connection": "close"}
+                text=json.dumps({"error": problem}),
+                content_type="application/json",
+                headers={"Connection": "close"},
             ) from None
         except ConnectionError:
             self.refused["body-abandoned"] = self.refused.get("body-abandoned", 0) + 1

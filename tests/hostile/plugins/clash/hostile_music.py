@@ -1,3 +1,1 @@
 """What `cyborg new module music` wrote before it refused the name: a kind named like a built-in."""
-
-from cyborg.modules.placeholder import KIND
