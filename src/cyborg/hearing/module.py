@@ -304,7 +304,9 @@ def cutter(vad: str) -> Cutter:
 
 
 def _build(node: Node, settings: SpeechInputSettings, context: BuildContext) -> SpeechInput:
-    db = NavigationDatabase(Path(settings.db) if settings.db else context.data_dir / "navigation.db")
+    db = NavigationDatabase(
+        Path(settings.db) if settings.db else context.data_dir / "navigation.db", recover=not settings.db
+    )
     try:
         return SpeechInput(
             node,
