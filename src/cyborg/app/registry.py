@@ -118,6 +118,13 @@ class KindRegistry:
                 name,
                 " and ".join(others),
             )
+        for name, origins in self._clashes.items():
+            log.warning(
+                "module kind %r is offered by several packages (%s): it cannot be used until one goes, the "
+                "other kinds can; fix: uninstall one of them, or rename the kind in one package's entry points",
+                name,
+                "; ".join(origins),
+            )
         self._loaded: dict[str, ModuleKind[Any]] = dict(extra or {})
 
     def clashes(self) -> dict[str, list[str]]:
