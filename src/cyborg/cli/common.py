@@ -190,6 +190,12 @@ def access_options(command: Callable[..., None]) -> Callable[..., None]:
                 "a token shorter than 16 characters is easy to guess; fix: leave it out to get a "
                 'generated one, or make one with: python3 -c "import secrets; print(secrets.token_urlsafe(24))"'
             )
+        if value is not None and not (value.strip().isascii() and value.strip().isprintable()):
+            raise click.BadParameter(
+                "a token must be printable ASCII (it travels in an HTTP header, where other characters are "
+                'not read the same by every client); fix: make one with: python3 -c "import secrets; '
+                'print(secrets.token_urlsafe(24))"'
+            )
         return value.strip() if value else None
 
     @click.option(
