@@ -78,7 +78,6 @@ CASES = {
     "stored FREQ=SECONDLY;INTERVAL=0": lambda db: stored_by_an_older_version(
         db, "RRULE:FREQ=SECONDLY;INTERVAL=0"
     ),
-    "stored sparse FREQ=SECONDLY (once a leap year)": lambda db: stored_by_an_older_version(db, SPARSE),
     ".ics FREQ=SECONDLY since 1990": lambda db: imported_from_ics(db, "FREQ=SECONDLY", "PT1S"),
     ".ics FREQ=MINUTELY since 1990": lambda db: imported_from_ics(db, "FREQ=MINUTELY", "PT30S"),
 }
