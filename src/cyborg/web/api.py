@@ -175,7 +175,7 @@ class RobotAPI:
     async def _json(self, request: web.Request) -> dict[str, Any]:
         raw = await self.guard.read_body(request)
         try:
-            body = json.loads(raw)
+            body = json.loads(raw.decode("utf-8"))  # strict UTF-8 (RFC 8259): no BOM, no UTF-16
         except (ValueError, RecursionError):  # also numbers of over 4300 digits and very deep nesting
             raise CommandError('the body is not usable JSON; send e.g. {"name": "music_play"}') from None
         if not isinstance(body, dict):
