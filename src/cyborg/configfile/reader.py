@@ -120,7 +120,11 @@ def key_lines(text: str) -> dict[tuple[str, ...], int]:
 
 
 class _ValueNotBuilt(Exception):
-    """A scalar YAML reads as a date or a number that Python cannot build (``2026-13-01``, 5,000 digits)."""
+    """A scalar YAML reads as a date or a number that Python cannot build (``2026-13-01``, 5,000 digits).
+
+    Internal, not a CyborgError: it never leaves this module (the loader turns it into a ConfigError
+    with the file's name), and it must not be caught as a yaml.YAMLError on the way.
+    """
 
 
 def _checked(
