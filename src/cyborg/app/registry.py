@@ -39,6 +39,17 @@ def _origin(entry: EntryPoint) -> str:
     return f"{package} ({entry.value})"
 
 
+_WARNED: set[tuple[str, ...]] = set()
+"""Clashes already warned about in this process (a command may read the entry points more than once)."""
+
+
+def _first_time(clash: tuple[str, ...]) -> bool:
+    if clash in _WARNED:
+        return False
+    _WARNED.add(clash)
+    return True
+
+
 def _builtin(entry: EntryPoint) -> bool:
     """Whether ``entry`` is one of cyborg's own kinds."""
     return entry.dist is not None and _normalized(entry.dist.name) == "cyborg"
@@ -111,6 +122,8 @@ class KindRegistry:
             else:
                 self._clashes.setdefault(entry.name, [_origin(known)]).append(_origin(entry))
         for name, others in self.ignored.items():
+            if not _first_time(("ignored", name, *others)):
+                continue
             log.warning(
                 "module kind %r of %s is ignored: cyborg has a built-in kind of that name, which is used; "
                 "fix: rename the kind in that package's entry points (and its modules: blocks), then "
@@ -119,6 +132,8 @@ class KindRegistry:
                 " and ".join(others),
             )
         for name, origins in self._clashes.items():
+            if not _first_time(("clash", name, *origins)):
+                continue
             log.warning(
                 "module kind %r is offered by several packages (%s): it cannot be used until one goes, the "
                 "other kinds can; fix: uninstall one of them, or rename the kind in one package's entry points",
