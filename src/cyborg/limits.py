@@ -26,6 +26,10 @@ MAX_SCRIPT_SECONDS = 366 * 24 * 3600.0
 MAX_SPEED = 1e6
 """Largest virtual-time factor for ``--speed`` (use ``max`` for as fast as possible)."""
 
+MIN_SPEED = 0.01
+"""Smallest virtual-time factor for ``--speed``: a virtual second every 100 real ones (1e-9 overflowed
+the clock's waits; 1e-6 made a virtual second last 11.6 days)."""
+
 MAX_MAP_CELLS = 25_000_000
 """Most grid cells of a map (5000 x 5000, e.g. 250 m x 250 m at 5 cm): about 25 MB of grid."""
 
@@ -40,3 +44,14 @@ MAX_EVENT_DAYS = 366
 
 MAX_OCCURRENCES_PER_QUERY = 1_000
 """Most occurrences of one recurring event that one calendar query expands."""
+
+MAX_RULE_STEPS = 200_000
+"""Most steps (periods of its FREQ that dateutil looks at) a calendar rule may take from one occurrence
+to the next."""
+
+MAX_RULE_SECONDS = 0.5
+"""Most CPU time a calendar rule may take from one occurrence to the next (a sparse FREQ=SECONDLY rule
+steps through every day of the years between its occurrences)."""
+
+MAX_RULE_TOTAL_SECONDS = 1.0
+"""Most CPU time one expansion of a calendar rule (a check, a query) may take in all."""

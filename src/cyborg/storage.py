@@ -127,11 +127,16 @@ class SQLiteFile:
     what = "database"  # how log lines and errors name the file, e.g. "navigation database"
     foreign_keys = False
 
-    def __init__(self, path: str | Path) -> None:
+    def __init__(self, path: str | Path, *, recover: bool = True) -> None:
+        """``recover``: move an unusable file aside and start afresh (the robot's own files); False
+        for a path the user named (``cyborg db --db``, a module's ``db:``): refuse it, touching nothing."""
         self.path = Path(path)
+        self.recover = recover
+        self._identity: tuple[int, int] | None = None  # of the file opened: a write checks it is still there
         self._failure: tuple[str, str] | None = None  # (problem, fix) of the first failed write of an episode
         self._failed_writes = 0
         self._conn = self._open_or_recover()
+        self._identity = _identity(self.path)
 
     def _prepare(self, conn: sqlite3.Connection) -> None:
         """Check, migrate or create the schema; raise :class:`Unusable` for a foreign or broken file."""
@@ -156,6 +161,11 @@ class SQLiteFile:
                     f"cannot use {self.path}: {exc.__cause__}; fix: free some space on that disk "
                     "(or give another folder with --data-dir)"
                 ) from exc
+            if not self.recover:
+                raise DatabaseError(
+                    f"{self.path} is not a usable {self.what} ({exc.args[0]}); it was left as it is; fix: give "
+                    f"the path of a {self.what} (or a new file name, to start one)"
+                ) from None
             self._move_aside(str(exc.args[0]))
         try:
             return self._open()
@@ -187,11 +197,13 @@ class SQLiteFile:
                 conn.execute("PRAGMA foreign_keys=ON")
         except sqlite3.OperationalError as exc:
             conn.close()
-            fix = (
-                "free some space on that disk (or give another folder with --data-dir)"
-                if _disk_trouble(exc)
-                else "check permissions and that no other program locks it"
-            )
+            holders = holders_of(self.path) if _locked(exc) else []
+            if _disk_trouble(exc):
+                fix = "free some space on that disk (or give another folder with --data-dir)"
+            elif holders:
+                fix = f"stop the program that holds it ({'; '.join(holders)}), or let it finish, then retry"
+            else:
+                fix = "check permissions and that no other program locks it"
             raise DatabaseError(f"cannot use {self.path}: {exc}; fix: {fix}") from exc
         except sqlite3.DatabaseError as exc:
             conn.close()
@@ -245,6 +257,8 @@ class SQLiteFile:
                 yield conn
         except sqlite3.Error as exc:
             raise self._write_failed(what, exc) from exc
+        if self._identity is not None and _identity(self.path) != self._identity:
+            raise self._vanished(what)
         if self._failure is not None:
             log.warning(
                 "%s %s: writes work again, after %d failed writes (the first: %s)",
@@ -257,11 +271,29 @@ class SQLiteFile:
 
     def _write_failed(self, what: str, exc: sqlite3.Error) -> NotSaved:
         problem = f"could not {what} in {self.path}: {exc}"
-        fix = (
-            "free some space on that disk (or give another folder with --data-dir)"
-            if _disk_trouble(exc)
-            else "check the disk and the file's permissions"
+        if _disk_trouble(exc):
+            fix = "free some space on that disk (or give another folder with --data-dir)"
+        elif _locked(exc):
+            holders = holders_of(self.path)
+            problem += f" (held by {'; '.join(holders)})" if holders else ""
+            fix = (
+                "stop that program, or let it finish, then retry"
+                if holders
+                else "find the program that holds it (fuser -v FILE), stop it or let it finish, then retry"
+            )
+        else:
+            fix = "check the disk and the file's permissions"
+        return self._failed(problem, fix)
+
+    def _vanished(self, what: str) -> NotSaved:
+        problem = (
+            f"could not {what}: {self.path} was deleted or replaced while in use (its data folder removed?), "
+            "so what is written goes to a file nobody can open"
         )
+        fix = "restore the data folder, then restart the robot (it keeps what it knows in memory meanwhile)"
+        return self._failed(problem, fix)
+
+    def _failed(self, problem: str, fix: str) -> NotSaved:
         self._failed_writes += 1
         if self._failure is None:
             self._failure = (problem, fix)
@@ -291,6 +323,43 @@ class SQLiteFile:
         self, kind: type[BaseException] | None, value: BaseException | None, tb: TracebackType | None
     ) -> None:
         self.close()
+
+
+def _identity(path: Path) -> tuple[int, int] | None:
+    """(device, inode) of the file at ``path``; None if there is none."""
+    try:
+        status = path.stat()
+    except OSError:
+        return None
+    return status.st_dev, status.st_ino
+
+
+def _locked(exc: sqlite3.Error) -> bool:
+    code = getattr(exc, "sqlite_errorcode", 0) & 0xFF
+    return code in (sqlite3.SQLITE_BUSY, sqlite3.SQLITE_LOCKED) or "locked" in str(exc)
+
+
+def holders_of(path: Path) -> list[str]:
+    """Other processes that have ``path`` open, as 'NAME (process PID)'; [] where /proc cannot tell."""
+    try:
+        target = path.resolve()
+        processes = list(Path("/proc").iterdir())
+    except OSError:
+        return []
+    found: list[str] = []
+    for process in processes:
+        if not process.name.isdigit() or int(process.name) == os.getpid():
+            continue
+        try:
+            opened = any(Path(os.readlink(fd)) == target for fd in (process / "fd").iterdir())
+            if opened:
+                command = " ".join(
+                    (process / "cmdline").read_bytes().decode(errors="replace").replace("\0", " ").split()
+                )
+                found.append(f"{command[:80] or process.name} (process {process.name})")
+        except OSError:
+            continue
+    return found
 
 
 def _disk_trouble(exc: sqlite3.Error) -> bool:

@@ -20,10 +20,15 @@ def _limit_memory() -> None:
     resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT, MEMORY_LIMIT))
 
 
-def run_cyborg(args: list[str], tmp_path: Path) -> subprocess.CompletedProcess[str]:
+def run_cyborg(
+    args: list[str], tmp_path: Path, *, plugins: Path | None = None, log_level: str = "ERROR"
+) -> subprocess.CompletedProcess[str]:
+    """``plugins``: a folder of installed packages (dist-info and modules) put after the code under test."""
     env = {**os.environ, "CYBORG_DATA_DIR": str(tmp_path / "data"), "NO_COLOR": "1"}
+    if plugins is not None:
+        env["PYTHONPATH"] = os.pathsep.join(filter(None, [os.environ.get("PYTHONPATH"), str(plugins)]))
     return subprocess.run(
-        [str(CYBORG_SCRIPT), "--log-level", "ERROR", *args],
+        [str(CYBORG_SCRIPT), "--log-level", log_level, *args],
         cwd=tmp_path,
         env=env,
         capture_output=True,
@@ -35,6 +40,7 @@ def run_cyborg(args: list[str], tmp_path: Path) -> subprocess.CompletedProcess[s
 
 
 @pytest.fixture
-def cyborg(tmp_path: Path) -> Callable[[list[str]], subprocess.CompletedProcess[str]]:
-    """``cyborg(args)`` runs ``cyborg --log-level ERROR *args`` in ``tmp_path`` (its data folder inside)."""
-    return lambda args: run_cyborg(args, tmp_path)
+def cyborg(tmp_path: Path) -> Callable[..., subprocess.CompletedProcess[str]]:
+    """``cyborg(args)`` runs ``cyborg --log-level ERROR *args`` in ``tmp_path`` (its data folder inside);
+    keywords as :func:`run_cyborg`."""
+    return lambda args, **options: run_cyborg(args, tmp_path, **options)

@@ -52,10 +52,13 @@ def test_hostile_bodies_are_answered_400_naming_the_problem() -> None:
             ("/api/emotion/values", b'{"pleasure": ' + b"9" * 5000 + b', "arousal": 0, "dominance": 0}'),
             ("/api/event", b"[" * 20_000 + b"]" * 20_000),  # nested deeper than Python recurses
             ("/api/say", b'{"text": "' + b"la " * MAX_TEXT_LENGTH + b'"}'),
+            ("/api/event", b'\xef\xbb\xbf{"name": "music_play"}'),  # a UTF-8 BOM (RFC 8259: not sent)
+            ("/api/event", '{"name": "music_play"}'.encode("utf-16")),  # JSON travels as UTF-8
         ]
     )
     statuses = [status for status, _ in answers]
-    assert statuses == [400, 400, 400], answers
+    assert statuses == [400, 400, 400, 400, 400], answers
+    assert all("not usable JSON" in answer["error"] for _, answer in answers[3:]), answers
     assert "not usable JSON" in answers[0][1]["error"] and "not usable JSON" in answers[1][1]["error"]
     assert f"over the limit of {MAX_TEXT_LENGTH}" in answers[2][1]["error"]
     assert published[topics.TEXT_FROM_SPEECH] == []

@@ -1,9 +1,10 @@
-"""Issue 12, item 2: no calendar rule freezes the robot.
+"""Issue 12, item 2 and issue 31, item 2: no calendar rule freezes the robot.
 
 Each rule is put in front of a running robot (a whole `cyborg sim --script` in its own
 process): rules an older version let into the database (INTERVAL=0 never advances) and rules
 that are valid but start long ago (FREQ=SECONDLY since 1990: a billion occurrences before
-today). The scheduler looks at the calendar every 10 s; the robot must still hear what it is
+today), and sparse sub-daily rules, which dateutil walks day by day through the years between
+their occurrences (over 10 minutes for one a leap year, on the event loop). The scheduler looks at the calendar every 10 s; the robot must still hear what it is
 told a minute later, and `cyborg db events list --at now` must still answer.
 """
 
@@ -11,6 +12,8 @@ from __future__ import annotations
 
 import json
 import sqlite3
+import time
+import urllib.request
 from collections.abc import Callable
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
@@ -21,6 +24,7 @@ import pytest
 from cyborg.navigation.database import NavigationDatabase
 from cyborg.navigation.ics import import_ics
 from cyborg.navigation.models import CalendarEvent
+from tests.hostile.robot import ServedRobot
 
 SCRIPT = """\
 start: 2026-11-23T12:00:00
@@ -46,6 +50,8 @@ RRULE:{rule}\r
 END:VEVENT\r
 END:VCALENDAR\r
 """
+
+SPARSE = "RRULE:FREQ=SECONDLY;BYMONTH=2;BYMONTHDAY=29;BYHOUR=23;BYMINUTE=59;BYSECOND=59"
 
 
 def stored_by_an_older_version(db_path: Path, rule: str) -> None:
@@ -111,3 +117,25 @@ def test_the_robot_still_answers_with_the_rule_in_its_calendar(
     listed = cyborg(["db", "--db", str(data / "navigation.db"), "events", "list", "--at", "now"])
     assert listed.returncode == 0, listed.stdout + listed.stderr
     assert listed.stdout.startswith("id"), listed.stdout
+
+
+def test_a_robot_with_a_sparse_rule_answers_and_stops_on_sigterm(tmp_path: Path) -> None:
+    """Review 2.21: the rule froze the real-time robot from its first scheduler tick and SIGTERM was
+    ignored; now its expansion runs out of budget, the rule is skipped with a warning naming it."""
+    data = tmp_path / "data"
+    data.mkdir()
+    stored_by_an_older_version(data / "navigation.db", SPARSE)
+    robot = ServedRobot(tmp_path, "--data-dir", str(data))
+    try:
+        deadline = time.monotonic() + 30
+        while "skipping the event" not in robot.text():
+            assert time.monotonic() < deadline and robot.process.poll() is None, robot.text()
+            time.sleep(0.1)
+        for _ in range(3):
+            with urllib.request.urlopen(robot.url + "/api/status", timeout=5) as answer:
+                assert answer.status == 200
+        warning = next(line for line in robot.text().splitlines() if "skipping the event" in line)
+        assert "BYMONTHDAY=29" in warning and "fix:" in warning, warning
+        assert robot.terminate() == 0, robot.text()
+    finally:
+        robot.kill()

@@ -18,6 +18,7 @@ import yaml
 
 HERE = Path(__file__).parent
 FILES = HERE / "files"
+PLUGINS = HERE / "plugins"  # packages "installed" by putting their folder on PYTHONPATH
 CASES: dict[str, dict[str, Any]] = yaml.safe_load((HERE / "cases.yaml").read_text(encoding="utf-8"))
 
 
@@ -30,12 +31,13 @@ def test_every_hostile_file_has_a_case() -> None:
 
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_hostile_input_is_refused_in_one_line_naming_the_fix(
-    name: str, tmp_path: Path, cyborg: Callable[[list[str]], CompletedProcess[str]]
+    name: str, tmp_path: Path, cyborg: Callable[..., CompletedProcess[str]]
 ) -> None:
     case = CASES[name]
     places = {"{file}": str(FILES / name), "{ok}": str(FILES / "_ok_script.yaml"), "{tmp}": str(tmp_path)}
     args = [_fill(arg, places) for arg in case["run"]]
-    result = cyborg(args)
+    plugins = PLUGINS / case["plugins"] if "plugins" in case else None
+    result = cyborg(args, plugins=plugins, log_level=case.get("log_level", "ERROR"))
     output = result.stdout + result.stderr
     assert "Traceback" not in output, output
     assert result.returncode == case["exit"], output

@@ -12,6 +12,7 @@ from pydantic import BaseModel
 from pydantic_core import PydanticUndefined
 
 from cyborg.app.registry import KindRegistry
+from cyborg.errors import ConfigError
 
 __all__ = ["kinds_markdown", "settings_rows"]
 
@@ -57,7 +58,11 @@ def kinds_markdown(registry: KindRegistry, names: list[str] | None = None) -> st
     """One section per kind: its summary, where it comes from, and the table of its settings."""
     parts: list[str] = []
     for name in names if names is not None else registry.names():
-        kind = registry.get(name)
+        try:
+            kind = registry.get(name)
+        except ConfigError as exc:  # that kind only; the others are written all the same
+            parts.append(f"### `{name}`\n\nNot usable: {' '.join(exc.problems)}")
+            continue
         lines = [f"### `{name}`", "", kind.summary, "", "| key | default | meaning |", "| --- | --- | --- |"]
         lines += [
             f"| `{key}` | {default} | {meaning} |" for key, default, meaning in settings_rows(kind.settings)

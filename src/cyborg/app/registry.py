@@ -39,6 +39,22 @@ def _origin(entry: EntryPoint) -> str:
     return f"{package} ({entry.value})"
 
 
+_WARNED: set[tuple[str, ...]] = set()
+"""Clashes already warned about in this process (a command may read the entry points more than once)."""
+
+
+def _first_time(clash: tuple[str, ...]) -> bool:
+    if clash in _WARNED:
+        return False
+    _WARNED.add(clash)
+    return True
+
+
+def _builtin(entry: EntryPoint) -> bool:
+    """Whether ``entry`` is one of cyborg's own kinds."""
+    return entry.dist is not None and _normalized(entry.dist.name) == "cyborg"
+
+
 def _normalized(name: str) -> str:
     return re.sub(r"[-_.]+", "-", name).lower()
 
@@ -91,13 +107,44 @@ class KindRegistry:
             shared = main_venv_entries()
             entries = [*entry_points(group=ENTRY_POINT_GROUP), *(entry for entry, _ in shared)]
             self._elsewhere = {entry.value: dist for entry, dist in shared}
+        self.ignored: dict[str, list[str]] = {}
+        """Kinds of other packages named like a built-in kind: the built-in is used (name -> origins)."""
         for entry in entries:
             known = self._entries.get(entry.name)
             if known is None:
                 self._entries[entry.name] = entry
-            elif known.value != entry.value:
+            elif known.value == entry.value:
+                continue
+            elif _builtin(known) or _builtin(entry):
+                builtin, other = (known, entry) if _builtin(known) else (entry, known)
+                self._entries[entry.name] = builtin
+                self.ignored.setdefault(entry.name, []).append(_origin(other))
+            else:
                 self._clashes.setdefault(entry.name, [_origin(known)]).append(_origin(entry))
+        for name, others in self.ignored.items():
+            if not _first_time(("ignored", name, *others)):
+                continue
+            log.warning(
+                "module kind %r of %s is ignored: cyborg has a built-in kind of that name, which is used; "
+                "fix: rename the kind in that package's entry points (and its modules: blocks), then "
+                "reinstall it",
+                name,
+                " and ".join(others),
+            )
+        for name, origins in self._clashes.items():
+            if not _first_time(("clash", name, *origins)):
+                continue
+            log.warning(
+                "module kind %r is offered by several packages (%s): it cannot be used until one goes, the "
+                "other kinds can; fix: uninstall one of them, or rename the kind in one package's entry points",
+                name,
+                "; ".join(origins),
+            )
         self._loaded: dict[str, ModuleKind[Any]] = dict(extra or {})
+
+    def clashes(self) -> dict[str, list[str]]:
+        """Kinds offered by several packages other than cyborg (name -> origins): unusable until one goes."""
+        return {name: list(origins) for name, origins in self._clashes.items()}
 
     def names(self) -> list[str]:
         """Every kind's name, sorted (nothing is imported to list them)."""
@@ -140,12 +187,17 @@ class KindRegistry:
             if dist is not None:
                 _make_importable(dist)
             loaded = entry.load()
-        except Exception as exc:
+        except (Exception, SystemExit) as exc:  # SystemExit: a module that calls sys.exit() when imported
+            reason = (
+                f"it called sys.exit({exc.code!r}) while being imported"
+                if isinstance(exc, SystemExit)
+                else repr(exc)
+            )
             raise ConfigError(
-                f"module kind {name!r} from {_origin(entry)} could not be imported: {exc!r}; "
+                f"module kind {name!r} from {_origin(entry)} could not be imported: {reason}; "
                 "fix: repair or reinstall that package",
                 source=source,
-            ) from exc
+            ) from None
         if not isinstance(loaded, ModuleKind):
             raise ConfigError(
                 f"module kind {name!r} from {_origin(entry)} is a {type(loaded).__name__}, not a ModuleKind; "

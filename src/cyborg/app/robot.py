@@ -15,7 +15,7 @@ import random
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from cyborg.app.config import LoadedConfig
 from cyborg.app.context import BuildContext, calendar_of, heard_by
@@ -31,6 +31,7 @@ from cyborg.motivator.store import COMMIT_WINDOW, ControllerStore
 from cyborg.navigation.calendar import CalendarEntry
 from cyborg.storage import SaveStatus
 from cyborg.transport.base import Transport
+from cyborg.transport.watchdog import LoopWatchdog
 
 if TYPE_CHECKING:
     from cyborg.maps import OccupancyMap
@@ -53,6 +54,8 @@ class Robot:
     place: BuildContext
     components: dict[str, Component] = field(default_factory=dict)
     """Modules and gatekeepers by node name."""
+    watchdog: LoopWatchdog | None = None
+    """Names a callback that blocks the shared event loop (from :meth:`start` on, in real time)."""
 
     @property
     def data_dir(self) -> Path:
@@ -77,6 +80,9 @@ class Robot:
         """Start the controller; what the build made is frozen out of garbage collections from now
         on (:mod:`cyborg.app.tuning`), so none walks the whole machine on the controller's loop."""
         freeze_built()
+        if not self.transport.clock.is_virtual:  # where people wait on it (virtual runs stay as they were)
+            self.watchdog = LoopWatchdog(self.transport.clock.loop)
+            self.watchdog.start()
         self.controller.start()
 
     # --- the RobotView the dashboard reads (cyborg.app.view) --------------------------------
@@ -86,6 +92,9 @@ class Robot:
 
     def save_status(self) -> SaveStatus:
         return self.store.save_status
+
+    def loop_blocked(self) -> dict[str, Any] | None:
+        return self.watchdog.report() if self.watchdog is not None else None
 
     def base(self) -> BaseView | None:
         for component in self.components.values():
@@ -112,6 +121,8 @@ class Robot:
                 log.exception("closing %s failed; closing the rest", component.node.name)
             component.node.shutdown()
         self.store.close()
+        if self.watchdog is not None:
+            self.watchdog.stop()
         thaw()
 
 

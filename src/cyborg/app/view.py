@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 from cyborg.controller.runtime import ControllerStats, Phase
 from cyborg.storage import SaveStatus
@@ -98,6 +98,11 @@ class RobotView(Protocol):
 
     def save_status(self) -> SaveStatus | None:
         """Whether the controller's data is being saved; None where that is not known."""
+        ...
+
+    def loop_blocked(self) -> dict[str, Any] | None:
+        """The last time a callback blocked the robot's event loop (see cyborg.transport.watchdog);
+        None if never, or where not watched (a ROS node per module)."""
         ...
 
     def base(self) -> BaseView | None:

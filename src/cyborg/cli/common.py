@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 import click
 
 from cyborg.errors import CyborgError
-from cyborg.limits import MAX_SCRIPT_SECONDS, MAX_SPEED
+from cyborg.limits import MAX_SCRIPT_SECONDS, MAX_SPEED, MIN_SPEED
 from cyborg.web.access import TOKEN_ENV, Access, allowed_origins
 
 if TYPE_CHECKING:
@@ -87,6 +87,13 @@ def parse_speed(value: str | None) -> float | str | None:
         )
     if speed <= 0:
         raise click.BadParameter(f"{value!r} must be positive")
+    if speed < MIN_SPEED:
+        raise click.BadParameter(
+            f"{value!r} is too slow to be of use (at least {MIN_SPEED:g}: one virtual second in "
+            f"{1 / MIN_SPEED:g} real ones); fix: use e.g. --speed 0.5 for slow motion, or leave --speed out "
+            "for real time",
+            param_hint="--speed",
+        )
     return speed
 
 
@@ -196,6 +203,12 @@ def access_options(command: Callable[..., None]) -> Callable[..., None]:
             raise click.BadParameter(
                 "a token shorter than 16 characters is easy to guess; fix: leave it out to get a "
                 'generated one, or make one with: python3 -c "import secrets; print(secrets.token_urlsafe(24))"'
+            )
+        if value is not None and not (value.strip().isascii() and value.strip().isprintable()):
+            raise click.BadParameter(
+                "a token must be printable ASCII (it travels in an HTTP header, where other characters are "
+                'not read the same by every client); fix: make one with: python3 -c "import secrets; '
+                'print(secrets.token_urlsafe(24))"'
             )
         return value.strip() if value else None
 

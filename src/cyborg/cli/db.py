@@ -45,7 +45,7 @@ class InputError(CyborgError, click.ClickException):
 def _open(ctx: click.Context) -> Iterator[NavigationDatabase]:
     """The database named by ``--db``; CyborgErrors become InputError (exit 2)."""
     try:
-        with NavigationDatabase(ctx.obj) as db:
+        with NavigationDatabase(ctx.obj, recover=False) as db:  # never move the user's file aside
             yield db
     except CyborgError as exc:
         raise InputError(str(exc)) from exc

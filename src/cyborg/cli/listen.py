@@ -111,7 +111,7 @@ def listen(
         model=str(model) if model else None,
         **({} if min_confidence is None else {"min_confidence": min_confidence}),
     )
-    places = NavigationDatabase(db or default_data_dir() / "navigation.db")
+    places = NavigationDatabase(db or default_data_dir() / "navigation.db", recover=db is None)
     try:
         ears = SpeechInput(
             transport.node("cyborg_listen"),

@@ -67,11 +67,19 @@ def kinds(markdown: bool) -> None:
             click.echo(kinds_markdown(registry), nl=False)
             return
         width = max(map(len, registry.names()), default=0)
+        broken = 0
         for name in registry.names():
-            summary = registry.get(name).summary
+            try:
+                summary = registry.get(name).summary
+            except CyborgError as exc:  # this kind only: the others are listed all the same
+                broken += 1
+                click.secho(f"{name:<{width}}  NOT USABLE: {'; '.join(str(exc).splitlines())}", fg="red")
+                continue
             click.echo(f"{name:<{width}}  {summary}  [{registry.origin(name)}]")
     except CyborgError as exc:
         fail(exc)
+    if broken:
+        fail(CyborgError(f"{broken} of {len(registry.names())} kinds cannot be used (marked above)"))
 
 
 @click.command()

@@ -47,8 +47,17 @@ def _walk(folder: Path) -> list[Path]:
     return sorted(p for p in folder.rglob("*.tmpl") if p.is_file())
 
 
-def write_module(name: str, parent: Path) -> Path:
-    """Write the package for ``name`` into ``parent/name``; refuses to overwrite anything."""
+def write_module(name: str, parent: Path, taken: dict[str, str] | None = None) -> Path:
+    """Write the package for ``name`` into ``parent/name``; refuses to overwrite anything.
+
+    ``taken``: kinds this installation knows already (name -> where from); a module named like one
+    would register a second kind of that name once installed.
+    """
+    if taken and name in taken:
+        raise InvalidValueError(
+            f"{name!r} is already a module kind of this installation ({taken[name]}); installed, the new "
+            f"package would offer a second kind {name!r}; fix: pick another name, e.g. my_{name} or {name}_2"
+        )
     target = parent / name
     if target.exists():
         raise CyborgError(f"{target} exists already; fix: pick another name or folder (nothing was written)")
@@ -77,8 +86,11 @@ def new_group() -> None:
 )
 def new_module(name: str, parent: Path) -> None:
     """Write a ready package for the behaviour module NAME: code, kind, test, YAML, scenario."""
+    from cyborg.app.registry import module_kinds
+
+    registry = module_kinds()
     try:
-        target = write_module(name, parent)
+        target = write_module(name, parent, {kind: registry.origin(kind) for kind in registry.names()})
     except (CyborgError, OSError) as exc:
         fail(exc if isinstance(exc, CyborgError) else CyborgError(f"{exc}; fix: check the folder"))
         return

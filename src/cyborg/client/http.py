@@ -100,6 +100,10 @@ class HttpLink:
         except aiohttp.WSServerHandshakeError as exc:
             fix = f"pass --token or set ${TOKEN_ENV}" if exc.status == 401 else "check --url"
             raise ClientError(f"the robot refused its live stream (HTTP {exc.status}); fix: {fix}") from None
+        except aiohttp.ClientError as exc:
+            raise ClientError(
+                f"cannot reach the live stream of the robot at {self.url} ({exc}); fix: check that it runs"
+            ) from None
 
 
 class RobotLink(Protocol):
@@ -126,6 +130,8 @@ async def _follow(
     headers = client_headers(token)
     async with aiohttp.ClientSession() as session, session.ws_connect(ws_url, headers=headers) as socket:
         async for message in socket:
+            if message.type != aiohttp.WSMsgType.TEXT:
+                break
             record = json.loads(message.data)
             kind = record.get("type")
             if kind == "state":
@@ -135,3 +141,10 @@ async def _follow(
             else:
                 continue
             show(status)
+        code = socket.close_code
+    # The stream ended without a Ctrl-C: the robot went away; say so (and exit non-zero).
+    if code == aiohttp.WSCloseCode.GOING_AWAY:
+        raise ClientError(f"the robot at {url} stopped (it closed its live stream)")
+    raise ClientError(
+        f"lost the live stream of the robot at {url} (close code {code}); fix: check that it still runs"
+    )

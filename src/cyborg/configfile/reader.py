@@ -119,6 +119,49 @@ def key_lines(text: str) -> dict[tuple[str, ...], int]:
     return lines
 
 
+class _ValueNotBuilt(Exception):
+    """A scalar YAML reads as a date or a number that Python cannot build (``2026-13-01``, 5,000 digits).
+
+    Internal, not a CyborgError: it never leaves this module (the loader turns it into a ConfigError
+    with the file's name), and it must not be caught as a yaml.YAMLError on the way.
+    """
+
+
+def _checked(
+    build: Callable[[Any, yaml.ScalarNode], Any], what: str, fix: str
+) -> Callable[[Any, yaml.ScalarNode], Any]:
+    def construct(loader: Any, node: yaml.ScalarNode) -> Any:
+        try:
+            return build(loader, node)
+        except (ValueError, OverflowError) as exc:
+            long = len(node.value) > 40
+            shown = f"{node.value[:20]}... ({len(node.value):,} characters)" if long else node.value
+            reason = "over Python's limit of 4,300 digits" if "digits" in str(exc) else str(exc)
+            raise _ValueNotBuilt(
+                f"line {node.start_mark.line + 1}: {shown} is not a usable {what} ({reason}); fix: {fix}"
+            ) from None
+
+    return construct
+
+
+_TIMESTAMP = "tag:yaml.org,2002:timestamp"
+_INT = "tag:yaml.org,2002:int"
+_DATE_FIX = "correct the date (YYYY-MM-DD, a real day), or put the value in quotes if it is text"
+_INT_FIX = "give a number of at most 4,300 digits, or put the value in quotes if it is text"
+
+
+class _SafeLoader(yaml.SafeLoader):
+    """PyYAML's safe loader, with a ConfigError line instead of a ValueError for dates and numbers."""
+
+
+class _CSafeLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):  # type: ignore[misc]
+    """The same on libyaml."""
+
+
+for _loader in (_SafeLoader, _CSafeLoader):
+    _loader.add_constructor(_TIMESTAMP, _checked(yaml.SafeLoader.construct_yaml_timestamp, "date", _DATE_FIX))
+    _loader.add_constructor(_INT, _checked(yaml.SafeLoader.construct_yaml_int, "whole number", _INT_FIX))
+
 Loader = yaml.SafeLoader | yaml.CSafeLoader
 
 
@@ -139,12 +182,12 @@ def load_yaml(text: str, source: str, keys: KeyRules = PLAIN_KEYS) -> Any:
         )
     if yaml_loader(text) is yaml.CSafeLoader:
         try:
-            return _load_yaml_with(yaml.CSafeLoader(text), source, keys)
+            return _load_yaml_with(_CSafeLoader(text), source, keys)
         except ConfigError as exc:
             if not isinstance(exc.__cause__, yaml.YAMLError):
                 raise
             # The C loader's messages have no file name and no excerpt: the Python one tells it better.
-    loader = yaml.SafeLoader(text)
+    loader = _SafeLoader(text)
     loader.name = source  # syntax errors then say 'in "machine.yaml", line 3'
     return _load_yaml_with(loader, source, keys)
 
@@ -188,6 +231,8 @@ def _load_yaml_with(loader: Loader, source: str, keys: KeyRules) -> Any:
         if duplicates:
             raise ConfigError(duplicates, source=source)
         return loader.construct_document(root)
+    except _ValueNotBuilt as exc:
+        raise ConfigError(str(exc), source=source) from None
     except yaml.YAMLError as exc:
         raise ConfigError(
             f"not valid YAML: {exc}\nfix: correct the syntax at the line and column shown "

@@ -30,8 +30,18 @@ NO_MICROPHONE = (
 )
 
 
+MIN_RATE = 4_000
+MAX_RATE = 192_000
+"""Sample rates a recording may have (a header claiming 0 or 4,000,000,007 Hz is broken, not audio)."""
+
+
 def to_recogniser_rate(samples: Any, rate: int) -> bytes:
-    """Mono int16 ``samples`` at ``rate`` as 16 kHz 16-bit bytes."""
+    """Mono int16 ``samples`` at ``rate`` (MIN_RATE to MAX_RATE) as 16 kHz 16-bit bytes."""
+    if not MIN_RATE <= rate <= MAX_RATE:
+        raise HearingError(
+            f"a sample rate of {rate:,} Hz is not usable audio; fix: give a recording at {MIN_RATE:,} to "
+            f"{MAX_RATE:,} Hz (16,000 is what the recogniser takes)"
+        )
     data = np.asarray(samples)
     if rate != SAMPLE_RATE:
         from scipy.signal import resample_poly
@@ -51,6 +61,12 @@ def wav_bytes(data: bytes, what: str = "the recording") -> bytes:
         raise HearingError(f"{what} is not a WAV file ({exc}); fix: give a 16-bit PCM WAV") from exc
     if width != 2:
         raise HearingError(f"{what} has {8 * width}-bit samples; fix: give a 16-bit PCM WAV")
+    if not MIN_RATE <= rate <= MAX_RATE:
+        raise HearingError(
+            f"{what} claims a sample rate of {rate:,} Hz (its header is broken, or it is no recording); "
+            f"fix: give a 16-bit PCM WAV at {MIN_RATE:,} to {MAX_RATE:,} Hz (16,000 is best)"
+        )
+    frames = frames[: len(frames) - len(frames) % (width * channels)]  # cut mid-sample: keep what is whole
     samples = np.frombuffer(frames, dtype="<i2").reshape(-1, channels).mean(axis=1)
     return to_recogniser_rate(samples, rate)
 

@@ -177,9 +177,19 @@ class SpeechInput:
         self._queue.put_nowait(b"")
 
     async def listen_to(self, audio: bytes) -> list[Heard]:
-        """Decode a whole recording and publish what it holds; returns what was heard."""
+        """Decode a recording and publish what it holds, as it goes; returns what was heard.
+
+        It is cut a second at a time, and each utterance decoded as soon as its end is seen: an
+        hour's recording prints its first sentence at once and costs time in proportion to its length.
+        """
         found = []
-        for utterance in [*self._utterances.feed(audio), *self._utterances.finish()]:
+        step = 2 * 16_000  # bytes of a second of 16 kHz 16-bit audio
+        for at in range(0, len(audio), step):
+            for utterance in list(self._utterances.feed(audio[at : at + step])):
+                ended = time.perf_counter()
+                found.append(self._publish(await self._decode(utterance), ended))
+            await asyncio.sleep(0)  # the rest of the loop runs between seconds of audio
+        for utterance in list(self._utterances.finish()):
             ended = time.perf_counter()
             found.append(self._publish(await self._decode(utterance), ended))
         return found
@@ -294,7 +304,9 @@ def cutter(vad: str) -> Cutter:
 
 
 def _build(node: Node, settings: SpeechInputSettings, context: BuildContext) -> SpeechInput:
-    db = NavigationDatabase(Path(settings.db) if settings.db else context.data_dir / "navigation.db")
+    db = NavigationDatabase(
+        Path(settings.db) if settings.db else context.data_dir / "navigation.db", recover=not settings.db
+    )
     try:
         return SpeechInput(
             node,

@@ -243,6 +243,7 @@ class Utterances:
 
         self._endpointer = Endpointer(window=window, ratio=ratio, vad_mode=vad_mode, sample_rate=SAMPLE_RATE)
         self._pending = b""
+        self._offset = 0  # of the first byte of _pending not yet judged
         self._speech: list[bytes] = []
 
     @property
@@ -252,10 +253,12 @@ class Utterances:
 
     def feed(self, chunk: bytes) -> Iterator[bytes]:
         """Yield the utterances that ended within ``chunk``."""
-        self._pending += chunk
+        self._pending = self._pending[self._offset :] + chunk  # one copy per chunk, not one per frame
+        self._offset = 0
         size = self.frame_bytes
-        while len(self._pending) >= size:
-            frame, self._pending = self._pending[:size], self._pending[size:]
+        while len(self._pending) - self._offset >= size:
+            frame = self._pending[self._offset : self._offset + size]
+            self._offset += size
             speech = self._endpointer.process(frame)
             if speech is not None:
                 self._speech.append(speech)
@@ -265,10 +268,12 @@ class Utterances:
     def finish(self) -> Iterator[bytes]:
         """Yield the utterance still open at the end of the stream, if any."""
         if self._endpointer.in_speech:
-            rest = self._endpointer.end_stream((self._pending + bytes(self.frame_bytes))[: self.frame_bytes])
+            tail = self._pending[self._offset :]
+            rest = self._endpointer.end_stream((tail + bytes(self.frame_bytes))[: self.frame_bytes])
             if rest is not None:
                 self._speech.append(rest)
         self._pending = b""
+        self._offset = 0
         if self._speech:
             yield self._take()
 

@@ -135,22 +135,11 @@ class EventStore(LocationStore):
         for label, moment in (("window_start", window_start), ("window_end", window_end)):
             if moment.tzinfo is None:
                 raise CalendarError(f"{label}={moment.isoformat()} is naive; pass an aware datetime")
-        found = [
-            Occurrence(event, start, end)
-            for event in self.list_events(include_ignored=False)
-            for start, end in occurrences_between(
-                event.start, event.end, event.recurrence, window_start, window_end
-            )
-        ]
-        return sorted(found, key=lambda occ: (occ.start, occ.event.id or 0))
+        return occurrences_among(self.list_events(include_ignored=False), window_start, window_end)
 
     def ongoing_events(self, now: datetime) -> list[Occurrence]:
         """Occurrences of non-ignored events with ``start <= now < end`` (recurring ones expanded)."""
-        if now.tzinfo is None:
-            raise CalendarError(
-                f"now={now.isoformat()} is naive; pass an aware time, e.g. datetime.now(timezone.utc)"
-            )
-        return [occ for occ in self.events_between(now, now + timedelta(microseconds=1)) if occ.start <= now]
+        return ongoing_among(self.list_events(include_ignored=False), now)
 
     def _event_id_by_uid(self, uid: str) -> int | None:
         rows = self._read("SELECT id FROM events WHERE uid = ?", (uid,))
@@ -181,6 +170,32 @@ class EventStore(LocationStore):
         except (ValueError, ZoneInfoNotFoundError) as exc:
             log.warning("skipping calendar event %s in %s: %s", event_id, self.path, exc)
             return None
+
+
+def occurrences_among(
+    events: Sequence[CalendarEvent], window_start: datetime, window_end: datetime
+) -> list[Occurrence]:
+    """Occurrences of ``events`` overlapping ``[window_start, window_end)``, by start (no database:
+    a thread may expand them while the loop goes on; every expansion is bounded, see recurrence)."""
+    found = [
+        Occurrence(event, start, end)
+        for event in events
+        for start, end in occurrences_between(
+            event.start, event.end, event.recurrence, window_start, window_end
+        )
+    ]
+    return sorted(found, key=lambda occ: (occ.start, occ.event.id or 0))
+
+
+def ongoing_among(events: Sequence[CalendarEvent], now: datetime) -> list[Occurrence]:
+    """Occurrences of ``events`` with ``start <= now < end``."""
+    if now.tzinfo is None:
+        raise CalendarError(
+            f"now={now.isoformat()} is naive; pass an aware time, e.g. datetime.now(timezone.utc)"
+        )
+    return [
+        occ for occ in occurrences_among(events, now, now + timedelta(microseconds=1)) if occ.start <= now
+    ]
 
 
 def _event_values(event: CalendarEvent) -> tuple[object, ...]:

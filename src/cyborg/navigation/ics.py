@@ -162,10 +162,25 @@ def _as_aware(value: date | datetime, zone: ZoneInfo) -> datetime:
     return value.astimezone(zone)
 
 
+def _check_zone(name: str, prop: Any) -> None:
+    """A time with a TZID that neither this machine nor the file's VTIMEZONEs know comes back naive."""
+    zone_id = prop.params.get("TZID") if hasattr(prop, "params") else None
+    value = prop.dt
+    if zone_id and isinstance(value, datetime) and value.tzinfo is None:
+        raise CalendarError(
+            f"its {name} has the time zone {_short(str(zone_id))}, which neither this machine nor the file "
+            "defines; fix: export it again with a known zone (an IANA name such as Europe/Oslo, or with "
+            "its VTIMEZONE)"
+        )
+
+
 def _times(vevent: Any, zone: ZoneInfo) -> tuple[datetime, datetime]:
     dtstart = vevent.get("DTSTART")
     if dtstart is None:
         raise CalendarError("it has no DTSTART")
+    _check_zone("DTSTART", dtstart)
+    if vevent.get("DTEND") is not None:
+        _check_zone("DTEND", vevent.get("DTEND"))
     start = _as_aware(dtstart.dt, zone)
     if vevent.get("DTEND") is not None:
         end = _as_aware(vevent.get("DTEND").dt, zone)

@@ -76,7 +76,10 @@ class NavigationSettings(ModuleSettings):
 
 
 def _build(node: Node, settings: NavigationSettings, context: BuildContext) -> NavigationModule:
-    db = NavigationDatabase(Path(settings.db) if settings.db else context.data_dir / "navigation.db")
+    # A file the settings name is the user's: refused if unusable, never moved aside.
+    db = NavigationDatabase(
+        Path(settings.db) if settings.db else context.data_dir / "navigation.db", recover=not settings.db
+    )
     occupancy = context.occupancy_map()
     map_name = Path(occupancy.source).stem if occupancy.source else "map"
     db.use_map(map_name)  # also for a map without goals: the last map's places are not on this one

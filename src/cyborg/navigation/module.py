@@ -36,8 +36,9 @@ from cyborg.navigation.behaviour import (
 from cyborg.navigation.calendar import CalendarEntry
 from cyborg.navigation.database import NavigationDatabase
 from cyborg.navigation.dialogue import Answer, Reply, ReplyKind, Request, after_answer, reply_to
+from cyborg.navigation.events import ongoing_among
 from cyborg.navigation.keywords import Intent, detect_answer, detect_navigation
-from cyborg.navigation.models import CalendarEvent, Location, ResponseType
+from cyborg.navigation.models import CalendarEvent, Location, Occurrence, ResponseType
 from cyborg.navigation.watchdog import TripWatch
 from cyborg.transport import topics
 from cyborg.transport.base import GoalStatus, MessageInfo, Node
@@ -115,6 +116,8 @@ class NavigationModule(BehaviourModule):
         self.sulking = False
         self.wandering_now = False
         self._closing = False
+        self._expanding: asyncio.Future[list[Occurrence]] | None = None
+        """The calendar being looked at on a worker thread (real time only)."""
         self.emotion_since = node.clock.monotonic()
         self._warned_off_map: set[str] = set()
         self.request: Request | None = None
@@ -143,6 +146,8 @@ class NavigationModule(BehaviourModule):
         """Stop looking at the calendar and end the goal that runs; close the database if it opened it."""
         self._closing = True
         self._scheduler.cancel()
+        if self._expanding is not None:
+            self._expanding.cancel()
         super().close()
         if self.owns_db:
             self.db.close()
@@ -246,7 +251,30 @@ class NavigationModule(BehaviourModule):
         return math.dist(self.pose, place.position) <= max(place.tolerance, AT_PLACE_DISTANCE)
 
     def _check_schedule(self) -> None:
-        ongoing = self.db.ongoing_events(self.node.clock.datetime())
+        """Look at the calendar. In real time its rules are expanded on a worker thread, so a costly
+        one (each is bounded: cyborg.navigation.recurrence) never stops the robot's loop; in virtual
+        time on the loop, so a run is the same every time."""
+        now = self.node.clock.datetime()
+        if self.node.clock.is_virtual:
+            self._act_on_schedule(self.db.ongoing_events(now))
+            return
+        if self._expanding is not None:
+            return  # the last look is still under way: this tick is its
+        events = self.db.list_events(include_ignored=False)
+        self._expanding = asyncio.ensure_future(asyncio.to_thread(ongoing_among, events, now))
+        self._expanding.add_done_callback(self._expanded)
+
+    def _expanded(self, task: asyncio.Future[list[Occurrence]]) -> None:
+        self._expanding = None
+        if task.cancelled() or self._closing:
+            return
+        error = task.exception()
+        if error is not None:
+            log.warning("calendar: could not look at it: %s", error)
+            return
+        self._act_on_schedule(task.result())
+
+    def _act_on_schedule(self, ongoing: list[Occurrence]) -> None:
         if not ongoing:
             self.scheduled = None
             return

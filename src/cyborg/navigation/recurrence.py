@@ -9,8 +9,10 @@ Expansion is windowed: a rule is checked once (INTERVAL and COUNT in range, some
 matches it, occurrences do not overlap) and each query starts the rule a whole number of
 periods before its window instead of at the event's first start, so "every second since
 1970" costs as little as "every Wednesday"; a query also stops after a bounded number of
-occurrences (:mod:`cyborg.limits`). A rule stored before these checks that fails them is
-skipped with a logged warning, never expanded.
+occurrences (:mod:`cyborg.limits`). Every expansion runs under a budget of steps and CPU time
+(:class:`Budget`): dateutil walks a sparse sub-daily rule (``FREQ=SECONDLY;BYMONTH=2;BYMONTHDAY=29``)
+day by day through the years between its occurrences, which no count of occurrences bounds. A rule
+stored before these checks that fails them is skipped with a logged warning, never expanded.
 
 No clock is read here: every function takes the time it needs as an argument.
 """
@@ -18,10 +20,14 @@ No clock is read here: every function takes the time it needs as an argument.
 from __future__ import annotations
 
 import collections
+import contextlib
 import functools
 import itertools
 import logging
 import re
+import sys
+import time as _time
+from collections.abc import Iterator
 from datetime import UTC, datetime, time, timedelta, tzinfo
 from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
@@ -29,7 +35,14 @@ from dateutil.relativedelta import relativedelta
 from dateutil.rrule import rrule, rruleset, rrulestr
 
 from cyborg.errors import CalendarError, DatabaseError, RuleTooCostly
-from cyborg.limits import MAX_EVENT_DAYS, MAX_OCCURRENCES_PER_QUERY, MAX_RULE_COUNT
+from cyborg.limits import (
+    MAX_EVENT_DAYS,
+    MAX_OCCURRENCES_PER_QUERY,
+    MAX_RULE_COUNT,
+    MAX_RULE_SECONDS,
+    MAX_RULE_STEPS,
+    MAX_RULE_TOTAL_SECONDS,
+)
 
 RULE_EXAMPLE = "FREQ=WEEKLY;BYDAY=WE or FREQ=DAILY;COUNT=5"
 _STAMP = re.compile(r"^(\d{8})(?:T(\d{6})(Z?))?$")
@@ -49,6 +62,59 @@ MAX_SCAN = 20 * MAX_OCCURRENCES_PER_QUERY
 """Most occurrences one query iterates over (including those before its window)."""
 
 log = logging.getLogger(__name__)
+
+
+# --- the work budget ------------------------------------------------------------------------
+
+
+class Budget:
+    """The work one expansion of a rule may take: MAX_RULE_STEPS steps and MAX_RULE_SECONDS of CPU time
+    between two occurrences (:meth:`reset` at each), and MAX_RULE_TOTAL_SECONDS in all.
+
+    A step is a Python call or generator resumption in this thread (dateutil takes one per period
+    of the rule it looks at); the time is this thread's CPU time, so a loaded machine does not
+    turn a usable rule into a refused one.
+    """
+
+    def __init__(self, what: str) -> None:
+        self.what = what
+        self._end = _time.thread_time() + MAX_RULE_TOTAL_SECONDS
+        self.reset()
+
+    def reset(self) -> None:
+        """An occurrence was found: the next gap gets a budget of its own."""
+        self._steps = 0
+        self._deadline = min(self._end, _time.thread_time() + MAX_RULE_SECONDS)
+
+    def __call__(self, frame: object, event: str, arg: object) -> None:
+        self._steps += 1
+        now = _time.thread_time()
+        if now > self._end:
+            raise RuleTooCostly(f"{self.what} takes over {MAX_RULE_TOTAL_SECONDS} s of work; fix: {_COARSER}")
+        if self._steps > MAX_RULE_STEPS or now > self._deadline:
+            raise RuleTooCostly(
+                f"{self.what} takes over {MAX_RULE_STEPS:,} steps or {MAX_RULE_SECONDS} s of work from one "
+                f"occurrence to the next; fix: {_COARSER}"
+            )
+
+
+_COARSER = (
+    "use the coarsest FREQ that says the same, with the same BY... parts (FREQ=DAILY;BYHOUR=23 rather than "
+    "FREQ=SECONDLY;BYHOUR=23, FREQ=YEARLY;BYMONTH=2;BYMONTHDAY=29;BYHOUR=23 rather than FREQ=SECONDLY;...): "
+    "a sub-daily FREQ is walked through day by day, also on the days its BY... parts skip"
+)
+
+
+@contextlib.contextmanager
+def bounded(what: str) -> Iterator[Budget]:
+    """Raise RuleTooCostly inside the block once it goes over its :class:`Budget` (which it yields)."""
+    budget = Budget(what)
+    previous = sys.gettrace()
+    sys.settrace(budget)
+    try:
+        yield budget
+    finally:
+        sys.settrace(previous)
 
 
 # --- recurrence strings ----------------------------------------------------------------------
@@ -193,8 +259,13 @@ def check_expansion(recurrence: str, start: datetime, length: timedelta | None =
             f"one occurrence lasts {length}, over the limit of {MAX_EVENT_DAYS} days; fix: check the end "
             "(or DTEND/DURATION) of the event"
         )
-    probe = _far_probe(rule_text, start)
-    first = list(itertools.islice(probe, _OVERLAP_SAMPLE + 1))
+    first: list[datetime] = []
+    if not _dates_never_match(rule_text, start):
+        probe = _far_probe(rule_text, start)
+        with bounded("finding its first occurrences") as budget:
+            for occurrence in itertools.islice(probe, _OVERLAP_SAMPLE + 1):
+                first.append(occurrence)
+                budget.reset()
     if not first:
         raise RuleTooCostly(
             "no date matches all of its BY... parts, so it never repeats; fix: correct them (e.g. BYMONTH=2 "
@@ -231,6 +302,26 @@ def _far_probe(rule_text: str, start: datetime) -> rrule:
     return rule
 
 
+_DATE_PARTS = ("BYMONTH", "BYMONTHDAY", "BYYEARDAY", "BYDAY")
+
+
+def _dates_never_match(rule_text: str, start: datetime) -> bool:
+    """True if a daily or sub-daily rule's date parts match no day in 400 years.
+
+    The same parts under FREQ=YEARLY pick the same days with one step a year, where the rule's own
+    FREQ would walk every day of the 400 years to find that none matches.
+    """
+    parts = _rule_parts(rule_text)
+    if parts.get("FREQ") not in ("DAILY", "HOURLY", "MINUTELY", "SECONDLY"):
+        return False
+    dates = {k: v for k, v in parts.items() if k in _DATE_PARTS}
+    if not dates or any(c.isdigit() for c in dates.get("BYDAY", "").replace(",", "")):
+        return False
+    yearly = ";".join(["FREQ=YEARLY", *(f"{k}={v}" for k, v in dates.items())])
+    probe = _far_probe(yearly, start.replace(hour=0, minute=0, second=0, microsecond=0))
+    return next(iter(probe), None) is None
+
+
 def build_rule_set(recurrence: str, start: datetime) -> rruleset:
     """The dateutil rule set of a stored recurrence; ``start`` is always the first occurrence."""
     rules = rrulestr(recurrence, dtstart=start, forceset=True)
@@ -259,9 +350,19 @@ def occurrences_between(
     if recurrence is None:
         starts = [start] if start < window_end else []
     else:
-        if not _usable(recurrence, start, length):
+        if not _usable(recurrence, start, length) or (recurrence, start) in _TOO_COSTLY:
             return []
-        starts = _starts(recurrence, start, window_start - length - timedelta(seconds=1), window_end)
+        try:
+            starts = _starts(recurrence, start, window_start - length - timedelta(seconds=1), window_end)
+        except RuleTooCostly as exc:
+            _TOO_COSTLY.add((recurrence, start))
+            log.warning(
+                "calendar: skipping the event starting %s from now on: recurrence %r: %s",
+                start,
+                recurrence,
+                exc,
+            )
+            return []
     found = []
     for occ in starts:
         occ_end = occ + length
@@ -269,6 +370,9 @@ def occurrences_between(
             found.append((occ, occ_end))
     return found[:MAX_OCCURRENCES_PER_QUERY]
 
+
+_TOO_COSTLY: set[tuple[str, datetime]] = set()
+"""Rules (with their start) a query found over the work budget: skipped for the rest of the process."""
 
 _SEEN_SPANS: dict[tuple[str, datetime], tuple[datetime, datetime | None, list[datetime]]] = {}
 """Per rule: (lower, upper, starts): every occurrence starting in [lower, upper) (None: forever)."""
@@ -289,13 +393,15 @@ def _starts(recurrence: str, start: datetime, lower: datetime, upper: datetime) 
         return [occ for occ in seen[2] if lower <= occ < upper]
     found: list[datetime] = []
     after: datetime | None = None
-    for scanned, occ in enumerate(_rules_near(recurrence, start, lower).xafter(lower, inc=True), start=1):
-        if occ >= upper:
-            after = occ
-            break
-        if len(found) >= MAX_OCCURRENCES_PER_QUERY + 2 or scanned >= MAX_SCAN:  # +2: ended before the window
-            return found  # cut short: not a complete picture of the span, so not remembered
-        found.append(occ)
+    with bounded("finding its occurrences") as budget:
+        for scanned, occ in enumerate(_rules_near(recurrence, start, lower).xafter(lower, inc=True), start=1):
+            budget.reset()
+            if occ >= upper:
+                after = occ
+                break
+            if len(found) >= MAX_OCCURRENCES_PER_QUERY + 2 or scanned >= MAX_SCAN:  # +2: before the window
+                return found  # cut short: not a complete picture of the span, so not remembered
+            found.append(occ)
     if len(found) <= _SEEN_SPAN_STARTS:
         if len(_SEEN_SPANS) >= _SEEN_SPAN_RULES:
             _SEEN_SPANS.clear()
@@ -340,7 +446,11 @@ def _rules_near(recurrence: str, start: datetime, lower: datetime) -> rruleset:
 def _last_of_count(rule_text: str, start: datetime) -> datetime:
     """The last occurrence of a rule with COUNT (at most MAX_RULE_COUNT of them)."""
     rule = rrulestr(rule_text, dtstart=start)
-    tail = collections.deque(itertools.islice(rule, MAX_RULE_COUNT), maxlen=1)
+    tail: collections.deque[datetime] = collections.deque(maxlen=1)
+    with bounded("finding its last occurrence") as budget:
+        for occurrence in itertools.islice(rule, MAX_RULE_COUNT):
+            tail.append(occurrence)
+            budget.reset()
     return tail[0] if tail else start
 
 

@@ -12,7 +12,8 @@
 - what they share: :mod:`~cyborg.transport._queue` (subscription queues),
   :mod:`~cyborg.transport._goals` (a client's goal handle), :mod:`~cyborg.transport._callbacks`
   (running a component's callback), :mod:`~cyborg.transport._host` and
-  :mod:`~cyborg.transport._convert` (what the ROS transports share).
+  :mod:`~cyborg.transport._convert` (what the ROS transports share);
+- :mod:`~cyborg.transport.watchdog`: notices a blocked event loop and names the callback that holds it.
 
 :class:`EmbeddedTransport` is imported when first asked for, so that a process using only
 the ROS transport (``cyborg.transport.ros``) does not load it.

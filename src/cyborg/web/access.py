@@ -31,6 +31,7 @@ class Limits:
 
     max_body: int = 64 * 1024  # bytes of a command's body
     header_timeout: float = 10.0  # real seconds to send a request, or the next one on a kept-alive connection
+    body_timeout: float = 10.0  # real seconds to send a command's body once its headers are in
     max_connections: int = 512
     grace: float = 1.0  # real seconds a new connection has to start its request before it may make room
     max_websockets: int = 64

@@ -31,6 +31,7 @@ from cyborg.transport import topics
 from cyborg.transport.base import Node
 from cyborg.transport.messages import EmotionalFeedback, String
 from cyborg.web.access import DEFAULT_PORT as DEFAULT_PORT
+from cyborg.web.request_log import RequestLog
 from cyborg.web.security import Access, Guard, needs_token, new_token
 
 log = logging.getLogger(__name__)
@@ -129,6 +130,8 @@ class RobotAPI:
         self._runner: web.AppRunner | None = None
         self._server: asyncio.Server | None = None
         self.port: int | None = None
+        self.request_log = RequestLog(log)
+        """What aiohttp would log about bad requests, one short line at most every few seconds."""
 
     # --- records ------------------------------------------------------------------------
 
@@ -179,8 +182,9 @@ class RobotAPI:
     # --- handlers -------------------------------------------------------------------------
 
     async def _json(self, request: web.Request) -> dict[str, Any]:
+        raw = await self.guard.read_body(request)
         try:
-            body = await request.json()
+            body = json.loads(raw.decode("utf-8"))  # strict UTF-8 (RFC 8259): no BOM, no UTF-16
         except (ValueError, RecursionError):  # also numbers of over 4300 digits and very deep nesting
             raise CommandError('the body is not usable JSON; send e.g. {"name": "music_play"}') from None
         if not isinstance(body, dict):
@@ -406,7 +410,9 @@ class RobotAPI:
         speed = getattr(clock, "speed", 1.0) if clock.is_virtual else 1.0
         # The loop's timers run on the robot's clock: scale the real-time limit; none at --speed max.
         timeout = self.guard.limits.header_timeout * speed if speed else 0.0
-        self._runner = web.AppRunner(self.app, access_log=None, keepalive_timeout=timeout)
+        self._runner = web.AppRunner(
+            self.app, access_log=None, keepalive_timeout=timeout, logger=self.request_log
+        )
         await self._runner.setup()
         assert self._runner.server is not None
         accept = self.guard.protocol_factory(self._runner.server, speed or 0.0)

@@ -9,6 +9,7 @@ it and announces the address; :func:`serve_api` is the in-process robot's hook.
 
 from __future__ import annotations
 
+import socket
 from collections.abc import Awaitable, Callable
 from typing import Any
 
@@ -63,6 +64,11 @@ async def start_api(
     ``say(text, colour)``; return the address."""
     try:
         url = await api.start(host, port)
+    except socket.gaierror as exc:  # the host is the problem, not the port
+        raise CyborgError(
+            f"cannot serve on {host}:{port}: {exc.strerror}; fix: give --host an address of this machine "
+            "(127.0.0.1 for this machine only, 0.0.0.0 for every network it is on)"
+        ) from exc
     except OSError as exc:
         raise CyborgError(
             f"cannot serve on {host}:{port}: {exc.strerror}; fix: pass --port 0 or another port"
@@ -94,6 +100,7 @@ def serve_api(
                 "gatekeepers": {name: g.report() for name, g in gatekeepers.items()},
                 "emotion_enabled": robot.emotion.enabled,
                 "storage": robot.store.save_status.as_json(),
+                "blocked": robot.loop_blocked(),
             },
             settle=robot.store.flush,
         )

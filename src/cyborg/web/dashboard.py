@@ -278,6 +278,7 @@ class Dashboard:
                 "regions": lanes,
                 "emotion_enabled": self.robot.emotion_enabled(),
                 "storage": self._storage(),
+                "blocked": self.robot.loop_blocked(),
                 "motivator": self._motivator_settings(),
                 "has_base": self._map() is not None,
             }

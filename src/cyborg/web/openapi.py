@@ -55,6 +55,13 @@ STATUS_SCHEMA: dict[str, Any] = {
                 "unsaved": {"type": "array", "items": {"type": "string"}},
             },
         },
+        "blocked": {
+            "type": "object",
+            "nullable": True,
+            "description": "the last time a callback blocked the in-process robot's event loop (everything "
+            "stood still meanwhile): the callback, its module, file and line, how long, and the fix; "
+            "null if never, absent under ROS",
+        },
     },
 }
 

@@ -18,6 +18,7 @@ import logging
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 from cyborg.app.config import LoadedConfig
 from cyborg.app.view import BaseStatus, BaseView
@@ -147,6 +148,9 @@ class RemoteRobot:
 
     def save_status(self) -> SaveStatus | None:
         return None  # the store is the controller node's; it does not publish its state
+
+    def loop_blocked(self) -> dict[str, Any] | None:
+        return None  # each module has its own process and loop there
 
     def base(self) -> BaseView | None:
         return self.base_mirror

@@ -93,6 +93,8 @@ class Guard:
         self._busy: dict[RequestHandler, int] = {}
         self._evicted: set[RequestHandler] = set()  # closed to make room, not yet gone
         self._opened: dict[RequestHandler, float] = {}  # open connection -> when (loop time)
+        self._reading: dict[RequestHandler, float] = {}  # connection reading a body -> since (loop time)
+        self._speed = 1.0
         self.max_connections = self.limits.max_connections
         self.refused: dict[str, int] = {}  # why -> how many requests were refused (docs, tests)
 
@@ -165,7 +167,8 @@ class Guard:
                 given = credentials.strip()
             elif request.path == "/api/ws":
                 given = request.query.get("token", "")
-            if not secrets.compare_digest(given.encode(), token.encode()):
+            # aiohttp keeps bytes that are not UTF-8 as surrogates: compare the bytes the client sent.
+            if not secrets.compare_digest(given.encode("utf-8", "surrogateescape"), token.encode()):
                 self._refuse(
                     "token",
                     web.HTTPUnauthorized,
@@ -220,6 +223,7 @@ class Guard:
         real second (the robot's clock; 0 at --speed max)."""
         loop = asyncio.get_running_loop()
         grace = self.limits.grace * speed
+        self._speed = speed
 
         def accept() -> asyncio.Protocol:
             now = loop.time()
@@ -232,6 +236,11 @@ class Guard:
                     (c for c in connections if c not in self._busy and now - self._opened[c] >= grace),
                     None,
                 )
+                if idle is None:  # then the one that has been sending its body the longest
+                    slow = sorted((since, id(c), c) for c, since in self._reading.items() if c in live)
+                    if slow and now - slow[0][0] >= grace:
+                        idle = slow[0][2]
+                        self.refused["slow-body-closed"] = self.refused.get("slow-body-closed", 0) + 1
                 if idle is None:
                     self.refused["connections"] = self.refused.get("connections", 0) + 1
                     return _Refused(self._too_many(), grace)
@@ -243,6 +252,39 @@ class Guard:
             return handler
 
         return accept
+
+    async def read_body(self, request: web.Request) -> bytes:
+        """The request's body, within ``body_timeout`` real seconds of its headers (408 if not).
+
+        While it arrives the connection may be closed to make room for a new one (at the
+        connection limit, after the idle ones): a client that sends a byte a second must not
+        lock the dashboard and the command tool out. 400 if the client leaves halfway.
+        """
+        protocol = request.protocol
+        self._reading[protocol] = asyncio.get_running_loop().time()
+        limit = self.limits.body_timeout * self._speed
+        try:
+            async with asyncio.timeout(limit if limit > 0 else None):
+                return await request.read()
+        except TimeoutError:
+            self.refused["slow-body"] = self.refused.get("slow-body", 0) + 1
+            problem = (
+                f"the body did not arrive within {self.limits.body_timeout:g} s of the headers, this API's "
+                "limit; fix: send the whole (small) body at once"
+            )
+            raise web.HTTPRequestTimeout(
+                text=json.dumps({"error": problem}),
+                content_type="application/json",
+                headers={"Connection": "close"},
+            ) from None
+        except ConnectionError:
+            self.refused["body-abandoned"] = self.refused.get("body-abandoned", 0) + 1
+            raise web.HTTPBadRequest(
+                text=json.dumps({"error": "the client left before its body arrived"}),
+                content_type="application/json",
+            ) from None
+        finally:
+            self._reading.pop(protocol, None)
 
     def _too_many(self) -> bytes:
         problem = (

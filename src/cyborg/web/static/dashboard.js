@@ -585,6 +585,7 @@
     $("top-phase").textContent = health.phase;
     showEmotionSwitch(health.emotion_enabled);
     showStorage(health.storage);
+    showBlocked(health.blocked);
     $("health-caption").textContent =
       `${health.active_state || "–"} for ${health.seconds_in_state.toFixed(0)} s · goal ${health.goal_status || "none"}`;
 
@@ -644,6 +645,20 @@
       else showNoBase();
     }
     scheduleDraw();
+  }
+
+  // A module callback that blocked the robot's event loop (everything here stood still meanwhile):
+  // shown for a minute after it ended, naming the callback and its module; the tooltip has the fix.
+  function showBlocked(blocked) {
+    const box = $("blocked-warning");
+    const recent = Boolean(blocked && (blocked.ongoing || blocked.seconds_ago < 60));
+    if (recent) {
+      const who = blocked.module ? `${blocked.callback} (${blocked.module})` : blocked.callback;
+      $("blocked-reason").textContent = `${who} ${blocked.seconds.toFixed(1)} s`;
+      box.title = `${who} at ${blocked.where} held the robot's event loop for ${blocked.seconds.toFixed(1)} s: ` +
+        `the controller, the other modules and this page stood still. Fix: ${blocked.fix}`;
+    }
+    box.hidden = !recent;
   }
 
   // Whether the robot's data is saved: a warning with the reason and the fix while it is not

@@ -1,0 +1,86 @@
+"""Issue 31, item 8: the user's data never quietly goes elsewhere.
+
+Review 3.18: `cyborg db --db notes.txt events list`, a listing command, renamed the user's file to
+``notes.txt.corrupt-...`` and put a database in its place. 3.14: a database locked by another
+program got the advice "check the disk and the file's permissions". 3.16: deleting the data folder
+while the robot ran went unnoticed (``storage.saved`` stayed true).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+import urllib.request
+from collections.abc import Callable
+from pathlib import Path
+from subprocess import CompletedProcess
+
+from tests.hostile.robot import ServedRobot
+
+LOCKER = """
+import sqlite3, sys, time
+connection = sqlite3.connect(sys.argv[1], isolation_level=None)
+connection.execute("BEGIN EXCLUSIVE")
+print("locked", flush=True)
+time.sleep(60)
+"""
+
+
+def test_a_listing_command_leaves_a_file_that_is_no_database_as_it_is(
+    tmp_path: Path, cyborg: Callable[..., CompletedProcess[str]]
+) -> None:
+    notes = tmp_path / "notes.txt"
+    notes.write_text("my notes\n", encoding="utf-8")
+    result = cyborg(["db", "--db", str(notes), "events", "list"])
+    output = result.stdout + result.stderr
+    assert result.returncode == 2 and "Traceback" not in output, output
+    assert "notes.txt is not a usable navigation database" in output and "fix:" in output, output
+    assert notes.read_text(encoding="utf-8") == "my notes\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt"]
+
+
+def test_a_locked_database_names_the_program_that_holds_it(
+    tmp_path: Path, cyborg: Callable[..., CompletedProcess[str]]
+) -> None:
+    db = tmp_path / "navigation.db"
+    assert cyborg(["db", "--db", str(db), "locations", "list"]).returncode == 0
+    locker = subprocess.Popen([sys.executable, "-c", LOCKER, str(db)], stdout=subprocess.PIPE, text=True)
+    try:
+        assert locker.stdout is not None and locker.stdout.readline() == "locked\n"
+        result = cyborg(["db", "--db", str(db), "locations", "add", "lab kitchen"])
+    finally:
+        locker.kill()
+        locker.wait()
+    output = result.stdout + result.stderr
+    assert result.returncode == 2 and "Traceback" not in output, output
+    line = next(line for line in output.splitlines() if line.startswith("Error:"))
+    assert "database is locked" in line and f"(process {locker.pid})" in line, line
+    assert "fix: stop that program" in line and "permissions" not in line, line
+
+
+def test_a_deleted_data_folder_is_noticed(tmp_path: Path) -> None:
+    data = tmp_path / "data"
+    robot = ServedRobot(tmp_path, "--data-dir", str(data))
+    try:
+        shutil.rmtree(data)
+        body = json.dumps({"pleasure": 0.5, "arousal": 0.1, "dominance": 0.2}).encode()
+        request = urllib.request.Request(
+            robot.url + "/api/emotion/values", data=body, headers={"Content-Type": "application/json"}
+        )
+        with urllib.request.urlopen(request, timeout=30) as answer:
+            answered = json.load(answer)
+        assert answered.get("saved") is False, answered
+        with urllib.request.urlopen(robot.url + "/api/status", timeout=30) as answer:
+            storage = json.load(answer)["storage"]
+        assert storage["saved"] is False and "was deleted or replaced" in storage["problem"], storage
+        assert "restore the data folder" in storage["fix"], storage
+        time.sleep(0.2)
+        assert "was deleted or replaced" in robot.text()
+        assert robot.terminate() == 0 and "Traceback" not in robot.text(), robot.text()
+    finally:
+        robot.kill()
+        assert os.path.exists(tmp_path)
