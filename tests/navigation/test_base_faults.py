@@ -8,6 +8,7 @@ wrong with the fix, and is ready for the next person.
 
 from __future__ import annotations
 
+import json
 import logging
 import typing
 from pathlib import Path
@@ -18,8 +19,10 @@ import yaml
 from cyborg.app.config import LoadedConfig, packaged_config, parse_config
 from cyborg.modules.kind import BuildContext, ModuleKind
 from cyborg.sim.base import SimulatedBase, SimulatedBaseSettings
+from cyborg.transport import topics
 from cyborg.transport.base import Node
 from cyborg.transport.clock import VirtualClock
+from cyborg.transport.messages import String
 from tests.navigation.test_module import CONFIG, Cyborg, planner_for
 
 ROBOT = yaml.safe_load(packaged_config("robot.yaml").read_text())["modules"]["cyborg_navigation"]
@@ -80,6 +83,10 @@ def test_a_base_failing_quietly_ends_the_trip_within_its_limit_and_the_robot_say
     problem: str,
 ) -> None:
     cyborg = Cyborg(clock, tmp_path, kinds=faulty(base), config=robot_limits())
+    problems: list[dict[str, typing.Any]] = []  # what the dashboard is told (cyborg.modules.problems)
+    cyborg.transport.node("dashboard_probe").subscribe(
+        topics.PROBLEMS, String, lambda m, i: problems.append(json.loads(m.data))
+    )
     try:
 
         async def main() -> float:
@@ -98,7 +105,7 @@ def test_a_base_failing_quietly_ends_the_trip_within_its_limit_and_the_robot_say
             await cyborg.until(lambda: len(cyborg.sentences(since)) > 0, 15.0, "an answer")
             return ended - moving
 
-        with caplog.at_level(logging.WARNING, logger="cyborg.navigation.module"):
+        with caplog.at_level(logging.WARNING):
             took = clock.run(main())
     finally:
         cyborg.transport.shutdown()
@@ -106,3 +113,7 @@ def test_a_base_failing_quietly_ends_the_trip_within_its_limit_and_the_robot_say
     assert ("navigation_moving", "aborted", "navigation_talking") in cyborg.transitions()
     warnings = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
     assert any(problem in w and "fix:" in w for w in warnings), warnings
+    [told] = problems  # once, while the robot goes on
+    assert told["module"] == "cyborg_navigation"
+    [open_problem] = told["open"]
+    assert open_problem["key"] == "base" and problem in open_problem["problem"] and open_problem["fix"]

@@ -41,6 +41,7 @@ from pydantic import Field
 
 from cyborg.modules.behaviour import Abort, BehaviourModule, GoalContext, Outcome
 from cyborg.modules.kind import BuildContext, Component, ModuleKind, ModuleSettings
+from cyborg.modules.problems import ProblemReporter
 from cyborg.transport.base import MessageInfo, Node
 
 __all__ = [
@@ -55,4 +56,5 @@ __all__ = [
     "ModuleSettings",
     "Node",
     "Outcome",
+    "ProblemReporter",
 ]

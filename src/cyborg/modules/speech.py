@@ -21,6 +21,7 @@ from pathlib import Path
 from pydantic import Field
 
 from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
+from cyborg.modules.problems import ProblemReporter
 from cyborg.transport.base import MessageInfo, Node
 from cyborg.transport.messages import String
 from cyborg.transport.topics import SPEECH_INPUT_TOPIC, SPOKEN_TOPIC
@@ -107,12 +108,15 @@ class TextToSpeech:
             self.sound_problem = (
                 "espeak-ng is not installed; fix: run scripts/setup (or apt-get install espeak-ng)"
             )
-            log.warning("the robot cannot speak aloud: %s", self.sound_problem)
         self.wav_dir = wav_dir
         if wav_dir is not None:
             wav_dir.mkdir(parents=True, exist_ok=True)
         self._wake = asyncio.Event()
         self._spoken_pub = node.publisher(SPOKEN_TOPIC, String)
+        self.problems = ProblemReporter(node)
+        if self.sound_problem is not None:
+            what, _, fix = self.sound_problem.partition("; fix: ")
+            self.problems.report(f"the robot cannot speak aloud: {what}", fix, key="sound")
         node.subscribe(input_topic, String, self._on_text)
         self._task = node.clock.loop.create_task(self._speak_loop(), name="tts")
 
@@ -156,10 +160,15 @@ class TextToSpeech:
             if problem is None:
                 if self.sound_problem is not None:
                     log.warning("sound output works again: the robot speaks aloud")
+                    self.problems.clear("sound")
                 self.sound_problem = None
                 return
             if self.sound_problem is None:  # said once per outage, not per sentence
-                log.warning("the robot cannot speak aloud: %s; %s", problem, NO_SOUND_FIX)
+                self.problems.report(
+                    f"the robot cannot speak aloud: {problem}",
+                    NO_SOUND_FIX.removeprefix("fix: "),
+                    key="sound",
+                )
             self.sound_problem, self._sound_retry_at = problem, clock.monotonic() + SOUND_RETRY
             await clock.sleep(max(0.0, estimated_duration(text) - (clock.monotonic() - started)))
         else:

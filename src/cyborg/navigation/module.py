@@ -17,6 +17,7 @@ from datetime import UTC
 
 from cyborg.errors import CyborgError
 from cyborg.modules.behaviour import Abort, BehaviourModule, GoalContext
+from cyborg.modules.problems import ProblemReporter
 from cyborg.modules.speech import estimated_duration
 from cyborg.navigation.base_link import base_link
 from cyborg.navigation.behaviour import (
@@ -90,6 +91,7 @@ class NavigationModule(BehaviourModule):
         self.owns_db = False
         """True when the module opened ``db`` itself (its kind's factory did): close() closes it."""
         self.rng = rng
+        self.problems = ProblemReporter(node)
         self.scheduler_interval = scheduler_interval
         self.scheduler_repeat = scheduler_repeat
         self.answer_timeout = answer_timeout
@@ -377,7 +379,9 @@ class NavigationModule(BehaviourModule):
             raise Abort(self.db.no_pose_reason(target))
         if not await self.base.ready(2.0):
             self.failed_target = target
-            raise Abort(f"no robot base: {self.base.name} is not offered")
+            missing = f"no robot base: {self.base.name} is not offered"
+            self.problems.report(missing, "start the base's node (cyborg doctor names it)", key="base")
+            raise Abort(missing)
         x, y = target.position
         self.heading_to = target
         self.trip = Trip(self.origin, target)
@@ -405,7 +409,8 @@ class NavigationModule(BehaviourModule):
                     problem = watch.problem(now, handle.status is not GoalStatus.PENDING, self.pose_at)
                     if problem is not None:
                         self.failed_target, self.trip = target, None  # given up: not to go on with
-                        log.warning("giving up the trip to %s: %s", target.name, problem)
+                        what, _, fix = problem.partition("; fix: ")
+                        self.problems.report(f"gave up the trip to {target.name}: {what}", fix, key="base")
                         raise Abort(problem) from None
         finally:
             self.heading_to = None
@@ -416,6 +421,7 @@ class NavigationModule(BehaviourModule):
             self.failed_target = target
             raise Abort(f"could not reach {target.name}: {handle.text or status.name}")
         self.arrived_at = target
+        self.problems.clear("base")  # the base drove the robot there: whatever was wrong is over
         self.send_emotion(target.pleasantness * ARRIVAL_PLEASURE_SCALE, 0.0, 0.0)
 
     async def _wander(self, ctx: GoalContext) -> None:

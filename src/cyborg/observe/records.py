@@ -23,6 +23,8 @@ from cyborg.transport.messages import EmotionalState, PoseWithCovarianceStamped,
 from cyborg.transport.topics import SPOKEN_TOPIC
 
 Record = dict[str, Any]
+MAX_PROBLEMS_TEXT = 65_536  # characters of a problems message read; a longer one is cut (and left out)
+MAX_PROBLEMS = 20  # problems of one module kept in a record
 POSE_INTERVAL_NS = 1_000_000_000
 """At most one pose record a second."""
 NS_PER_S = 1_000_000_000
@@ -60,6 +62,7 @@ class RecordStream:
         node.subscribe(topics.SPEECH_HEARD, String, self._on_recognised, queue_size=1000)
         node.subscribe(topics.AMCL_POSE, PoseWithCovarianceStamped, self._on_pose, queue_size=10)
         node.subscribe(topics.MOTIVATOR_DECISION, String, self._on_decision, queue_size=1000)
+        node.subscribe(topics.PROBLEMS, String, self._on_problems, queue_size=1000)
 
     def now_ns(self) -> int:
         """Nanoseconds since the run started, on the injected clock."""
@@ -74,6 +77,20 @@ class RecordStream:
         record: Record = {"t": readable_seconds(t_ns), "t_ns": t_ns, "type": record_type, **fields}
         for listener in list(self.listeners):
             listener(record)
+
+    def _on_problems(self, m: String, info: MessageInfo) -> None:
+        """A module's open problems ({"module", "open": [{"key", "problem", "fix"}]}): a record
+        of type "problems"; what is not that shape is left out (a stranger's message)."""
+        try:
+            body = json.loads(m.data[:MAX_PROBLEMS_TEXT])
+            module, open_problems = str(body["module"]), body["open"]
+            problems = [
+                {"key": str(p.get("key", "")), "problem": str(p["problem"]), "fix": str(p.get("fix", ""))}
+                for p in open_problems[:MAX_PROBLEMS]
+            ]
+        except (ValueError, KeyError, TypeError, AttributeError):
+            return
+        self.emit("problems", module=module, open=problems)
 
     def _on_state(self, m: SystemState, info: MessageInfo) -> None:
         self.emit("state", event=m.event, **{"from": m.from_system_state}, to=m.to_system_state)

@@ -34,6 +34,9 @@ TEXT_FROM_SPEECH = "/text_from_speech"
 # (std_msgs/String): a message a gatekeeper dropped, a module goal that raised.
 GATEKEEPER_DROPPED = "/cyborg_diagnostics/dropped"
 MODULE_CRASHED = "/cyborg_diagnostics/crashed"
+# Ours: a problem a module has and cannot fix itself (no sound device, a base that does not
+# answer), and when it is over, as JSON {module, key, problem, fix, active} (std_msgs/String).
+PROBLEMS = "/cyborg_diagnostics/problems"
 # Ours: what the text-to-speech module is asked to say, and what it has said (std_msgs/String).
 SPEECH_INPUT_TOPIC = "/cyborg_tts/say"
 SPOKEN_TOPIC = "/cyborg_tts/spoken"

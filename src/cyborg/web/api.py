@@ -112,7 +112,9 @@ class RobotAPI:
             "pleasure": 0.0,
             "arousal": 0.0,
             "dominance": 0.0,
+            "problems": {},
         }
+        """``problems``: each module's open problems (:mod:`cyborg.modules.problems`)."""
         self._sockets: dict[web.WebSocketResponse, asyncio.Queue[str]] = {}
         self.stream = RecordStream(node)
         self.stream.listeners.append(self._on_record)
@@ -144,6 +146,12 @@ class RobotAPI:
             self.status.update(state=record["to"], previous_state=record["from"], event=record["event"])
             if self._lanes is not None and record["to"] in self._lanes.regions.machine.states:
                 self._lanes.on_change(record["to"], 0.0)
+        elif kind == "problems":
+            problems = self.status.setdefault("problems", {})
+            if record["open"]:
+                problems[record["module"]] = record["open"]
+            else:
+                problems.pop(record["module"], None)
         elif kind == "emotion":
             self.status.update(
                 emotion=record["emotion"],

@@ -239,6 +239,10 @@
       const status = await getJSON("/api/status");
       applyStatus({ valid_events: status.valid_events, state: status.state,
         previous_state: status.previous_state, event: status.event });
+      if (status.problems) {
+        dash.problems = { ...status.problems };
+        showProblems();
+      }
     } catch (error) {
       say(`could not read the status: ${error.message}`, true);
     }
@@ -659,6 +663,23 @@
         `the controller, the other modules and this page stood still. Fix: ${blocked.fix}`;
     }
     box.hidden = !recent;
+  }
+
+  // What modules cannot fix themselves (no sound device, a base that does not answer): a warning
+  // naming the first, the tooltip every one with its fix; gone when each module says it is over.
+  function showProblems() {
+    const box = $("problems-warning");
+    const lines = [];
+    for (const [module, open] of Object.entries(dash.problems || {})) {
+      for (const p of open) lines.push({ module, ...p });
+    }
+    if (lines.length) {
+      const first = lines[0];
+      $("problems-reason").textContent = lines.length > 1
+        ? `${first.module}: ${first.problem} (+${lines.length - 1} more)` : `${first.module}: ${first.problem}`;
+      box.title = lines.map((p) => `${p.module}: ${p.problem}${p.fix ? `. Fix: ${p.fix}` : ""}`).join("\n");
+    }
+    box.hidden = lines.length === 0;
   }
 
   // Whether the robot's data is saved: a warning with the reason and the fix while it is not
@@ -1142,6 +1163,10 @@
       case "recognised": return `“${r.text || "…"}” ${Math.round(r.confidence * 100)} %${r.accepted ? "" : " (rejected)"}`;
       case "emotion": return `${r.emotion}  P ${signed(r.pleasure)} A ${signed(r.arousal)} D ${signed(r.dominance)}`;
       case "pose": return `x ${r.x.toFixed(2)} y ${r.y.toFixed(2)} heading ${((r.theta * 180) / Math.PI).toFixed(0)}°`;
+      case "problems":
+        return r.open.length
+          ? `${r.module}: ${r.open.map((p) => p.problem + (p.fix ? ` (fix: ${p.fix})` : "")).join("; ")}`
+          : `${r.module}: no problem left`;
       case "motivator":
         if (r.event) return `chose ${r.event}${r.reason ? ` — ${r.reason}` : ""}`;
         return `nothing chosen: ${r.reason || "no reason given"}`;
@@ -1296,6 +1321,12 @@
         break;
       case "pose":
         applyPose(r);
+        break;
+      case "problems":
+        dash.problems = dash.problems || {};
+        if (r.open.length) dash.problems[r.module] = r.open;
+        else delete dash.problems[r.module];
+        showProblems();
         break;
       default:
         break;
