@@ -290,12 +290,13 @@ ENGINES = ("whisper", "whisper+endpointer", "pocketsphinx", "pocketsphinx+silero
 NAVIGATION = (NAV_INFO, NAV_CMD, NAV_FEEDBACK)
 
 
-def synthesise_all(voices: int) -> list[dict[str, object]]:
-    """Every sentence of every set by every voice at every noise level (16 kHz bytes)."""
+def synthesise_all(voices: int, sets: list[str]) -> list[dict[str, object]]:
+    """Every sentence of ``sets`` by every voice at every noise level (16 kHz bytes)."""
     from cyborg.hearing.synth import VOICES, synthesise
 
     utterances: list[dict[str, object]] = []
-    for name, (inside, outside) in SETS.items():
+    for name in sets:
+        inside, outside = SETS[name]
         for noise in NOISES:
             for voice in VOICES[:voices]:
                 for sentence in [*inside, *outside]:
@@ -312,7 +313,50 @@ def synthesise_all(voices: int) -> list[dict[str, object]]:
     return utterances
 
 
-def child(engine: str, cache: Path, out: Path) -> None:
+FLOOR_EVERY = 10
+"""The floor (a fixed piece of work) is timed after every this many utterances."""
+
+
+def floor_work() -> float:
+    """Seconds a fixed piece of single-threaded work takes now (about 20 ms on an idle core):
+    the floor beside which the latency is read, since the machine's load stretches both."""
+    started = time.perf_counter()
+    total = 0
+    for i in range(200_000):
+        total += i * i % 7
+    return time.perf_counter() - started
+
+
+def text_only(sets: list[str]) -> None:
+    """Score the understanding alone: each sentence's own text, as if heard perfectly."""
+    from cyborg.app.config import load_config, packaged_config
+    from cyborg.app.context import heard_by
+    from cyborg.app.registry import module_kinds
+    from cyborg.hearing.grammar import PlaceWords
+    from cyborg.hearing.module import grammar_of
+    from cyborg.hearing.understanding import Understanding
+    from cyborg.hearing.whisper import WhisperRecogniser
+    from cyborg.navigation.database import NavigationDatabase
+
+    listening = heard_by(load_config(packaged_config("cyborg.yaml")), module_kinds())()
+    places = NavigationDatabase(Path(tempfile.mkdtemp()) / "navigation.db").list_locations()
+    words = [PlaceWords(p.name, tuple(p.aliases)) for p in places]
+    grammar = grammar_of(words, WhisperRecogniser.__new__(WhisperRecogniser), listening)
+    understanding = Understanding.of_grammar(grammar)
+    for name in sets:
+        inside, outside = SETS[name]
+        wrong = []
+        for sentence in [*inside, *outside]:
+            x = understanding.of(sentence)
+            did = (f"{x.event}:{x.place}" if x.place else x.event) if x else None
+            if did != inside.get(sentence):
+                wrong.append(f"{sentence!r} -> {did}")
+        print(f"{name}: {len(inside) + len(outside) - len(wrong)} of {len(inside) + len(outside)} right")
+        for line in wrong:
+            print("   ", line)
+
+
+def child(engine: str, cache: Path, out: Path, options: dict[str, str]) -> None:
     """Hear every cached utterance with ``engine`` and write what was published, per utterance."""
     from cyborg.app.config import load_config, packaged_config
     from cyborg.app.context import heard_by
@@ -327,7 +371,7 @@ def child(engine: str, cache: Path, out: Path) -> None:
     utterances = pickle.loads(cache.read_bytes())
     recogniser_name, _, vad = engine.partition("+")
     started = time.perf_counter()
-    settings = SpeechInputSettings(engine=recogniser_name, vad="pocketsphinx")
+    settings = SpeechInputSettings(engine=recogniser_name, vad="pocketsphinx", **options)
     recogniser = recogniser_of(settings)
     assert recogniser.name == recogniser_name, f"{engine}: fell back to {recogniser.name}"
     default_vad = "silero" if recogniser_name == "whisper" else "pocketsphinx"
@@ -355,9 +399,12 @@ def child(engine: str, cache: Path, out: Path) -> None:
         assert recogniser.grammar is not None
         understanding = Understanding.of_grammar(recogniser.grammar)
     results: list[dict[str, object]] = []
+    floors: list[float] = []
 
     async def run() -> None:
-        for u in utterances:
+        for n, u in enumerate(utterances):
+            if n % FLOOR_EVERY == 0:
+                floors.append(floor_work() * 1000)
             published.clear()
             before, cpu = len(ears.latencies), time.process_time()
             heard = await ears.listen_to(u["audio"])
@@ -385,13 +432,18 @@ def child(engine: str, cache: Path, out: Path) -> None:
         ears.close()
         clock.close()
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    out.write_text(json.dumps({"engine": engine, "load": load_seconds, "peak_mb": peak, "results": results}))
+    out.write_text(
+        json.dumps(
+            {"engine": engine, "load": load_seconds, "peak_mb": peak, "results": results, "floors": floors}
+        )
+    )
 
 
 def score(results: list[dict[str, object]]) -> dict[str, dict[str, float]]:
     """Per set and all together: intended %, quiet/loud intended %, rejected %, misdirections, asked."""
     table: dict[str, dict[str, float]] = {}
-    for name in [*SETS, "all"]:
+    present = [name for name in SETS if any(r["set"] == name for r in results)]
+    for name in [*present, "all"]:
         chosen = [r for r in results if name in (r["set"], "all")]
         inside = [r for r in chosen if r["label"]]
         outside = [r for r in chosen if not r["label"]]
@@ -508,21 +560,39 @@ def main() -> None:
     parser.add_argument("--out", type=Path, help=argparse.SUPPRESS)
     parser.add_argument("--keep", type=Path, help="also write every utterance's result here (JSON lines)")
     parser.add_argument("--footprint", action="store_true", help="only install sizes and import times")
+    parser.add_argument(
+        "--sets", default=",".join(SETS), help=f"which sets, of {', '.join(SETS)} (default: all)"
+    )
+    parser.add_argument(
+        "--settings",
+        default="",
+        help="speech_input settings for every engine, e.g. window=10,beam=1 (default: the defaults)",
+    )
+    parser.add_argument(
+        "--text", action="store_true", help="score the understanding of the sentences' own text"
+    )
     args = parser.parse_args()
+    options = dict(item.split("=", 1) for item in args.settings.split(",") if item)
+    sets = args.sets.split(",")
+    if unknown := set(sets) - set(SETS):
+        parser.error(f"--sets: no set {', '.join(sorted(unknown))}; choose from {', '.join(SETS)}")
     if args.child:
-        child(args.child, args.cache, args.out)
+        child(args.child, args.cache, args.out, options)
         return
     if args.footprint:
         footprint()
         return
+    if args.text:
+        text_only(sets)
+        return
     folder = Path(tempfile.mkdtemp())
     cache = folder / "utterances.pickle"
     started = time.perf_counter()
-    utterances = synthesise_all(args.voices)
+    utterances = synthesise_all(args.voices, sets)
     cache.write_bytes(pickle.dumps(utterances))
     print(machine_line())
     print(
-        f"utterances: {len(utterances)} per engine ({', '.join(f'{n}: {len(i)} in, {len(o)} out' for n, (i, o) in SETS.items())}"
+        f"utterances: {len(utterances)} per engine ({', '.join(f'{n}: {len(SETS[n][0])} in, {len(SETS[n][1])} out' for n in sets)}"
         f" sentences x {args.voices} voices x {len(NOISES)} noise levels); synthesised in {time.perf_counter() - started:.0f} s"
     )
     loads: list[float] = []
@@ -532,7 +602,20 @@ def main() -> None:
         with open("/proc/loadavg", encoding="utf-8") as f:
             loads.append(float(f.read().split()[0]))
         subprocess.run(
-            [sys.executable, __file__, "--child", engine, "--cache", str(cache), "--out", str(out)],
+            [
+                sys.executable,
+                __file__,
+                "--child",
+                engine,
+                "--cache",
+                str(cache),
+                "--out",
+                str(out),
+                "--settings",
+                args.settings,
+                "--sets",
+                args.sets,
+            ],
             check=True,
         )
         with open("/proc/loadavg", encoding="utf-8") as f:
@@ -541,7 +624,8 @@ def main() -> None:
     print(f"load average (1 min) during the run: {min(loads):.1f}-{max(loads):.1f}")
     print(
         "engine | set | intended % (quiet / loud) | rejected % | misdirections | asked first | "
-        "latency p50 / p95 ms | CPU ms per utterance | peak RSS MB | load s"
+        "latency p50 / p95 ms (floor: fixed work's p50 / p95 ms, same run) | CPU ms per utterance | "
+        "peak RSS MB | load s"
     )
     for report in reports:
         results = report["results"]
@@ -554,7 +638,8 @@ def main() -> None:
                 f"({row['quiet']:.1f} / {row['loud']:.1f}) | {row['out']:.1f} | {row['misdirections']:.0f} | "
                 f"{row['asked']:.0f} | "
                 + (
-                    f"{percentile(latencies, 50):.0f} / {percentile(latencies, 95):.0f} | "
+                    f"{percentile(latencies, 50):.0f} / {percentile(latencies, 95):.0f} "
+                    f"(floor {percentile(report['floors'], 50):.0f} / {percentile(report['floors'], 95):.0f}) | "
                     f"{percentile(cpu, 50):.0f} | {report['peak_mb']:.0f} | {report['load']:.1f}"
                     if name == "all"
                     else "| | |"

@@ -243,6 +243,11 @@ class SpeechInputSettings(ModuleSettings):
     prompt: str = Field(
         "", description="more text to prime Whisper with, before the places and phrases it is primed with"
     )
+    prompt_phrasings: bool = Field(
+        True,
+        description="also prime Whisper with the other ways the modules listen for to ask for a place "
+        "('take me to', 'how do I get to'), as many as fit",
+    )
     vad: str = Field(
         "silero",
         pattern="^(silero|pocketsphinx)$",
@@ -273,6 +278,7 @@ def recogniser_of(settings: SpeechInputSettings) -> SpeechRecogniser:
                 beam=settings.beam,
                 window=settings.window,
                 prompt=settings.prompt,
+                phrasings=settings.prompt_phrasings,
                 min_confidence=settings.min_confidence,
             )
         except HearingError as exc:

@@ -21,6 +21,7 @@ import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 
+import snowballstemmer
 from rapidfuzz import fuzz
 
 from cyborg.errors import NavigationError
@@ -438,11 +439,104 @@ def _find_phrase(words: list[str], phrase: str) -> int | None:
 
 def _negated(words: list[str], start: int) -> bool:
     """Whether a negation comes just before the phrase starting at ``start`` ("do not go to")."""
-    return any(w in NEGATIONS for w in words[max(0, start - 2) : start])
+    return any(w in NEGATIONS for w in words[max(0, start - 3) : start])
+
+
+CUE_STOP_WORDS = frozenset(
+    {
+        *FILLER_WORDS,
+        *("i", "me", "you", "your", "we", "us", "do", "can", "could", "would", "will", "might"),
+        *("how", "there", "on", "about", "over", "are", "for", "with", "in", "into", "towards"),
+        *("want", "need", "help", "know", "tell", "trying", "cant", "lets"),
+    }
+)
+"""Words of the trigger phrases that say nothing of what is asked on their own (function words,
+and verbs that lean on the trigger's other words: "need to find", "tell me where")."""
+CUE_SCORE = 0.6
+"""Lowest score (the sum of the cue words' shares) at which a sentence without a trigger phrase
+is read as a request of the intent its cue words lean to."""
+STATEMENT_OPENERS = frozenset(
+    {"my", "his", "her", "their", "our", "the", "this", "that", "he", "she", "they", "it", "its"}
+)
+"""First words of a sentence about something rather than a request ("my friend is looking at the
+lift", "the lift smells funny"): without a trigger phrase, no request."""
+FUZZY_TRIGGER_SCORE = 85.0
+"""Lowest rapidfuzz ratio at which the words before a place count as a misheard trigger phrase
+("show me the wait on" for "show me the way to")."""
+ME_TO = ("me to", "us to", "with me to", "with us to", "me over to", "us over to")
+"""Words right before a place that make any verb a request to be taken there ("drive me to el6")."""
+
+_STEMMER = snowballstemmer.stemmer("english")
+
+
+def _stem(word: str) -> str:
+    return str(_STEMMER.stemWord(word))
+
+
+def _cue_shares() -> dict[str, dict[Intent, float]]:
+    """Each content word of the trigger phrases (stemmed) and the share of its phrases per intent:
+    "where" is all information, "get" mostly information, "take" half command, half feedback."""
+    counts: dict[str, dict[Intent, int]] = {}
+    for intent, phrases in TRIGGERS.items():
+        for phrase in phrases:
+            for word in set(phrase.split()) - CUE_STOP_WORDS:
+                row = counts.setdefault(_stem(word), {})
+                row[intent] = row.get(intent, 0) + 1
+    return {
+        stem: {intent: n / sum(row.values()) for intent, n in row.items()} for stem, row in counts.items()
+    }
+
+
+CUES: dict[str, dict[Intent, float]] = _cue_shares()
+"""Cue words (stemmed) of the navigation intents, learnt from :data:`TRIGGERS`."""
+
+
+def classify_request(words: Sequence[str], place: LocationMatch) -> Intent | None:
+    """The intent of a sentence that names ``place`` but holds no trigger phrase, from its other
+    words (intent and slot).
+
+    Each cue word (a content word of the trigger phrases, with any ending: "leading" for "lead",
+    "directions" for "direction") adds its shares of the intents; words that send someone right
+    before the place ("drive me to", "come with me to") make it a command, and so do words close
+    to a trigger phrase there (a misheard "show me the wait on"). The leading intent needs
+    :data:`CUE_SCORE` and a clear lead over the next; a negated command and a statement ("the
+    lift is ...") are none.
+    """
+    if not words or words[0] in STATEMENT_OPENERS:
+        return None
+    span = range(place.start, place.start + len(place.matched.split()))
+    lead = words[: place.start]
+    if lead and lead[-1] == "the":
+        lead = lead[:-1]
+    before = " ".join(lead)
+    scores: dict[Intent, float] = {}
+    negated = any(w in NEGATIONS for w in lead)
+    for intent, phrases in TRIGGERS.items():
+        for phrase in phrases:
+            tail = " ".join(lead[-len(phrase.split()) :])
+            if len(phrase) >= 10 and fuzz.ratio(tail, phrase) >= FUZZY_TRIGGER_SCORE:
+                scores[intent] = max(scores.get(intent, 0.0), 1.0)
+    for i, word in enumerate(words):
+        if i not in span:
+            for intent, share in CUES.get(_stem(word), {}).items():
+                scores[intent] = scores.get(intent, 0.0) + share
+    if any(f" {before} ".endswith(f" {lead} ") for lead in ME_TO):
+        scores[Intent.NAVIGATION_COMMAND] = scores.get(Intent.NAVIGATION_COMMAND, 0.0) + 1.0
+    if not scores:
+        return None
+    ranked = sorted(scores.items(), key=lambda item: -item[1])
+    intent, best = ranked[0]
+    runner_up = ranked[1][1] if len(ranked) > 1 else 0.0
+    if best < CUE_SCORE or best - runner_up < CUE_SCORE / 2:
+        return None
+    if intent is Intent.NAVIGATION_COMMAND and negated:
+        return None
+    return intent
 
 
 def detect_navigation(text: str, matcher: LocationMatcher) -> Detection | None:
-    """A navigation request in ``text``: a trigger phrase followed by a known place.
+    """A navigation request in ``text``: a trigger phrase followed by a known place, or else a
+    known place in a sentence whose other words ask for it (:func:`classify_request`).
 
     The earliest place wins; of the triggers before it, the one nearest to it, then the
     longest ("show me the way to" over "the way to"); a negated command is none.
@@ -461,7 +555,11 @@ def detect_navigation(text: str, matcher: LocationMatcher) -> Detection | None:
             if match is not None:
                 candidates.append(((after + match.start, -after, -size), intent, match))
     if not candidates:
-        return None
+        place = matcher.find(" ".join(words))
+        guessed = classify_request(words, place) if place is not None else None
+        if place is None or guessed is None:
+            return None
+        return Detection(guessed, place.location, place.matched, place.score)
     _, intent, match = min(candidates, key=lambda c: c[0])
     return Detection(intent, match.location, match.matched, match.score)
 
