@@ -244,9 +244,10 @@ class SpeechInputSettings(ModuleSettings):
         "", description="more text to prime Whisper with, before the places and phrases it is primed with"
     )
     prompt_phrasings: bool = Field(
-        True,
+        False,
         description="also prime Whisper with the other ways the modules listen for to ask for a place "
-        "('take me to', 'how do I get to'), as many as fit",
+        "('take me to', 'how do I get to'), as many as fit (measured: +1 point on new phrasings, "
+        "-3 on the plain ones, and Whisper echoed the prompt's requests: docs/benchmarks-history.md)",
     )
     vad: str = Field(
         "silero",

@@ -122,7 +122,7 @@ def prompt_of(
     extra: str = "",
     *,
     budget: Callable[[str], int] | None = None,
-    phrasings: bool = True,
+    phrasings: bool = False,
 ) -> str:
     """The text Whisper is primed with: ``extra``, the greetings and answers every robot hears,
     the other phrases modules declare (as many as fit), with ``phrasings`` the other ways the
@@ -221,7 +221,7 @@ class WhisperRecogniser:
         beam: int = DEFAULT_BEAM,
         window: float = DEFAULT_WINDOW,
         prompt: str = "",
-        phrasings: bool = True,
+        phrasings: bool = False,
         min_confidence: float = 0.0,
         understanding: Callable[[Grammar], Understanding] | None = None,
     ) -> None:

@@ -535,8 +535,9 @@ def classify_request(words: Sequence[str], place: LocationMatch) -> Intent | Non
 
 
 def detect_navigation(text: str, matcher: LocationMatcher) -> Detection | None:
-    """A navigation request in ``text``: a trigger phrase followed by a known place, or else a
-    known place in a sentence whose other words ask for it (:func:`classify_request`).
+    """A navigation request in ``text``: a trigger phrase followed by a known place, or else the one
+    known place of a sentence whose other words ask for it (:func:`classify_request`; such a
+    request is not :attr:`~Detection.certain`: the robot asks before it acts).
 
     The earliest place wins; of the triggers before it, the one nearest to it, then the
     longest ("show me the way to" over "the way to"); a negated command is none.
@@ -556,10 +557,14 @@ def detect_navigation(text: str, matcher: LocationMatcher) -> Detection | None:
                 candidates.append(((after + match.start, -after, -size), intent, match))
     if not candidates:
         place = matcher.find(" ".join(words))
-        guessed = classify_request(words, place) if place is not None else None
-        if place is None or guessed is None:
+        if place is None:
             return None
-        return Detection(guessed, place.location, place.matched, place.score)
+        other = matcher.find(" ".join(words[place.start + len(place.matched.split()) :]))
+        guessed = classify_request(words, place)
+        if guessed is None or (other is not None and other.location != place.location):
+            return None  # two places: which one is meant is a guess
+        # Read from cue words rather than said in a known way: the place is asked about first.
+        return Detection(guessed, place.location, place.matched, min(place.score, CERTAIN_SCORE - 1))
     _, intent, match = min(candidates, key=lambda c: c[0])
     return Detection(intent, match.location, match.matched, match.score)
 
