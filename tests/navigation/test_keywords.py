@@ -266,6 +266,9 @@ def test_a_place_without_a_request_is_none(text: str) -> None:
         ("maybe another time", Intent.NO),
         ("turn around please", None),
         ("I said no to him yesterday at the bus stop", None),
+        ("never", Intent.NO),
+        ("I do not like him at home", None),  # "do not" and "never" answer only in a short sentence
+        ("it never rains here in the summer", None),
     ],
 )
 def test_answers_said_many_ways_and_not_hidden_in_other_sentences(text: str, intent: Intent | None) -> None:

@@ -200,6 +200,10 @@ confusions than they gain (docs/benchmarks-history.md, issue 34)."""
 
 WEAK_ANSWERS = frozenset({"please", "right"})
 """Answers only when said (nearly) alone: "please" is yes, "turn around please" is not."""
+WEAK_NO_ANSWERS = frozenset({"never", "dont", "do not"})
+"""Answers only in a short sentence ("never!", "please don't"): "I do not like him at home" is none."""
+WEAK_NO_WORDS = 3
+"""The most words a sentence with a weak no-answer may have."""
 ANSWER_COMPANIONS = frozenset(
     {"then", "thanks", "thank", "you", "robot", "cyborg", "yes", "sure", "ok", "okay"}
 )
@@ -511,13 +515,19 @@ def classify_request(words: Sequence[str], place: LocationMatch) -> Intent | Non
     before = " ".join(lead)
     scores: dict[Intent, float] = {}
     negated = any(w in NEGATIONS for w in lead)
-    for intent, phrases in TRIGGERS.items():
-        for phrase in phrases:
-            tail = " ".join(lead[-len(phrase.split()) :])
-            if len(phrase) >= 10 and fuzz.ratio(tail, phrase) >= FUZZY_TRIGGER_SCORE:
-                scores[intent] = max(scores.get(intent, 0.0), 1.0)
-    for i, word in enumerate(words):
-        if i not in span:
+    heard_as = max(  # the trigger phrase nearest to the words before the place; the longest on a tie
+        (
+            (fuzz.ratio(" ".join(lead[-len(p.split()) :]), p), len(p), intent)
+            for intent, ps in TRIGGERS.items()
+            for p in ps
+        ),
+        key=lambda t: t[:2],
+    )
+    if heard_as[0] >= FUZZY_TRIGGER_SCORE and heard_as[1] >= 10:
+        scores[heard_as[2]] = 1.0
+    name = normalise(place.location).split()
+    for i, word in enumerate(words):  # a span heard roughly may hold a cue ("get the information desk")
+        if i not in span or max(fuzz.ratio(word, n) for n in name) < DEFAULT_THRESHOLD:
             for intent, share in CUES.get(_stem(word), {}).items():
                 scores[intent] = scores.get(intent, 0.0) + share
     if any(f" {before} ".endswith(f" {lead} ") for lead in ME_TO):
@@ -591,6 +601,8 @@ def detect_answer(text: str) -> Detection | None:
     if first > ANSWER_START and len(words) > SHORT_ANSWER:
         return None
     if intent is Intent.YES and phrase in WEAK_ANSWERS and not set(words) <= WEAK_ANSWERS | ANSWER_COMPANIONS:
+        return None
+    if intent is Intent.NO and phrase in WEAK_NO_ANSWERS and len(words) > WEAK_NO_WORDS:
         return None
     return Detection(intent, None, phrase, 100.0)
 
