@@ -238,7 +238,7 @@ class SpeechInputSettings(ModuleSettings):
     threads: int = Field(2, ge=1, le=64, description="CPU threads Whisper decodes with")
     beam: int = Field(5, ge=1, le=16, description="Whisper's beam width (1: greedy, faster)")
     window: float = Field(
-        15.0, ge=5, le=30, description="seconds of audio Whisper's encoder reads (longer: slower)"
+        10.0, ge=5, le=30, description="seconds of audio Whisper's encoder reads (longer: slower)"
     )
     prompt: str = Field(
         "", description="more text to prime Whisper with, before the places and phrases it is primed with"

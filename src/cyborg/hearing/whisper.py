@@ -8,8 +8,8 @@ codecs), which the robot never needs because it hands over raw samples.
 
 The decoder is primed (Whisper's "previous text") with the places and phrases of the grammar,
 which is what makes a small model hear "el6" and "e16". The encoder reads a short window
-(15 s by default) rather than Whisper's 30 s: commands are short, and the encoder's cost grows
-with the window. Whisper writes any English, so the rejecting is done by the robot's
+(10 s by default) rather than Whisper's 30 s: commands are short, and the encoder's cost grows
+with the window (10 s: half the encoder's time of 15 s, the same accuracy in the benchmark). Whisper writes any English, so the rejecting is done by the robot's
 understanding (:mod:`~cyborg.hearing.understanding`): a transcript is believed when a module
 would act on it.
 """
@@ -49,8 +49,8 @@ log = logging.getLogger(__name__)
 
 DEFAULT_THREADS = 2
 DEFAULT_BEAM = 5
-"""Beam width: about 2 points better than greedy decoding for ~50 ms (docs/benchmarks.md)."""
-DEFAULT_WINDOW = 15.0
+"""Beam width: 6 points better than greedy decoding on new phrasings for ~40 ms of CPU (docs/benchmarks-history.md)."""
+DEFAULT_WINDOW = 10.0
 """Seconds of audio the encoder reads; shorter utterances are padded to it, longer ones cut."""
 MAX_TOKENS = 40
 """A command is a few words; a cap keeps a looping decode from running on."""
