@@ -155,14 +155,13 @@ def prompt_of(
         if count(said) < room:
             own.append(said)
             room -= count(said)
-    others, cues = [], set()
-    for (
-        trigger
-    ) in grammar.triggers:  # one phrase per set of cue words: "where do I find" is like "where can I find"
-        said = frozenset(trigger.split()) - CUE_STOP_WORDS
-        if trigger not in PROMPT_LEADS and trigger not in _LEFT_OUT and said not in cues:
+    others: list[str] = []
+    cues: set[frozenset[str]] = set()
+    for trigger in grammar.triggers:  # one per set of cue words: "where do I find" is like "where can I find"
+        words = frozenset(trigger.split()) - CUE_STOP_WORDS
+        if trigger not in PROMPT_LEADS and trigger not in _LEFT_OUT and words not in cues:
             others.append(trigger)
-            cues.add(said)
+            cues.add(words)
     asked = []
     for i, trigger in enumerate(others if phrasings and places else []):
         said = _sentence_of(trigger, places[i % len(places)])
