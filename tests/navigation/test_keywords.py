@@ -282,3 +282,15 @@ def test_a_place_heard_roughly_is_found_but_not_certain() -> None:
     clear = detect("where is the e16", MATCHER)
     assert clear is not None and clear.certain
     assert detect("where is the a17", MATCHER) is None  # other digits: never that place
+
+
+def test_a_number_heard_as_a_word_is_not_certain_even_before_polite_words() -> None:
+    for text in (
+        "where is the entrance to",
+        "go to the entrance to please",
+        "get me over to entrance to, thanks",
+    ):
+        found = detect_navigation(text, MATCHER)
+        assert found is not None and found.location == "entrance 2" and not found.certain, text
+    plain = detect_navigation("go to the entrance please", MATCHER)
+    assert plain is not None and plain.location == "entrance" and plain.certain

@@ -70,6 +70,9 @@ NUMBER_WORDS: dict[str, str] = {
 NUMBER_SOUNDS = {"to": "2", "too": "2", "for": "4", "won": "1", "ate": "8"}
 """Words speech-to-text writes for a number at the end of a place's name ("entrance to")."""
 
+TRAILING_WORDS = frozenset({"please", "now", "thanks", "thank", "you"})
+"""Polite words people put after a place ("go to the entrance 2 please")."""
+
 FILLER_WORDS = frozenset({"the", "a", "an", "my", "this", "that", "to", "at", "of", "is"})
 """Words a place-name match may not start or end with (unless the name itself does)."""
 
@@ -368,13 +371,17 @@ class LocationMatcher:
         """The best place name in ``text`` (earliest; then highest score; then longest), or None.
 
         A sentence that ends in a word that sounds like a number ("where is the entrance to",
-        speech-to-text's "entrance 2") is also read with the number; a place found only that way
-        is not certain, and neither is the place without the number.
+        speech-to-text's "entrance 2"; polite words after it count as its end: "entrance to
+        please") is also read with the number; a place found only that way is not certain, and
+        neither is the place without the number.
         """
         words = normalise(text).split()
         found = self._find(words)
-        if words and words[-1] in NUMBER_SOUNDS:
-            with_number = self._find([*words[:-1], NUMBER_SOUNDS[words[-1]]])
+        end = len(words)
+        while end > 1 and words[end - 1] in TRAILING_WORDS:
+            end -= 1
+        if end and words[end - 1] in NUMBER_SOUNDS:
+            with_number = self._find([*words[: end - 1], NUMBER_SOUNDS[words[end - 1]]])
             if with_number is not None and (found is None or with_number.location != found.location):
                 return replace(with_number, score=min(with_number.score, CERTAIN_SCORE - 1))
         return found
