@@ -1,6 +1,6 @@
 """Speech input per engine in one run: intended events, rejections, misdirections, latency, CPU and memory.
 
-Usage: .venv/bin/python benchmarks/bench_speech.py [--engines whisper,pocketsphinx,...] [--voices N]
+Usage: .venv/bin/python benchmarks/bench_speech.py [--engines whisper,pocketsphinx,...] [--voices N] [--sets ...]
        .venv/bin/python benchmarks/bench_speech.py --footprint   (install size and import time per engine)
 
 Every utterance is synthesised once (espeak-ng and flite voices at several rates, quiet and loud
@@ -9,9 +9,12 @@ own), one after the other. Engines: ``whisper`` (Whisper tiny.en, Silero VAD: th
 ``whisper+endpointer`` (pocketsphinx's end-pointer instead of Silero), ``pocketsphinx`` (the
 present pocketsphinx pipeline) and ``pocketsphinx+silero``.
 
-Three sets of sentences: the tuning set (pocketsphinx's language-model weights were chosen on
-it), the held-out set, and a set of new phrasings of the same requests written for issue 34
-(never tuned on). Each in-scope sentence is labelled with what the robot should do (event and
+Four sets of sentences: the tuning set (pocketsphinx's language-model weights were chosen on
+it), the held-out set, a set of new phrasings of the same requests written for issue 34 (read in
+its first round: a development set since), and a fresh set written before its second round and
+scored only in that round's final run. ``--sets tuning,new`` keeps the others held out while
+choosing; ``--settings window=10,beam=1`` tries other speech_input settings; ``--text`` scores the
+understanding of the sentences' own text. Each in-scope sentence is labelled with what the robot should do (event and
 place); it counts when some text is published and the robot's understanding of each gives that
 event and place ("yep, show me" may come as two utterances, both yes). Out-of-scope sentences count when nothing is published. A misdirection is
 a published text that sends the robot (or a person) to a place other than the one said, without
@@ -318,7 +321,7 @@ FLOOR_EVERY = 10
 
 
 def floor_work() -> float:
-    """Seconds a fixed piece of single-threaded work takes now (about 20 ms on an idle core):
+    """Seconds a fixed piece of single-threaded work takes now (10-15 ms on a quiet core):
     the floor beside which the latency is read, since the machine's load stretches both."""
     started = time.perf_counter()
     total = 0
