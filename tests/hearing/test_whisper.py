@@ -19,7 +19,7 @@ from cyborg.hearing.recogniser import Recogniser
 from cyborg.hearing.synth import VOICES, synthesise
 from cyborg.hearing.understanding import Understanding
 from cyborg.hearing.vad import SileroUtterances
-from cyborg.hearing.whisper import WhisperRecogniser, collapse_repeats
+from cyborg.hearing.whisper import WhisperRecogniser, collapse_repeats, prompt_of
 from cyborg.modules.kind import Listening
 from cyborg.navigation.database import NavigationDatabase
 
@@ -134,3 +134,18 @@ def test_a_looping_decode_is_said_once() -> None:
     assert collapse_repeats("go to go to go to el6") == "go to el6"
     assert collapse_repeats("no no no no") == "no"
     assert collapse_repeats("where is the cafeteria") == "where is the cafeteria"
+
+
+def test_the_prompt_can_also_hold_the_other_phrasings_within_whispers_budget(listening: Listening) -> None:
+    grammar = grammar_of(
+        [PlaceWords("cafeteria", ("canteen",)), PlaceWords("elevator")],
+        WhisperRecogniser.__new__(WhisperRecogniser),
+        listening,
+    )
+    plain = prompt_of(grammar)
+    varied = prompt_of(grammar, phrasings=True)
+    assert "Take me to the" not in plain and "Take me to the" in varied
+    assert "Where do I find" not in varied  # one phrasing per set of cue words ("where can I find")
+    places_last = "Where is the canteen? Go to the cafeteria. What do you think of the elevator?"
+    assert plain.endswith(places_last) and varied.endswith(places_last)  # the places are kept
+    assert round(1.4 * len(varied.split())) <= 223  # Whisper keeps no more of its prompt

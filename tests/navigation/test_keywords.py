@@ -219,6 +219,42 @@ def test_many_phrasings_of_a_request_are_understood(text: str, intent: Intent, l
 def test_a_negated_command_is_none() -> None:
     assert detect_navigation("don't go to the cafeteria", MATCHER) is None
     assert detect_navigation("please do not drive to the elevator", MATCHER) is None
+    assert detect_navigation("I don't want to go to the cafeteria", MATCHER) is None
+    assert detect_navigation("please don't ride with me to el6", MATCHER) is None
+
+
+@pytest.mark.parametrize(
+    ("text", "intent", "location"),
+    [  # no trigger phrase in these: the place and the other words say what is asked
+        ("could you escort us over to the cafeteria", CMD, "cafeteria"),
+        ("ride with me to the elevator", CMD, "elevator"),
+        ("guiding me towards the waiting area, please", CMD, "waiting area"),
+        ("el5, where is that", INFO, "el5"),
+        ("directions for the information desk please", INFO, "information desk"),
+        ("locating entrance 2 is hard", INFO, "entrance 2"),
+        ("your opinion, the waiting area?", FEEDBACK, "waiting area"),
+        ("show me the wait on the information desk", CMD, "information desk"),  # a misheard "way to"
+    ],
+)
+def test_a_request_without_a_trigger_phrase_is_read_from_its_cue_words(
+    text: str, intent: Intent, location: str
+) -> None:
+    found = detect_navigation(text, MATCHER)
+    assert found is not None and (found.intent, found.location) == (intent, location), text
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "my friend is looking at the elevator",  # a statement, not a request
+        "the cafeteria is where we met",
+        "I had lunch in the cafeteria",  # no cue word
+        "el6 and el5",
+        "show me the cafeteria and go",  # cue words of two intents, neither leading clearly
+    ],
+)
+def test_a_place_without_a_request_is_none(text: str) -> None:
+    assert detect_navigation(text, MATCHER) is None, text
 
 
 @pytest.mark.parametrize(
@@ -230,6 +266,9 @@ def test_a_negated_command_is_none() -> None:
         ("maybe another time", Intent.NO),
         ("turn around please", None),
         ("I said no to him yesterday at the bus stop", None),
+        ("never", Intent.NO),
+        ("I do not like him at home", None),  # "do not" and "never" answer only in a short sentence
+        ("it never rains here in the summer", None),
     ],
 )
 def test_answers_said_many_ways_and_not_hidden_in_other_sentences(text: str, intent: Intent | None) -> None:
@@ -243,3 +282,15 @@ def test_a_place_heard_roughly_is_found_but_not_certain() -> None:
     clear = detect("where is the e16", MATCHER)
     assert clear is not None and clear.certain
     assert detect("where is the a17", MATCHER) is None  # other digits: never that place
+
+
+def test_a_number_heard_as_a_word_is_not_certain_even_before_polite_words() -> None:
+    for text in (
+        "where is the entrance to",
+        "go to the entrance to please",
+        "get me over to entrance to, thanks",
+    ):
+        found = detect_navigation(text, MATCHER)
+        assert found is not None and found.location == "entrance 2" and not found.certain, text
+    plain = detect_navigation("go to the entrance please", MATCHER)
+    assert plain is not None and plain.location == "entrance" and plain.certain

@@ -248,10 +248,16 @@ class SpeechInputSettings(ModuleSettings):
     threads: int = Field(2, ge=1, le=64, description="CPU threads Whisper decodes with")
     beam: int = Field(5, ge=1, le=16, description="Whisper's beam width (1: greedy, faster)")
     window: float = Field(
-        15.0, ge=5, le=30, description="seconds of audio Whisper's encoder reads (longer: slower)"
+        10.0, ge=5, le=30, description="seconds of audio Whisper's encoder reads (longer: slower)"
     )
     prompt: str = Field(
         "", description="more text to prime Whisper with, before the places and phrases it is primed with"
+    )
+    prompt_phrasings: bool = Field(
+        False,
+        description="also prime Whisper with the other ways the modules listen for to ask for a place "
+        "('take me to', 'how do I get to'), as many as fit (measured: +1 point on new phrasings, "
+        "-3 on the plain ones, and Whisper echoed the prompt's requests: docs/benchmarks-history.md)",
     )
     vad: str = Field(
         "silero",
@@ -283,6 +289,7 @@ def recogniser_of(settings: SpeechInputSettings) -> SpeechRecogniser:
                 beam=settings.beam,
                 window=settings.window,
                 prompt=settings.prompt,
+                phrasings=settings.prompt_phrasings,
                 min_confidence=settings.min_confidence,
             )
         except HearingError as exc:

@@ -8,8 +8,8 @@ codecs), which the robot never needs because it hands over raw samples.
 
 The decoder is primed (Whisper's "previous text") with the places and phrases of the grammar,
 which is what makes a small model hear "el6" and "e16". The encoder reads a short window
-(15 s by default) rather than Whisper's 30 s: commands are short, and the encoder's cost grows
-with the window. Whisper writes any English, so the rejecting is done by the robot's
+(10 s by default) rather than Whisper's 30 s: commands are short, and the encoder's cost grows
+with the window (10 s: half the encoder's time of 15 s, the same accuracy in the benchmark). Whisper writes any English, so the rejecting is done by the robot's
 understanding (:mod:`~cyborg.hearing.understanding`): a transcript is believed when a module
 would act on it.
 """
@@ -33,7 +33,7 @@ from cyborg.hearing.grammar import ALWAYS_HEARD, Grammar
 from cyborg.hearing.recogniser import SAMPLE_RATE, Heard
 from cyborg.hearing.understanding import Understanding
 from cyborg.modules.conversation import is_greeting
-from cyborg.navigation.keywords import detect_answer
+from cyborg.navigation.keywords import CUE_STOP_WORDS, detect_answer
 
 __all__ = [
     "DEFAULT_BEAM",
@@ -49,8 +49,8 @@ log = logging.getLogger(__name__)
 
 DEFAULT_THREADS = 2
 DEFAULT_BEAM = 5
-"""Beam width: about 2 points better than greedy decoding for ~50 ms (docs/benchmarks.md)."""
-DEFAULT_WINDOW = 15.0
+"""Beam width: 6 points better than greedy decoding on new phrasings for ~40 ms of CPU (docs/benchmarks-history.md)."""
+DEFAULT_WINDOW = 10.0
 """Seconds of audio the encoder reads; shorter utterances are padded to it, longer ones cut."""
 MAX_TOKENS = 40
 """A command is a few words; a cap keeps a looping decode from running on."""
@@ -117,10 +117,18 @@ PROMPT_LEADS = {
 """How a place is shown to Whisper after the phrases a place follows, when the robot listens for them."""
 
 
-def prompt_of(grammar: Grammar, extra: str = "", *, budget: Callable[[str], int] | None = None) -> str:
+def prompt_of(
+    grammar: Grammar,
+    extra: str = "",
+    *,
+    budget: Callable[[str], int] | None = None,
+    phrasings: bool = False,
+) -> str:
     """The text Whisper is primed with: ``extra``, the greetings and answers every robot hears,
-    the other phrases modules declare (as many as fit), then each place (stored names and
-    aliases) in a request, as a person says them.
+    the other phrases modules declare (as many as fit), with ``phrasings`` the other ways the
+    modules listen for to ask for a place ("take me to", "how do I get to"), each in a request for
+    one of the places (as many as fit), then each place (stored names and aliases) in a request,
+    as a person says them.
 
     Whisper keeps only the last :data:`PROMPT_TOKENS` tokens of its prompt: the places come last
     so that they are always kept; ``budget`` counts a text's tokens (default: about one per word).
@@ -147,7 +155,46 @@ def prompt_of(grammar: Grammar, extra: str = "", *, budget: Callable[[str], int]
         if count(said) < room:
             own.append(said)
             room -= count(said)
-    return " ".join(head + own + named)
+    others: list[str] = []
+    cues: set[frozenset[str]] = set()
+    for trigger in grammar.triggers:  # one per set of cue words: "where do I find" is like "where can I find"
+        words = frozenset(trigger.split()) - CUE_STOP_WORDS
+        if trigger not in PROMPT_LEADS and trigger not in _LEFT_OUT and words not in cues:
+            others.append(trigger)
+            cues.add(words)
+    asked = []
+    for i, trigger in enumerate(others if phrasings and places else []):
+        said = _sentence_of(trigger, places[i % len(places)])
+        if count(said) >= room:
+            break
+        asked.append(said)
+        room -= count(said)
+    return " ".join(head + own + asked + named)
+
+
+_FRAMES = {
+    **dict.fromkeys(("where", "how", "which", "do", "is", "can", "could"), "{}?"),
+    **dict.fromkeys(("need", "want", "cant", "trying", "looking", "searching"), "I {}."),
+    **dict.fromkeys(("know", "tell"), "Do you {}?"),
+    "think": "What do you {}?",
+    "feel": "How do you {}?",
+    "thoughts": "Any {}?",
+    **dict.fromkeys(("opinion", "view", "your"), "What is your {}?"),
+    "views": "What are your {}?",
+}
+"""How a phrase that takes a place is said in a sentence, by its first word (default: as a command)."""
+_SPELLED = {"lets": "let's", "cant": "can't", "i": "I", "your": ""}
+_LEFT_OUT = frozenset({"goto", "wheres", "where are", "think on", "find the", "locate the"})
+"""Phrases a written sentence does not start with (spellings of another, or no sentence's start)."""
+
+
+def _sentence_of(phrase: str, place: str) -> str:
+    """A phrase that takes a place, asking for ``place`` as a person writes it: ``"cant find"`` ->
+    ``"I can't find the cafeteria."``."""
+    frame = _FRAMES.get(phrase.split()[0], "{}.")
+    words = " ".join(_SPELLED.get(w, w) for w in phrase.split()).strip()
+    text = frame.format(f"{words} the {place}").replace("  ", " ")
+    return text[0].upper() + text[1:]
 
 
 _SPACES = re.compile(r"\s+")
@@ -173,6 +220,7 @@ class WhisperRecogniser:
         beam: int = DEFAULT_BEAM,
         window: float = DEFAULT_WINDOW,
         prompt: str = "",
+        phrasings: bool = False,
         min_confidence: float = 0.0,
         understanding: Callable[[Grammar], Understanding] | None = None,
     ) -> None:
@@ -180,6 +228,7 @@ class WhisperRecogniser:
         self.beam = beam
         self.window = window
         self.extra_prompt = prompt
+        self.phrasings = phrasings
         self.min_confidence = min_confidence
         self.grammar: Grammar | None = None
         self.understanding: Understanding | None = None
@@ -235,7 +284,7 @@ class WhisperRecogniser:
 
     def use(self, grammar: Grammar) -> None:
         """Prime the decoder with ``grammar``'s places and phrases and believe what they make understood."""
-        text = prompt_of(grammar, self.extra_prompt, budget=self._count_tokens)
+        text = prompt_of(grammar, self.extra_prompt, budget=self._count_tokens, phrasings=self.phrasings)
         tokens = self._tokenizer.encode(" " + text, add_special_tokens=False).ids[-PROMPT_TOKENS:]
         self._prompt = [self._token("<|startofprev|>"), *tokens]
         self.understanding = self._understanding_of(grammar)

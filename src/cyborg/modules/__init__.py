@@ -34,7 +34,8 @@ The built-in modules live beside it: :mod:`~cyborg.modules.idle` and
 :mod:`~cyborg.modules.conversation` (conversation and question), :mod:`~cyborg.modules.music`,
 :mod:`~cyborg.modules.speech` (text-to-speech), :mod:`~cyborg.modules.event_script` (events on
 a timetable) and :mod:`~cyborg.modules.gatekeeper` (the relay in front of an output, which lets
-only the active state's module through).
+only the active state's module through). :mod:`~cyborg.modules.problems` tells the dashboard
+what a module cannot fix itself (:class:`ProblemReporter`).
 """
 
 from pydantic import Field

@@ -37,8 +37,14 @@ GREETING_PHRASES = (
     "nice to meet you",
     "pleased to meet you",
     "whats up",
+    "how are you",
+    "how are you doing",
+    "how is it going",
+    "hows it going",
+    "how do you do",
 )
-"""Not "how are you": primed with it, Whisper hears "how old are you" as it."""
+"""Whisper is not primed with these (its prompt leaves greetings out): primed with "how are you",
+it heard "how old are you" as it (docs/benchmarks-history.md, issue 34)."""
 CONVERSATION_ACTION = "cyborg_conversation/conversation"
 CONVERSATION_INTEREST = "conversation_interest"
 CLAIM_SECONDS = 1.0

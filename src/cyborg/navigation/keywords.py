@@ -21,6 +21,7 @@ import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 
+import snowballstemmer
 from rapidfuzz import fuzz
 
 from cyborg.errors import NavigationError
@@ -68,6 +69,9 @@ NUMBER_WORDS: dict[str, str] = {
 
 NUMBER_SOUNDS = {"to": "2", "too": "2", "for": "4", "won": "1", "ate": "8"}
 """Words speech-to-text writes for a number at the end of a place's name ("entrance to")."""
+
+TRAILING_WORDS = frozenset({"please", "now", "thanks", "thank", "you"})
+"""Polite words people put after a place ("go to the entrance 2 please")."""
 
 FILLER_WORDS = frozenset({"the", "a", "an", "my", "this", "that", "to", "at", "of", "is"})
 """Words a place-name match may not start or end with (unless the name itself does)."""
@@ -199,6 +203,10 @@ confusions than they gain (docs/benchmarks-history.md, issue 34)."""
 
 WEAK_ANSWERS = frozenset({"please", "right"})
 """Answers only when said (nearly) alone: "please" is yes, "turn around please" is not."""
+WEAK_NO_ANSWERS = frozenset({"never", "dont", "do not"})
+"""Answers only in a short sentence ("never!", "please don't"): "I do not like him at home" is none."""
+WEAK_NO_WORDS = 3
+"""The most words a sentence with a weak no-answer may have."""
 ANSWER_COMPANIONS = frozenset(
     {"then", "thanks", "thank", "you", "robot", "cyborg", "yes", "sure", "ok", "okay"}
 )
@@ -363,13 +371,17 @@ class LocationMatcher:
         """The best place name in ``text`` (earliest; then highest score; then longest), or None.
 
         A sentence that ends in a word that sounds like a number ("where is the entrance to",
-        speech-to-text's "entrance 2") is also read with the number; a place found only that way
-        is not certain, and neither is the place without the number.
+        speech-to-text's "entrance 2"; polite words after it count as its end: "entrance to
+        please") is also read with the number; a place found only that way is not certain, and
+        neither is the place without the number.
         """
         words = normalise(text).split()
         found = self._find(words)
-        if words and words[-1] in NUMBER_SOUNDS:
-            with_number = self._find([*words[:-1], NUMBER_SOUNDS[words[-1]]])
+        end = len(words)
+        while end > 1 and words[end - 1] in TRAILING_WORDS:
+            end -= 1
+        if end and words[end - 1] in NUMBER_SOUNDS:
+            with_number = self._find([*words[: end - 1], NUMBER_SOUNDS[words[end - 1]]])
             if with_number is not None and (found is None or with_number.location != found.location):
                 return replace(with_number, score=min(with_number.score, CERTAIN_SCORE - 1))
         return found
@@ -438,11 +450,111 @@ def _find_phrase(words: list[str], phrase: str) -> int | None:
 
 def _negated(words: list[str], start: int) -> bool:
     """Whether a negation comes just before the phrase starting at ``start`` ("do not go to")."""
-    return any(w in NEGATIONS for w in words[max(0, start - 2) : start])
+    return any(w in NEGATIONS for w in words[max(0, start - 3) : start])
+
+
+CUE_STOP_WORDS = frozenset(
+    {
+        *FILLER_WORDS,
+        *("i", "me", "you", "your", "we", "us", "do", "can", "could", "would", "will", "might"),
+        *("how", "there", "on", "about", "over", "are", "for", "with", "in", "into", "towards"),
+        *("want", "need", "help", "know", "tell", "trying", "cant", "lets"),
+    }
+)
+"""Words of the trigger phrases that say nothing of what is asked on their own (function words,
+and verbs that lean on the trigger's other words: "need to find", "tell me where")."""
+CUE_SCORE = 0.6
+"""Lowest score (the sum of the cue words' shares) at which a sentence without a trigger phrase
+is read as a request of the intent its cue words lean to."""
+STATEMENT_OPENERS = frozenset(
+    {"my", "his", "her", "their", "our", "the", "this", "that", "he", "she", "they", "it", "its"}
+)
+"""First words of a sentence about something rather than a request ("my friend is looking at the
+lift", "the lift smells funny"): without a trigger phrase, no request."""
+FUZZY_TRIGGER_SCORE = 85.0
+"""Lowest rapidfuzz ratio at which the words before a place count as a misheard trigger phrase
+("show me the wait on" for "show me the way to")."""
+ME_TO = ("me to", "us to", "with me to", "with us to", "me over to", "us over to")
+"""Words right before a place that make any verb a request to be taken there ("drive me to el6")."""
+
+_STEMMER = snowballstemmer.stemmer("english")
+
+
+def _stem(word: str) -> str:
+    return str(_STEMMER.stemWord(word))
+
+
+def _cue_shares() -> dict[str, dict[Intent, float]]:
+    """Each content word of the trigger phrases (stemmed) and the share of its phrases per intent:
+    "where" is all information, "get" mostly information, "take" half command, half feedback."""
+    counts: dict[str, dict[Intent, int]] = {}
+    for intent, phrases in TRIGGERS.items():
+        for phrase in phrases:
+            for word in set(phrase.split()) - CUE_STOP_WORDS:
+                row = counts.setdefault(_stem(word), {})
+                row[intent] = row.get(intent, 0) + 1
+    return {
+        stem: {intent: n / sum(row.values()) for intent, n in row.items()} for stem, row in counts.items()
+    }
+
+
+CUES: dict[str, dict[Intent, float]] = _cue_shares()
+"""Cue words (stemmed) of the navigation intents, learnt from :data:`TRIGGERS`."""
+
+
+def classify_request(words: Sequence[str], place: LocationMatch) -> Intent | None:
+    """The intent of a sentence that names ``place`` but holds no trigger phrase, from its other
+    words (intent and slot).
+
+    Each cue word (a content word of the trigger phrases, with any ending: "leading" for "lead",
+    "directions" for "direction") adds its shares of the intents; words that send someone right
+    before the place ("drive me to", "come with me to") make it a command, and so do words close
+    to a trigger phrase there (a misheard "show me the wait on"). The leading intent needs
+    :data:`CUE_SCORE` and a clear lead over the next; a negated command and a statement ("the
+    lift is ...") are none.
+    """
+    if not words or words[0] in STATEMENT_OPENERS:
+        return None
+    span = range(place.start, place.start + len(place.matched.split()))
+    lead = words[: place.start]
+    if lead and lead[-1] == "the":
+        lead = lead[:-1]
+    before = " ".join(lead)
+    scores: dict[Intent, float] = {}
+    negated = any(w in NEGATIONS for w in lead)
+    heard_as = max(  # the trigger phrase nearest to the words before the place; the longest on a tie
+        (
+            (fuzz.ratio(" ".join(lead[-len(p.split()) :]), p), len(p), intent)
+            for intent, ps in TRIGGERS.items()
+            for p in ps
+        ),
+        key=lambda t: t[:2],
+    )
+    if heard_as[0] >= FUZZY_TRIGGER_SCORE and heard_as[1] >= 10:
+        scores[heard_as[2]] = 1.0
+    name = normalise(place.location).split()
+    for i, word in enumerate(words):  # a span heard roughly may hold a cue ("get the information desk")
+        if i not in span or max(fuzz.ratio(word, n) for n in name) < DEFAULT_THRESHOLD:
+            for intent, share in CUES.get(_stem(word), {}).items():
+                scores[intent] = scores.get(intent, 0.0) + share
+    if any(f" {before} ".endswith(f" {lead} ") for lead in ME_TO):
+        scores[Intent.NAVIGATION_COMMAND] = scores.get(Intent.NAVIGATION_COMMAND, 0.0) + 1.0
+    if not scores:
+        return None
+    ranked = sorted(scores.items(), key=lambda item: -item[1])
+    intent, best = ranked[0]
+    runner_up = ranked[1][1] if len(ranked) > 1 else 0.0
+    if best < CUE_SCORE or best - runner_up < CUE_SCORE / 2:
+        return None
+    if intent is Intent.NAVIGATION_COMMAND and negated:
+        return None
+    return intent
 
 
 def detect_navigation(text: str, matcher: LocationMatcher) -> Detection | None:
-    """A navigation request in ``text``: a trigger phrase followed by a known place.
+    """A navigation request in ``text``: a trigger phrase followed by a known place, or else the one
+    known place of a sentence whose other words ask for it (:func:`classify_request`; such a
+    request is not :attr:`~Detection.certain`: the robot asks before it acts).
 
     The earliest place wins; of the triggers before it, the one nearest to it, then the
     longest ("show me the way to" over "the way to"); a negated command is none.
@@ -461,7 +573,15 @@ def detect_navigation(text: str, matcher: LocationMatcher) -> Detection | None:
             if match is not None:
                 candidates.append(((after + match.start, -after, -size), intent, match))
     if not candidates:
-        return None
+        place = matcher.find(" ".join(words))
+        if place is None:
+            return None
+        other = matcher.find(" ".join(words[place.start + len(place.matched.split()) :]))
+        guessed = classify_request(words, place)
+        if guessed is None or (other is not None and other.location != place.location):
+            return None  # two places: which one is meant is a guess
+        # Read from cue words rather than said in a known way: the place is asked about first.
+        return Detection(guessed, place.location, place.matched, min(place.score, CERTAIN_SCORE - 1))
     _, intent, match = min(candidates, key=lambda c: c[0])
     return Detection(intent, match.location, match.matched, match.score)
 
@@ -488,6 +608,8 @@ def detect_answer(text: str) -> Detection | None:
     if first > ANSWER_START and len(words) > SHORT_ANSWER:
         return None
     if intent is Intent.YES and phrase in WEAK_ANSWERS and not set(words) <= WEAK_ANSWERS | ANSWER_COMPANIONS:
+        return None
+    if intent is Intent.NO and phrase in WEAK_NO_ANSWERS and len(words) > WEAK_NO_WORDS:
         return None
     return Detection(intent, None, phrase, 100.0)
 
