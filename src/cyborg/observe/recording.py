@@ -16,16 +16,18 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
 
+import numpy as np
 from mcap.exceptions import McapError
 from mcap.reader import make_reader
 from mcap.records import Attachment, Channel, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader
 
 from cyborg.errors import CyborgError
+from cyborg.maps import Cell, NamedPose, OccupancyMap
 from cyborg.observe import channels as ch
 from cyborg.observe.records import Record, readable_seconds
 
-__all__ = ["Input", "Recording", "RecordingError", "open_recording"]
+__all__ = ["Input", "Recording", "RecordingError", "open_recording", "recorded_map"]
 
 MAGIC = b"\x89MCAP0\r\n"
 
@@ -58,9 +60,12 @@ class Recording:
     """Every event sent to the controller (``t_ns``, ``event``, ``sender``, ``source``)."""
     marks: list[dict[str, Any]] = field(default_factory=list)
     logs: list[dict[str, Any]] = field(default_factory=list)
-    """Warnings, errors and diagnostics (``t_ns``, ``level``, ``text``)."""
+    """Gatekeeper passes (level ``info``) and drops, module crashes: ``t_ns``, ``level``, ``kind``
+    (passed, dropped, crashed), ``sender``, ``detail``."""
     problem: str | None = None
     """Why the file was read only in part (it was cut short), else None."""
+    scene: dict[str, tuple[Schema, bytes]] = field(default_factory=dict, repr=False)
+    """The first map (foxglove.Grid) and places (foxglove.SceneUpdate) messages, by topic, undecoded."""
     _times: list[int] = field(default_factory=list, repr=False)
 
     @property
@@ -163,6 +168,7 @@ def open_recording(path: Path) -> Recording:
     events: list[dict[str, Any]] = []
     marks: list[dict[str, Any]] = []
     logs: list[dict[str, Any]] = []
+    scene: dict[str, tuple[Schema, bytes]] = {}
     problem: str | None = None
     start_ns: int | None = None
     with path.open("rb") as file:
@@ -193,8 +199,12 @@ def open_recording(path: Path) -> Recording:
                     events.append({"t_ns": t_ns, **json.loads(message.data)})
                 elif topic == ch.MARK_CHANNEL:
                     marks.append({"t_ns": t_ns, **json.loads(message.data)})
+                elif topic in (ch.MAP_TOPIC, ch.PLACES_TOPIC) and _schema is not None:
+                    scene.setdefault(topic, (_schema, bytes(message.data)))
                 elif topic == ch.DIAGNOSTIC_TOPIC:
-                    logs.append({"t_ns": t_ns, "level": "warning", **json.loads(message.data)})
+                    diagnostic = json.loads(message.data)
+                    level = "info" if diagnostic.get("kind") == "passed" else "warning"
+                    logs.append({"t_ns": t_ns, "level": level, **diagnostic})
         except (McapError, EOFError, ValueError, KeyError, struct.error) as exc:
             if metadata is None:
                 raise RecordingError(
@@ -207,7 +217,7 @@ def open_recording(path: Path) -> Recording:
             )
     if metadata is None:
         metadata = _check_metadata(path, None)
-    return Recording(path, metadata, attachments, records, inputs, events, marks, logs, problem)
+    return Recording(path, metadata, attachments, records, inputs, events, marks, logs, problem, scene)
 
 
 def window(path: Path, start_ns: int, end_ns: int, topics: Iterable[str] | None = None) -> list[Record]:
@@ -233,3 +243,43 @@ def window(path: Path, start_ns: int, end_ns: int, topics: Iterable[str] | None 
             kind = ch.TYPE_OF_TOPIC.get(channel.topic, channel.topic)
             out.append({"t": readable_seconds(t_ns), "t_ns": t_ns, "type": kind, **json.loads(message.data)})
         return out
+
+
+def _decode(schema: Schema, data: bytes) -> Any:
+    """A protobuf message of a Foxglove schema, decoded with the descriptors the file carries."""
+    from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
+
+    files = descriptor_pb2.FileDescriptorSet.FromString(schema.data)
+    pool = descriptor_pool.DescriptorPool()
+    for file in files.file:
+        pool.Add(file)
+    return message_factory.GetMessageClass(pool.FindMessageTypeByName(schema.name)).FromString(data)
+
+
+def recorded_map(recording: Recording) -> OccupancyMap | None:
+    """The map the recording holds (its foxglove.Grid, with the places of its foxglove.SceneUpdate),
+    or None: the robot had no map, or the message cannot be decoded."""
+    found = recording.scene.get(ch.MAP_TOPIC)
+    if found is None:
+        return None
+    try:
+        grid = _decode(*found)
+        cols = int(grid.column_count)
+        values = np.frombuffer(grid.data, dtype=np.uint8)[: (len(grid.data) // cols) * cols]
+        cells = np.full(values.shape, Cell.UNKNOWN, dtype=np.uint8)
+        cells[values == 0] = Cell.FREE
+        cells[values == 100] = Cell.OCCUPIED
+        places: list[NamedPose] = []
+        if ch.PLACES_TOPIC in recording.scene:
+            for entity in _decode(*recording.scene[ch.PLACES_TOPIC]).entities:
+                for sphere in entity.spheres[:1]:
+                    places.append(NamedPose(entity.id, sphere.pose.position.x, sphere.pose.position.y, 0.0))
+        return OccupancyMap(
+            cells.reshape(-1, cols),
+            float(grid.cell_size.x),
+            (float(grid.pose.position.x), float(grid.pose.position.y)),
+            poses=tuple(places),
+            source=recording.path.name,
+        )
+    except Exception:  # a foreign or damaged map: the replay draws no map, and says nothing wrong
+        return None

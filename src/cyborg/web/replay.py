@@ -2,7 +2,7 @@
 
 Serves :file:`static/replay.html` (a time slider, play/pause and speed; at the slider's moment the
 active state and last transition, the emotion and its plot, the robot's track on the map and the
-log up to then) and a read-only API that answers as the robot's would have at that moment:
+log up to then, the map behind the track) and a read-only API that answers as the robot's would have at that moment:
 ``GET /api/status?at=SECONDS`` (seconds since the recording started), ``GET /api/records?at=``
 and ``GET /api/replay`` (what the recording is: its span, metadata and marks). The recording is
 read once; a moment is then a binary search per record type.
@@ -18,14 +18,17 @@ from typing import Any
 
 from aiohttp import web
 
-from cyborg.observe.recording import Recording
+from cyborg.maps import OccupancyMap
+from cyborg.observe.recording import Recording, recorded_map
 from cyborg.observe.records import NS_PER_S, Record
-from cyborg.web.dashboard import STATIC_DIR
+from cyborg.web.dashboard import STATIC_DIR, map_png
 
-__all__ = ["ReplayAPI", "serve_replay"]
+__all__ = ["ReplayAPI", "ReplayView", "serve_replay"]
 
 RECORDS_SHOWN = 200
 """The log's records up to a moment that ``/api/records`` gives (the latest)."""
+MAP_PIXELS = 1600
+"""The map image is at most about this many pixels a side (walls kept)."""
 TRACK_POINTS = 4000
 """At most about this many points of the robot's track and the emotion plot go to the page."""
 
@@ -45,29 +48,26 @@ class _Timeline:
         return self.records[: bisect.bisect_right(self.times, t_ns)]
 
 
-class ReplayAPI:
-    """The read-only API of one recording (see the module docstring)."""
+class ReplayView:
+    """One recording as the replay page sees it: what it is, and any moment of it.
 
-    def __init__(self, recording: Recording) -> None:
+    ``begin_ns``: where the page's slider starts (the live dashboard's look back shows only the
+    last minutes of a recording); the state, emotion and pose at a moment still come from
+    everything recorded before it.
+    """
+
+    def __init__(self, recording: Recording, *, begin_ns: int = 0, live: bool = False) -> None:
         self.recording = recording
+        self.begin_ns = max(0, min(begin_ns, recording.end_ns))
+        self.live = live
         by_type: dict[str, list[Record]] = {}
         for record in recording.records:
             by_type.setdefault(str(record["type"]), []).append(record)
         self.timelines = {kind: _Timeline(records) for kind, records in by_type.items()}
         self.all = _Timeline(recording.records)
-        self.app = web.Application()
-        self.app.add_routes(
-            [
-                web.get("/", self.index),
-                web.get("/api/replay", self.get_replay),
-                web.get("/api/status", self.get_status),
-                web.get("/api/records", self.get_records),
-                web.static("/static", STATIC_DIR),
-            ]
-        )
 
-    def _at(self, request: web.Request) -> int:
-        raw = request.query.get("at")
+    def at(self, raw: str | None) -> int:
+        """The moment ``?at=`` names (seconds since the recording started); its end if none."""
         if raw is None:
             return self.recording.end_ns
         try:
@@ -106,40 +106,112 @@ class ReplayAPI:
         timeline = self.timelines.get(kind)
         return timeline.last(t_ns) if timeline is not None else None
 
+    def records_at(self, t_ns: int) -> list[Record]:
+        """The latest records up to ``t_ns`` (at most RECORDS_SHOWN), oldest first."""
+        index = bisect.bisect_right(self.all.times, t_ns)
+        return self.all.records[max(0, index - RECORDS_SHOWN) : index]
+
+    def _shown(self, kind: str) -> list[Record]:
+        timeline = self.timelines.get(kind)
+        if timeline is None:
+            return []
+        first = bisect.bisect_left(timeline.times, self.begin_ns)
+        return timeline.records[max(0, first - 1) :]
+
+    def info(self) -> dict[str, Any]:
+        """What the recording is: its span, metadata, marks, the robot's track and the emotion plot."""
+        recording = self.recording
+        poses = self._shown("pose")
+        every = max(1, len(poses) // TRACK_POINTS)
+        emotions = self._shown("emotion")
+        step = max(1, len(emotions) // TRACK_POINTS)
+        return {
+            "file": recording.path.name,
+            "begin": self.begin_ns / NS_PER_S,
+            "duration": recording.end_ns / NS_PER_S,
+            "live": self.live,
+            "records": len(recording.records),
+            "metadata": recording.metadata,
+            "marks": [
+                {"t": m["t_ns"] / NS_PER_S, "note": m.get("note")}
+                for m in recording.marks
+                if m["t_ns"] >= self.begin_ns
+            ],
+            "problem": None if self.live else recording.problem,
+            "track": [[r["t"], r["x"], r["y"]] for r in poses[::every]],
+            "emotions": [[r["t"], r["pleasure"], r["arousal"], r["dominance"]] for r in emotions[::step]],
+        }
+
+
+class ReplayAPI:
+    """The read-only API of one recording (see the module docstring)."""
+
+    def __init__(self, recording: Recording) -> None:
+        self.view = ReplayView(recording)
+        self.recording = recording
+        self._map: OccupancyMap | None = None
+        self._map_read = False
+        self._png: bytes | None = None
+        self.app = web.Application()
+        self.app.add_routes(
+            [
+                web.get("/", self.index),
+                web.get("/api/replay", self.get_replay),
+                web.get("/api/status", self.get_status),
+                web.get("/api/records", self.get_records),
+                web.get("/api/map", self.get_map),
+                web.get("/api/map.png", self.get_map_image),
+                web.static("/static", STATIC_DIR),
+            ]
+        )
+
+    def status_at(self, t_ns: int) -> dict[str, Any]:
+        """What ``/api/status`` of the robot would have answered ``t_ns`` after the start."""
+        return self.view.status_at(t_ns)
+
     async def index(self, request: web.Request) -> web.FileResponse:
         return web.FileResponse(STATIC_DIR / "replay.html")
 
     async def get_replay(self, request: web.Request) -> web.Response:
-        recording = self.recording
-        poses = self.timelines.get("pose")
-        every = max(1, len(poses.records) // TRACK_POINTS) if poses else 1
-        track = [[r["t"], r["x"], r["y"]] for r in poses.records[::every]] if poses else []
-        emotions = self.timelines.get("emotion")
-        plot = (
-            [[r["t"], r["pleasure"], r["arousal"], r["dominance"]] for r in emotions.records]
-            if emotions
-            else []
-        )
+        return web.json_response(self.view.info())
+
+    async def get_status(self, request: web.Request) -> web.Response:
+        return web.json_response(self.view.status_at(self.view.at(request.query.get("at"))))
+
+    async def get_records(self, request: web.Request) -> web.Response:
+        return web.json_response(self.view.records_at(self.view.at(request.query.get("at"))))
+
+    def occupancy(self) -> OccupancyMap | None:
+        """The recording's map (decoded once), or None."""
+        if not self._map_read:
+            self._map, self._map_read = recorded_map(self.recording), True
+        return self._map
+
+    async def get_map(self, request: web.Request) -> web.Response:
+        """The map the robot ran on, as the live dashboard's ``/api/map`` gives it (404: none recorded)."""
+        occupancy = self.occupancy()
+        if occupancy is None:
+            return web.json_response({"error": "this recording holds no map", "has_base": False}, status=404)
+        rows, cols = occupancy.shape
         return web.json_response(
             {
-                "file": recording.path.name,
-                "duration": recording.end_ns / NS_PER_S,
-                "records": len(recording.records),
-                "metadata": recording.metadata,
-                "marks": [{"t": m["t_ns"] / NS_PER_S, "note": m.get("note")} for m in recording.marks],
-                "problem": recording.problem,
-                "track": track,
-                "emotions": plot,
+                "has_base": True,
+                "resolution": occupancy.resolution,
+                "origin": list(occupancy.origin),
+                "cells": [cols, rows],
+                "image": "/api/map.png",
+                "locations": [{"name": p.name, "x": p.x, "y": p.y} for p in occupancy.poses],
             }
         )
 
-    async def get_status(self, request: web.Request) -> web.Response:
-        return web.json_response(self.status_at(self._at(request)))
-
-    async def get_records(self, request: web.Request) -> web.Response:
-        t_ns = self._at(request)
-        index = bisect.bisect_right(self.all.times, t_ns)
-        return web.json_response(self.all.records[max(0, index - RECORDS_SHOWN) : index])
+    async def get_map_image(self, request: web.Request) -> web.Response:
+        occupancy = self.occupancy()
+        if occupancy is None:
+            raise web.HTTPNotFound(text="this recording holds no map")
+        if self._png is None:
+            factor = max(1, math.ceil(max(occupancy.shape) / MAP_PIXELS))
+            self._png = await asyncio.get_running_loop().run_in_executor(None, map_png, occupancy, factor)
+        return web.Response(body=self._png, content_type="image/png")
 
 
 def serve_replay(api: ReplayAPI, host: str, port: int, announce: Callable[[str], None]) -> None:
