@@ -144,8 +144,8 @@ class Lookback:
         status = self.recorder or status
         files = [Path(f) for f in status.get("files") or [status["file"]] if f]
         recording = await asyncio.get_running_loop().run_in_executor(None, read_segments, files)
-        begin = recording.end_ns - round(minutes * 60 * NS_PER_S)
-        self.view = ReplayView(recording, begin_ns=begin, live=True)
+        self.view = ReplayView(recording, live=True)
+        self.view.begin_ns = max(0, self.view.end_ns - round(minutes * 60 * NS_PER_S))
         return web.json_response(self.view.info())
 
     def _view(self) -> ReplayView:

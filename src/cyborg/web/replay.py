@@ -27,7 +27,7 @@ __all__ = ["ReplayAPI", "ReplayView", "serve_replay"]
 
 RECORDS_SHOWN = 200
 """The log's records up to a moment that ``/api/records`` gives (the latest)."""
-MAP_PIXELS = 1600
+MAP_PIXELS = 720
 """The map image is at most about this many pixels a side (walls kept)."""
 TRACK_POINTS = 4000
 """At most about this many points of the robot's track and the emotion plot go to the page."""
@@ -58,7 +58,10 @@ class ReplayView:
 
     def __init__(self, recording: Recording, *, begin_ns: int = 0, live: bool = False) -> None:
         self.recording = recording
-        self.begin_ns = max(0, min(begin_ns, recording.end_ns))
+        marked = [int(m["t_ns"]) for m in recording.marks]
+        self.end_ns = max([recording.end_ns, *marked])
+        """The last moment recorded (a record, or a mark after the last record)."""
+        self.begin_ns = max(0, min(begin_ns, self.end_ns))
         self.live = live
         by_type: dict[str, list[Record]] = {}
         for record in recording.records:
@@ -69,7 +72,7 @@ class ReplayView:
     def at(self, raw: str | None) -> int:
         """The moment ``?at=`` names (seconds since the recording started); its end if none."""
         if raw is None:
-            return self.recording.end_ns
+            return self.end_ns
         try:
             seconds = float(raw)
         except ValueError:
@@ -77,7 +80,7 @@ class ReplayView:
         if not math.isfinite(seconds) or seconds < 0:
             raise web.HTTPBadRequest(
                 text=f"'at' must be seconds since the recording started (0 to "
-                f"{self.recording.end_ns / NS_PER_S:g}), got {raw[:40]!r}"
+                f"{self.end_ns / NS_PER_S:g}), got {raw[:40]!r}"
             )
         return round(seconds * NS_PER_S)
 
@@ -128,7 +131,7 @@ class ReplayView:
         return {
             "file": recording.path.name,
             "begin": self.begin_ns / NS_PER_S,
-            "duration": recording.end_ns / NS_PER_S,
+            "duration": self.end_ns / NS_PER_S,
             "live": self.live,
             "records": len(recording.records),
             "metadata": recording.metadata,
