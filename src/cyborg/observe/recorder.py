@@ -70,6 +70,9 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
+_encode = json.JSONEncoder(separators=(",", ":"), check_circular=False).encode
+"""Compact JSON (no spaces): smaller files, a little faster; what it decodes to is the same."""
+
 DEFAULT_BUDGET_BYTES = 1024**3
 """1 GiB: about 5 MB a robot day (docs/benchmarks.md), so months of recordings."""
 DEFAULT_SEGMENT_SECONDS = 3600.0
@@ -372,9 +375,10 @@ class Recorder:
             return
         try:
             self._rotate_if_due(t_ns)
-            self._json[topic].log(json.dumps(payload).encode(), log_time=self._log_time(t_ns))
+            self._json[topic].log(_encode(payload).encode(), log_time=self.facts.start_ns + t_ns)
             self.messages += 1
-            self._check()
+            if self._sink is not None and self._sink.failure is not None:
+                raise self._sink.failure
         except (OSError, RuntimeError) as exc:
             self._fail(exc)
 
@@ -389,7 +393,8 @@ class Recorder:
         if topic is None or self._writer is None:
             return
         t_ns = int(record["t_ns"])
-        fields = {k: v for k, v in record.items() if k not in ("t", "t_ns", "type")}
+        fields = record.copy()
+        del fields["t"], fields["t_ns"], fields["type"]
         self._write(topic, fields, t_ns)
         try:
             if kind == "pose":
