@@ -25,7 +25,12 @@ def ask(api: ReplayAPI, *paths: str) -> list[tuple[int, Any]]:
             out = []
             for path in paths:
                 response = await client.get(path)
-                body = await response.json() if response.status == 200 else await response.text()
+                if response.status != 200:
+                    body = await response.text()
+                elif response.content_type == "application/json":
+                    body = await response.json()
+                else:
+                    body = await response.read()
                 out.append((response.status, body))
             return out
 
@@ -55,6 +60,26 @@ def test_the_replay_api_answers_as_at_that_moment(tmp_path: Path) -> None:
     assert s3 == 400 and "'at' must be seconds" in bad
     assert log[-1] == entered or log[-1]["t_ns"] == entered["t_ns"]
     assert all(r["t_ns"] <= entered["t_ns"] for r in log)
+    # Served from a glance at the file: the start is answered from a window, the rest once read.
+    early = ReplayAPI.of_file(recording)
+    assert early.view is None
+    [(_, first), (_, loading), (_, start), (_, whole), (status, about), (png_status, png)] = ask(
+        early,
+        "/api/replay",
+        f"/api/status?at={just_before}",
+        "/api/records?at=30",
+        "/api/replay?wait=1",
+        "/api/map",
+        "/api/map.png",
+    )
+    assert first["loading"] is True and first["duration"] >= records[-1]["t"]
+    assert loading == before, "a moment early on is answered before the recording is read whole"
+    assert start == api.view.records_at(30_000_000_000), "the window holds what the whole file does"
+    assert whole["loading"] is False and whole["records"] == len(records)
+    # The map the robot ran on, from the recording (drawn behind the track).
+    assert (status, png_status) == (200, 200) and png[:4] == b"\x89PNG"
+    assert about["cells"][0] > 100 and about["resolution"] > 0
+    assert "cafeteria" in {place["name"] for place in about["locations"]}
 
 
 @pytest.mark.browser
@@ -84,6 +109,7 @@ def test_dragging_the_slider_shows_that_moment(tmp_path: Path) -> None:
             page.goto(url)
             page.wait_for_selector("body[data-shown='0']")
             assert page.inner_text("#state") == "idle"
+            page.wait_for_selector("body[data-loaded]")
             slider = page.locator("#slider").bounding_box()
             assert slider is not None
             page.mouse.move(slider["x"] + 2, slider["y"] + slider["height"] / 2)

@@ -14,20 +14,21 @@ import struct
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Any
 
-import numpy as np
 from mcap.exceptions import McapError
 from mcap.reader import make_reader
 from mcap.records import Attachment, Channel, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader
 
 from cyborg.errors import CyborgError
-from cyborg.maps import Cell, NamedPose, OccupancyMap
 from cyborg.observe import channels as ch
 from cyborg.observe.records import Record, readable_seconds
 
-__all__ = ["Input", "Recording", "RecordingError", "open_recording", "recorded_map"]
+if TYPE_CHECKING:
+    from cyborg.maps import OccupancyMap
+
+__all__ = ["Glance", "Input", "Recording", "RecordingError", "glance", "open_recording", "recorded_map"]
 
 MAGIC = b"\x89MCAP0\r\n"
 
@@ -220,6 +221,36 @@ def open_recording(path: Path) -> Recording:
     return Recording(path, metadata, attachments, records, inputs, events, marks, logs, problem, scene)
 
 
+@dataclass(frozen=True)
+class Glance:
+    """What a finished recording's summary says, read without reading its messages."""
+
+    path: Path
+    metadata: dict[str, str]
+    end_ns: int
+    """The last message's time (``t_ns``)."""
+    messages: int
+
+
+def glance(path: Path) -> Glance | None:
+    """A look at the recording at ``path`` through its summary (milliseconds, however long it is);
+    :class:`RecordingError` if it is none this code reads; None if it has no summary (cut short:
+    read it whole)."""
+    _check_file(path)
+    with path.open("rb") as file:
+        reader = make_reader(file)
+        try:
+            summary = reader.get_summary()
+            found = [m for m in reader.iter_metadata() if m.name == ch.METADATA_NAME] if summary else []
+        except (McapError, EOFError, ValueError, struct.error):
+            return None
+        if summary is None or summary.statistics is None:
+            return None
+        metadata = _check_metadata(path, dict(found[0].metadata) if found else None)
+        end_ns = max(0, summary.statistics.message_end_time - int(metadata["start_ns"]))
+        return Glance(path, metadata, end_ns, summary.statistics.message_count)
+
+
 def window(path: Path, start_ns: int, end_ns: int, topics: Iterable[str] | None = None) -> list[Record]:
     """The records between two moments (``t_ns``), read through the file's index (a seek): what a
     replay of a long recording reads without reading it whole. Needs a finished file."""
@@ -237,8 +268,8 @@ def window(path: Path, start_ns: int, end_ns: int, topics: Iterable[str] | None 
         wanted = list(topics) if topics is not None else list(ch.TYPE_OF_TOPIC)
         out: list[Record] = []
         for _schema, channel, message in reader.iter_messages(
-            topics=wanted, start_time=start + start_ns, end_time=start + end_ns + 1, log_time_order=True
-        ):
+            topics=wanted, starting_at=start + start_ns, ending_at=start + end_ns, log_time_order=False
+        ):  # in the order written, as a whole read gives them (the robot's clock only moves on)
             t_ns = message.log_time - start
             kind = ch.TYPE_OF_TOPIC.get(channel.topic, channel.topic)
             out.append({"t": readable_seconds(t_ns), "t_ns": t_ns, "type": kind, **json.loads(message.data)})
@@ -259,6 +290,10 @@ def _decode(schema: Schema, data: bytes) -> Any:
 def recorded_map(recording: Recording) -> OccupancyMap | None:
     """The map the recording holds (its foxglove.Grid, with the places of its foxglove.SceneUpdate),
     or None: the robot had no map, or the message cannot be decoded."""
+    import numpy as np
+
+    from cyborg.maps import Cell, NamedPose, OccupancyMap
+
     found = recording.scene.get(ch.MAP_TOPIC)
     if found is None:
         return None

@@ -14,19 +14,25 @@ import asyncio
 import bisect
 import math
 from collections.abc import Callable, Sequence
-from typing import Any
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from aiohttp import web
 
-from cyborg.maps import OccupancyMap
-from cyborg.observe.recording import Recording, recorded_map
+from cyborg.observe.recording import Glance, Recording, glance, open_recording, recorded_map, window
 from cyborg.observe.records import NS_PER_S, Record
-from cyborg.web.dashboard import STATIC_DIR, map_png
+
+if TYPE_CHECKING:
+    from cyborg.maps import OccupancyMap
 
 __all__ = ["ReplayAPI", "ReplayView", "serve_replay"]
 
 RECORDS_SHOWN = 200
 """The log's records up to a moment that ``/api/records`` gives (the latest)."""
+STATIC_DIR = Path(__file__).resolve().parent / "static"
+"""The pages (the same folder as the live dashboard's; not imported from it, to start quicker)."""
+EARLY_SECONDS = 60.0
+"""While the recording is read, a moment up to this far in is answered from a window of it."""
 MAP_PIXELS = 720
 """The map image is at most about this many pixels a side (walls kept)."""
 TRACK_POINTS = 4000
@@ -147,11 +153,25 @@ class ReplayView:
 
 
 class ReplayAPI:
-    """The read-only API of one recording (see the module docstring)."""
+    """The read-only API of one recording (see the module docstring).
 
-    def __init__(self, recording: Recording) -> None:
-        self.view = ReplayView(recording)
+    Given a :class:`~cyborg.observe.recording.Recording`, it answers from it. Given only a
+    :class:`~cyborg.observe.recording.Glance` (:meth:`of_file`), it is served at once: until the
+    recording is read, ``/api/replay`` says ``loading`` (its span and metadata, no track or plot
+    yet) and a moment within the first EARLY_SECONDS is answered from a window read through the
+    file's index, so that the page shows its start without waiting. The whole read (:meth:`load`,
+    on a worker thread) starts when first needed: ``/api/replay?wait=1`` (the page asks once it
+    shows the start), a later moment or the map; those wait for it.
+    """
+
+    def __init__(self, recording: Recording | None = None, *, glance: Glance | None = None) -> None:
+        if recording is None and glance is None:
+            raise ValueError("ReplayAPI needs a recording or a glance at one")
+        self.glance = glance
+        self.view = ReplayView(recording) if recording is not None else None
         self.recording = recording
+        self._loaded: asyncio.Future[None] | None = None
+        self._early: dict[int, ReplayView] = {}
         self._map: OccupancyMap | None = None
         self._map_read = False
         self._png: bytes | None = None
@@ -168,31 +188,118 @@ class ReplayAPI:
             ]
         )
 
+    @classmethod
+    def of_file(cls, path: Path) -> ReplayAPI:
+        """The API of the recording at ``path``, checked now and read once served (a file cut short,
+        which has no summary, is read whole now)."""
+        seen = glance(path)
+        return cls(open_recording(path)) if seen is None else cls(glance=seen)
+
+    def load(self) -> asyncio.Future[None]:
+        """Read the recording whole on a worker thread (once); the future is done when it is read."""
+        if self._loaded is None:
+            self._loaded = asyncio.get_running_loop().create_future()
+            if self.view is not None:
+                self._loaded.set_result(None)
+            else:
+                assert self.glance is not None
+                reading = asyncio.get_running_loop().run_in_executor(None, open_recording, self.glance.path)
+                reading.add_done_callback(self._read)
+        return self._loaded
+
+    def _read(self, reading: asyncio.Future[Recording]) -> None:
+        assert self._loaded is not None
+        if reading.cancelled():
+            self._loaded.cancel()
+            return
+        failure = reading.exception()
+        if failure is not None:
+            self._loaded.set_exception(failure)
+            return
+        self.recording = reading.result()
+        self.view = ReplayView(self.recording)
+        self._early.clear()
+        self._loaded.set_result(None)
+
+    async def _view(self, t_ns: int | None = None) -> ReplayView:
+        """The view to answer from: the whole recording, or early on a window up to ``t_ns``."""
+        if self.view is not None:
+            return self.view
+        if t_ns is not None and t_ns <= EARLY_SECONDS * NS_PER_S:
+            return await self._early_view(t_ns)
+        await self.load()
+        assert self.view is not None
+        return self.view
+
+    async def _early_view(self, t_ns: int) -> ReplayView:
+        assert self.glance is not None
+        glanced = self.glance
+        found = self._early.get(t_ns)
+        if found is None:
+            records = await asyncio.get_running_loop().run_in_executor(None, window, glanced.path, 0, t_ns)
+            part = Recording(glanced.path, glanced.metadata, {}, records, [])
+            found = self._early[t_ns] = ReplayView(part)
+        return found
+
     def status_at(self, t_ns: int) -> dict[str, Any]:
         """What ``/api/status`` of the robot would have answered ``t_ns`` after the start."""
+        assert self.view is not None, "read the recording first (load())"
         return self.view.status_at(t_ns)
+
+    def _at(self, request: web.Request) -> int:
+        view = self.view
+        if view is None:
+            assert self.glance is not None
+            view = ReplayView(Recording(self.glance.path, self.glance.metadata, {}, [], []))
+            if request.query.get("at") is None:
+                return self.glance.end_ns
+        return view.at(request.query.get("at"))
 
     async def index(self, request: web.Request) -> web.FileResponse:
         return web.FileResponse(STATIC_DIR / "replay.html")
 
     async def get_replay(self, request: web.Request) -> web.Response:
-        return web.json_response(self.view.info())
+        if self.view is None and request.query.get("wait"):
+            await self.load()
+        if self.view is not None:
+            return web.json_response({**self.view.info(), "loading": False})
+        assert self.glance is not None
+        glanced = self.glance
+        return web.json_response(
+            {
+                "file": glanced.path.name,
+                "begin": 0.0,
+                "duration": glanced.end_ns / NS_PER_S,
+                "live": False,
+                "records": None,
+                "metadata": glanced.metadata,
+                "marks": [],
+                "problem": None,
+                "track": [],
+                "emotions": [],
+                "loading": True,
+            }
+        )
 
     async def get_status(self, request: web.Request) -> web.Response:
-        return web.json_response(self.view.status_at(self.view.at(request.query.get("at"))))
+        t_ns = self._at(request)
+        return web.json_response((await self._view(t_ns)).status_at(t_ns))
 
     async def get_records(self, request: web.Request) -> web.Response:
-        return web.json_response(self.view.records_at(self.view.at(request.query.get("at"))))
+        t_ns = self._at(request)
+        return web.json_response((await self._view(t_ns)).records_at(t_ns))
 
-    def occupancy(self) -> OccupancyMap | None:
+    async def occupancy(self) -> OccupancyMap | None:
         """The recording's map (decoded once), or None."""
         if not self._map_read:
+            await self._view()
+            assert self.recording is not None
             self._map, self._map_read = recorded_map(self.recording), True
         return self._map
 
     async def get_map(self, request: web.Request) -> web.Response:
         """The map the robot ran on, as the live dashboard's ``/api/map`` gives it (404: none recorded)."""
-        occupancy = self.occupancy()
+        occupancy = await self.occupancy()
         if occupancy is None:
             return web.json_response({"error": "this recording holds no map", "has_base": False}, status=404)
         rows, cols = occupancy.shape
@@ -208,7 +315,9 @@ class ReplayAPI:
         )
 
     async def get_map_image(self, request: web.Request) -> web.Response:
-        occupancy = self.occupancy()
+        from cyborg.web.dashboard import map_png
+
+        occupancy = await self.occupancy()
         if occupancy is None:
             raise web.HTTPNotFound(text="this recording holds no map")
         if self._png is None:
