@@ -118,6 +118,7 @@ def test_dragging_the_slider_shows_that_moment(tmp_path: Path) -> None:
             page.mouse.up()
             page.wait_for_function("Number(document.body.dataset.shown) > 60")
             shown = float(page.get_attribute("body", "data-shown") or 0)
+            page.wait_for_selector("body[data-map='drawn']")  # the recorded map behind the track
             page.screenshot(path=str(Path("/tmp") / "replay-dragged.png"))
             api = ReplayAPI(open_recording(recording))
             expected = api.status_at(round(shown * 1e9))
