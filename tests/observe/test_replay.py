@@ -119,11 +119,14 @@ def test_dragging_the_slider_shows_that_moment(tmp_path: Path) -> None:
             page.wait_for_function("Number(document.body.dataset.shown) > 60")
             shown = float(page.get_attribute("body", "data-shown") or 0)
             page.wait_for_selector("body[data-map='drawn']")  # the recorded map behind the track
+            page.wait_for_selector("body[data-graph='drawn']")  # the recorded machine, its state lit
             page.screenshot(path=str(Path("/tmp") / "replay-dragged.png"))
             api = ReplayAPI(open_recording(recording))
             expected = api.status_at(round(shown * 1e9))
             assert page.inner_text("#state") == expected["state"]
             assert page.inner_text("#emotion") == expected["emotion"]
+            lit = page.evaluate("document.querySelector('#graph .node.active')?.id")
+            assert lit == f"state:{expected['state']}", "the graph shows the state at the slider's moment"
             assert page.locator("#log li").count() > 0
             log_times = [float(t) for t in page.locator("#log .t").all_inner_texts()]
             assert max(log_times) <= shown + 0.05, "the log shows nothing after the slider's moment"

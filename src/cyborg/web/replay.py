@@ -19,10 +19,12 @@ from typing import TYPE_CHECKING, Any
 
 from aiohttp import web
 
+from cyborg.errors import CyborgError
 from cyborg.observe.recording import Glance, Recording, glance, open_recording, recorded_map, window
 from cyborg.observe.records import NS_PER_S, Record
 
 if TYPE_CHECKING:
+    from cyborg.controller.machine import MachineSpec
     from cyborg.maps import OccupancyMap
 
 __all__ = ["ReplayAPI", "ReplayView", "serve_replay"]
@@ -33,6 +35,9 @@ STATIC_DIR = Path(__file__).resolve().parent / "static"
 """The pages (the same folder as the live dashboard's; not imported from it, to start quicker)."""
 EARLY_SECONDS = 60.0
 """While the recording is read, a moment up to this far in is answered from a window of it."""
+GRAPH_TIMEOUT = 10.0
+"""Real seconds Graphviz may take to lay out the recorded machine."""
+GRAPH_MEMORY = 2**30
 MAP_PIXELS = 720
 """The map image is at most about this many pixels a side (walls kept)."""
 TRACK_POINTS = 4000
@@ -175,6 +180,7 @@ class ReplayAPI:
         self._map: OccupancyMap | None = None
         self._map_read = False
         self._png: bytes | None = None
+        self._drawing: asyncio.Future[tuple[bytes, dict[str, Any]]] | None = None
         self.app = web.Application()
         self.app.add_routes(
             [
@@ -184,6 +190,9 @@ class ReplayAPI:
                 web.get("/api/records", self.get_records),
                 web.get("/api/map", self.get_map),
                 web.get("/api/map.png", self.get_map_image),
+                web.get("/api/machine", self.get_machine),
+                web.get("/api/graph.svg", self.get_graph),
+                web.get("/api/graph.json", self.get_graph_arrows),
                 web.static("/static", STATIC_DIR),
             ]
         )
@@ -313,6 +322,59 @@ class ReplayAPI:
                 "locations": [{"name": p.name, "x": p.x, "y": p.y} for p in occupancy.poses],
             }
         )
+
+    async def machine(self) -> MachineSpec:
+        """The state machine of the recorded configuration (404 if the recording holds none)."""
+        await self._view()
+        assert self.recording is not None
+        text = self.recording.config_text
+        if not text:
+            raise web.HTTPNotFound(text="this recording holds no configuration, so no state machine")
+        from cyborg.app.config import parse_config
+
+        source = f"{self.recording.path.name}:{self.recording.metadata.get('config')}"
+        try:
+            return parse_config(text, source=source).machine
+        except CyborgError as exc:
+            raise web.HTTPNotFound(text=f"the recorded configuration cannot be read here: {exc}") from None
+
+    async def get_machine(self, request: web.Request) -> web.Response:
+        """The recorded state machine, as the live API's ``/api/machine`` gives it."""
+        machine = await self.machine()
+        states = [
+            {"name": st.name, "parent": st.parent, "leaf": st.is_leaf, "transitions": dict(st.transitions)}
+            for st in machine.states.values()
+        ]
+        return web.json_response({"initial": machine.initial, "states": states})
+
+    async def _draw(self) -> tuple[bytes, dict[str, Any]]:
+        if self._drawing is None:
+            machine = await self.machine()
+
+            def work() -> tuple[bytes, dict[str, Any]]:
+                from cyborg.drawing.layout import draw, lay_out, run_graphviz
+
+                def run(args: list[str], data: bytes, left: float | None) -> bytes:
+                    return run_graphviz(args, data, left, memory=GRAPH_MEMORY)
+
+                layout = lay_out(machine, run, timeout=GRAPH_TIMEOUT)
+                return draw(layout, "svg", run, GRAPH_TIMEOUT), {"edges": layout.edges}
+
+            self._drawing = asyncio.ensure_future(asyncio.get_running_loop().run_in_executor(None, work))
+        try:
+            return await asyncio.shield(self._drawing)
+        except CyborgError as exc:
+            raise web.HTTPNotFound(text=f"the state machine cannot be drawn here: {exc}") from None
+
+    async def get_graph(self, request: web.Request) -> web.Response:
+        """The recorded machine drawn as the live dashboard draws it (ids ``state:<leaf>``,
+        ``super:<superstate>``; arrows in ``/api/graph.json``)."""
+        svg, _ = await self._draw()
+        return web.Response(body=svg, content_type="image/svg+xml")
+
+    async def get_graph_arrows(self, request: web.Request) -> web.Response:
+        _, arrows = await self._draw()
+        return web.json_response({"layout": "graphviz", **arrows})
 
     async def get_map_image(self, request: web.Request) -> web.Response:
         from cyborg.web.dashboard import map_png
