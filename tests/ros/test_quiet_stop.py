@@ -65,6 +65,8 @@ def test_a_launch_stopped_normally_prints_no_traceback(
         assert recording.metadata["middleware"] == "ROS 1" and recording.metadata["clock"] == "real"
         started = [r for r in recording.records if r["type"] == "state" and r["to"] == "idle"]
         assert started and started[0]["event"] == "start", "the launch's recorder heard the controller start"
+        counters = [entry["detail"] for entry in recording.logs if entry["kind"] == "controller"]
+        assert counters and counters[-1]["handovers"] >= 1, "the controller node's counters are recorded"
 
 
 def test_a_scripted_run_over_ros_in_simulated_time_ends_without_a_traceback(

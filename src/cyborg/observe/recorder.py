@@ -3,8 +3,8 @@
 A :class:`Recorder` listens to a run's :class:`~cyborg.observe.records.RecordStream` (state
 changes, emotions, decisions, speech, poses) and, on its own node, to what comes into the robot
 (events with their sender, texts heard, emotion commands), to gatekeeper passes and drops and
-module crashes, to the "mark" notes of the dashboard, and to the package's warnings and errors. Each
-goes to the MCAP file with its time on the robot's clock in integer nanoseconds
+module crashes, to the controller node's counters (over ROS), to the "mark" notes of the
+dashboard, and to the package's warnings and errors. Each goes to the MCAP file with its time on the robot's clock in integer nanoseconds
 (:mod:`~cyborg.observe.channels` says where). Every segment holds the run's configuration,
 script, seed, version and clock kind (attachments and metadata), the map and the places.
 
@@ -254,6 +254,7 @@ class Recorder:
             node.subscribe(topic, message_type, self._input_callback(topic), queue_size=1000)
         node.subscribe(topics.GATEKEEPER_DROPPED, String, self._on_dropped, queue_size=1000)
         node.subscribe(topics.GATEKEEPER_PASSED, String, self._on_passed, queue_size=1000)
+        node.subscribe(topics.CONTROLLER_STATS, String, self._on_controller_stats, queue_size=100)
         node.subscribe(topics.MODULE_CRASHED, String, self._on_crashed, queue_size=100)
         node.subscribe(ch.MARK_TOPIC, String, self._on_mark, queue_size=100)
         node.subscribe(ch.FLUSH_TOPIC, String, self._on_flush, queue_size=10)
@@ -461,6 +462,11 @@ class Recorder:
 
     def _on_passed(self, message: String, info: MessageInfo) -> None:
         self._diagnostic("passed", message, info, None)
+
+    def _on_controller_stats(self, message: String, info: MessageInfo) -> None:
+        """The controller node's counters (handovers, preempt timeouts, connect failures...), as
+        they change: a launch's health over time (in one process nobody publishes them)."""
+        self._diagnostic("controller", message, info, None)
 
     def _on_crashed(self, message: String, info: MessageInfo) -> None:
         self._diagnostic("crashed", message, info, LogLevel.Error)

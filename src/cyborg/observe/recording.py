@@ -61,8 +61,9 @@ class Recording:
     """Every event sent to the controller (``t_ns``, ``event``, ``sender``, ``source``)."""
     marks: list[dict[str, Any]] = field(default_factory=list)
     logs: list[dict[str, Any]] = field(default_factory=list)
-    """Gatekeeper passes (level ``info``) and drops, module crashes: ``t_ns``, ``level``, ``kind``
-    (passed, dropped, crashed), ``sender``, ``detail``."""
+    """Gatekeeper passes (level ``info``) and drops, module crashes, the controller node's counters
+    (``info``): ``t_ns``, ``level``, ``kind`` (passed, dropped, crashed, controller), ``sender``,
+    ``detail``."""
     problem: str | None = None
     """Why the file was read only in part (it was cut short), else None."""
     scene: dict[str, tuple[Schema, bytes]] = field(default_factory=dict, repr=False)
@@ -204,7 +205,7 @@ def open_recording(path: Path) -> Recording:
                     scene.setdefault(topic, (_schema, bytes(message.data)))
                 elif topic == ch.DIAGNOSTIC_TOPIC:
                     diagnostic = json.loads(message.data)
-                    level = "info" if diagnostic.get("kind") == "passed" else "warning"
+                    level = "warning" if diagnostic.get("kind") in ("dropped", "crashed") else "info"
                     logs.append({"t_ns": t_ns, "level": level, **diagnostic})
         except (McapError, EOFError, ValueError, KeyError, struct.error) as exc:
             if metadata is None:
