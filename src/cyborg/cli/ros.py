@@ -204,10 +204,10 @@ def launch_command(
     nodes (no master; each node's use_sim_time parameter is set instead). The cyborg_recorder node
     records the run to MCAP (--record FILE.mcap names the file; --no-record: no recorder node).
     """
-    from cyborg.app.parts import CONTROLLER, RECORDER
+    from cyborg.app.parts import RECORDER
     from cyborg.run.local import default_data_dir
     from cyborg.run.middleware import ROS1
-    from cyborg.run.roslaunch import all_parts, roslaunch_xml
+    from cyborg.run.roslaunch import all_parts, roslaunch_xml, with_recorder
     from cyborg.run.supervisor import Launch, launch
 
     parsed = parse_speed(speed)
@@ -227,10 +227,7 @@ def launch_command(
             )
         if no_record and record_path is not None:
             raise click.UsageError("--record and --no-record exclude each other: pick one")
-        if no_record:
-            parts = [part for part in parts if part != RECORDER]
-        elif record_path is not None and RECORDER not in parts:
-            parts.insert(1 if CONTROLLER in parts else 0, RECORDER)
+        parts, extra = with_recorder(parts, record_path, no_record, default=RECORDER in parts)
         folder = (data_dir or default_data_dir()).resolve()
         if write_path is not None:
             if middleware is not ROS1:
@@ -253,7 +250,7 @@ def launch_command(
             lockstep=lockstep,
             start=start,
             middleware=middleware,
-            extra_args={RECORDER: ["--record", str(record_path.resolve())]} if record_path else {},
+            extra_args=extra,
         )
         launch(robot, duration=duration)
     except CyborgError as exc:

@@ -137,9 +137,12 @@ def run_scenario_ros(
     echo: bool = False,
     say: Callable[[str], None] = click.echo,
     middleware: Middleware = ROS1,
+    record: Path | None = None,
 ) -> list[dict[str, Any]]:
     """Run a scenario on ``middleware``'s graph: the robot's nodes (no API) plus ``cyborg_scenario``;
-    return the records. ``speed``: virtual time at that factor of real time; None: in lockstep."""
+    return the records. ``speed``: virtual time at that factor of real time; None: in lockstep.
+    ``record``: the ``cyborg_recorder`` node records the run to this MCAP file (none otherwise: a
+    node more per scripted ROS run)."""
     from cyborg.sim.scenario import check_script, script_start
     from cyborg.sim.script import load_script
 
@@ -151,8 +154,13 @@ def run_scenario_ros(
         if transcript_path is None:
             transcript_path = data_dir / "transcript.jsonl"
         prepare_calendar(config, data_dir, map_path, script)
-        # Not recorded yet over ROS: a recorder node would add a process to every scripted ROS run.
         parts = [name for name in part_names(config) if name not in (API, RECORDER)] + [SCENARIO]
+        extra_args = {
+            SCENARIO: ["--script", str(script_path.resolve()), "--transcript", str(transcript_path)]
+        }
+        if record is not None:
+            parts.insert(1, RECORDER)
+            extra_args[RECORDER] = ["--record", str(record.resolve())]
         robot = Launch(
             config_path,
             config,
@@ -164,9 +172,7 @@ def run_scenario_ros(
             lockstep=speed is None,
             start=script_start(script),
             seed=script.seed,
-            extra_args={
-                SCENARIO: ["--script", str(script_path.resolve()), "--transcript", str(transcript_path)]
-            },
+            extra_args=extra_args,
             say=say,
             middleware=middleware,
         )
