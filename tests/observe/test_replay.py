@@ -25,6 +25,7 @@ def ask(api: ReplayAPI, *paths: str) -> list[tuple[int, Any]]:
             out = []
             for path in paths:
                 response = await client.get(path)
+                body: Any
                 if response.status != 200:
                     body = await response.text()
                 elif response.content_type == "application/json":
@@ -74,6 +75,7 @@ def test_the_replay_api_answers_as_at_that_moment(tmp_path: Path) -> None:
     )
     assert first["loading"] is True and first["duration"] >= records[-1]["t"]
     assert loading == before, "a moment early on is answered before the recording is read whole"
+    assert api.view is not None
     assert start == api.view.records_at(30_000_000_000), "the window holds what the whole file does"
     assert whole["loading"] is False and whole["records"] == len(records)
     # The map the robot ran on, from the recording (drawn behind the track).
