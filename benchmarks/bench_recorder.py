@@ -6,7 +6,8 @@ alternating in the same run, and reports the medians of wall and CPU time and th
 on the last recording: its size, a week of robot days (24 h = 3 of these) against the default
 budget, the time to read a 60 s window at SEEKS random moments through the MCAP index and to
 answer `/api/status?at=` (p50/p95), the replay page's first paint (`cyborg replay` started,
-Chromium, already running, opens the page, until it shows t = 0; median of 3), and the CPU the
+Chromium, already running, opens the page, until it shows t = 0; median of 3, alternating with
+the same on a one-minute recording as the floor), and the CPU the
 recorder alone takes to write the day's records again in this process (what the ratio's
 difference should be, without the noise of a loaded machine).
 Run: .venv/bin/python benchmarks/bench_recorder.py [--hours 8] [--runs 3] [--seeks 200]
@@ -139,7 +140,12 @@ def main() -> None:
             began = time.perf_counter()
             api.status_at(at)
             statuses.append((time.perf_counter() - began) * 1000)
-        paints = [first_paint(recording) for _ in range(3)]
+        minute = scratch / "minute.mcap"  # the floor: the same replay of a one-minute recording
+        day(60 / 3600, scratch, minute)
+        paints, floors = [], []
+        for _ in range(3):
+            paints.append(first_paint(recording))
+            floors.append(first_paint(minute))
         writing = recorder_cpu(read.records, scratch)
 
     def med(runs: list[dict[str, float]], key: str) -> float:
@@ -154,6 +160,8 @@ def main() -> None:
     print(f"| wall ratio | {med(with_, 'wall') / med(without, 'wall'):.3f} |")
     print(f"| CPU without / with | {med(without, 'cpu'):.2f} s / {med(with_, 'cpu'):.2f} s |")
     print(f"| CPU ratio | {med(with_, 'cpu') / med(without, 'cpu'):.3f} |")
+    every = " / ".join(", ".join(f"{r['cpu']:.2f}" for r in runs) for runs in (without, with_))
+    print(f"| CPU of each run, without / with | {every} s |")
     print(
         f"| the recorder alone: the day's records written again (CPU) | {writing:.2f} s "
         f"({writing / max(1, len(read.records)) * 1e6:.1f} us a record) |"
@@ -172,7 +180,11 @@ def main() -> None:
         f"| /api/status?at= ({args.seeks}) | p50 {statistics.median(statuses) * 1000:.0f} us, "
         f"p95 {percentile(statuses, 95) * 1000:.0f} us |"
     )
-    print(f"| replay first paint (median of 3) | {statistics.median(paints):.2f} s |")
+    paint, floor = statistics.median(paints), statistics.median(floors)
+    print(f"| replay first paint, one-minute recording (floor; median of 3, alternating) | {floor:.2f} s |")
+    print(
+        f"| replay first paint, the day's recording (median of 3) | {paint:.2f} s ({paint / floor:.2f}x the floor) |"
+    )
 
 
 if __name__ == "__main__":
