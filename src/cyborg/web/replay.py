@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 from aiohttp import web
 
-from cyborg.errors import CyborgError
+from cyborg.errors import CyborgError, InvalidValueError
 from cyborg.observe.recording import Glance, Recording, glance, open_recording, recorded_map, window
 from cyborg.observe.records import NS_PER_S, Record
 
@@ -171,7 +171,9 @@ class ReplayAPI:
 
     def __init__(self, recording: Recording | None = None, *, glance: Glance | None = None) -> None:
         if recording is None and glance is None:
-            raise ValueError("ReplayAPI needs a recording or a glance at one")
+            raise InvalidValueError(
+                "ReplayAPI needs a recording or a glance at one; fix: give recording= or glance="
+            )
         self.glance = glance
         self.view = ReplayView(recording) if recording is not None else None
         self.recording = recording
