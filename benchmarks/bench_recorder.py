@@ -5,8 +5,11 @@ transcript) RUNS times without recording (`--no-record`) and RUNS times with (`-
 alternating in the same run, and reports the medians of wall and CPU time and their ratio. Then,
 on the last recording: its size, a week of robot days (24 h = 3 of these) against the default
 budget, the time to read a 60 s window at SEEKS random moments through the MCAP index and to
-answer `/api/status?at=` (p50/p95), and the replay page's first paint (`cyborg replay` started,
-Chromium, already running, opens the page, until it shows t = 0; median of 3).
+answer `/api/status?at=` (p50/p95), the replay page's first paint (`cyborg replay` started,
+Chromium, already running, opens the page, until it shows t = 0; median of 3, alternating with
+the same on a one-minute recording as the floor), and the CPU the
+recorder alone takes to write the day's records again in this process (what the ratio's
+difference should be, without the noise of a loaded machine).
 Run: .venv/bin/python benchmarks/bench_recorder.py [--hours 8] [--runs 3] [--seeks 200]
 """
 
@@ -45,6 +48,28 @@ def day(hours: float, scratch: Path, record: Path | None) -> dict[str, float]:
     if status != 0:
         raise SystemExit(f"cyborg sim --script failed (status {status})")
     return {"wall": wall, "cpu": usage.ru_utime + usage.ru_stime}
+
+
+def recorder_cpu(records: list[dict[str, object]], scratch: Path) -> float:
+    """CPU seconds the recorder takes to write ``records`` (the day's), alone in this process."""
+    from cyborg.observe.recorder import Recorder, RecorderSettings, RunFacts
+    from cyborg.observe.records import RecordStream
+    from cyborg.transport.clock import VirtualClock
+    from cyborg.transport.embedded import EmbeddedTransport
+
+    clock = VirtualClock(speed=None)
+    transport = EmbeddedTransport(clock)
+    node = transport.node("cyborg_recorder")
+    settings = RecorderSettings(file=scratch / "again.mcap")
+    recorder = Recorder(node, RecordStream(node), settings, RunFacts(start_ns=0, clock="virtual"))
+    began = time.process_time()
+    for record in records:
+        recorder.on_record(record)
+    recorder.close()
+    took = time.process_time() - began
+    transport.shutdown()
+    clock.close()
+    return took
 
 
 def first_paint(recording: Path) -> float:
@@ -115,7 +140,13 @@ def main() -> None:
             began = time.perf_counter()
             api.status_at(at)
             statuses.append((time.perf_counter() - began) * 1000)
-        paints = [first_paint(recording) for _ in range(3)]
+        minute = scratch / "minute.mcap"  # the floor: the same replay of a one-minute recording
+        day(60 / 3600, scratch, minute)
+        paints, floors = [], []
+        for _ in range(3):
+            paints.append(first_paint(recording))
+            floors.append(first_paint(minute))
+        writing = recorder_cpu(read.records, scratch)
 
     def med(runs: list[dict[str, float]], key: str) -> float:
         return statistics.median(r[key] for r in runs)
@@ -129,6 +160,12 @@ def main() -> None:
     print(f"| wall ratio | {med(with_, 'wall') / med(without, 'wall'):.3f} |")
     print(f"| CPU without / with | {med(without, 'cpu'):.2f} s / {med(with_, 'cpu'):.2f} s |")
     print(f"| CPU ratio | {med(with_, 'cpu') / med(without, 'cpu'):.3f} |")
+    every = " / ".join(", ".join(f"{r['cpu']:.2f}" for r in runs) for runs in (without, with_))
+    print(f"| CPU of each run, without / with | {every} s |")
+    print(
+        f"| the recorder alone: the day's records written again (CPU) | {writing:.2f} s "
+        f"({writing / max(1, len(read.records)) * 1e6:.1f} us a record) |"
+    )
     print(f"| recording size | {size / 1e6:.2f} MB ({len(read.records)} records) |")
     print(
         f"| a week of 24 h days | {week / 1e6:.0f} MB of the default budget's "
@@ -143,7 +180,11 @@ def main() -> None:
         f"| /api/status?at= ({args.seeks}) | p50 {statistics.median(statuses) * 1000:.0f} us, "
         f"p95 {percentile(statuses, 95) * 1000:.0f} us |"
     )
-    print(f"| replay first paint (median of 3) | {statistics.median(paints):.2f} s |")
+    paint, floor = statistics.median(paints), statistics.median(floors)
+    print(f"| replay first paint, one-minute recording (floor; median of 3, alternating) | {floor:.2f} s |")
+    print(
+        f"| replay first paint, the day's recording (median of 3) | {paint:.2f} s ({paint / floor:.2f}x the floor) |"
+    )
 
 
 if __name__ == "__main__":

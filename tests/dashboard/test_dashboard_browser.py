@@ -259,6 +259,28 @@ def robot_dot(page: Page) -> tuple[float, float]:
     return float(x), float(y)
 
 
+def test_a_mark_then_a_look_back_at_it_then_live_again(page: Page, sim: str) -> None:
+    """The mark button puts a note into the recording; the look back (the last minutes, from the
+    recording) lists it, jumps to it, draws the map behind the track; "back to live" returns."""
+    expect(page.locator("#recorder-state")).to_have_text("on")
+    page.fill("#mark-note", "odd turn here")
+    page.click("#mark")
+    expect(page.locator("#control-message")).to_contain_text("marked: odd turn here")
+    page.click("#lookback")
+    page.wait_for_selector("body[data-shown]")
+    expect(page.locator("#title")).to_have_text("Cyborg: looking back")
+    mark = page.locator("#marks button", has_text="odd turn here")
+    expect(mark).to_be_visible()
+    expect(page.locator("body")).to_have_attribute("data-map", "drawn")
+    mark.click()
+    marked_at = float((mark.inner_text()).split(" s:")[0])
+    page.wait_for_function(f"Math.abs(Number(document.body.dataset.shown) - {marked_at}) < 0.2")
+    assert page.inner_text("#state") not in ("", NOTHING), "the state at the mark is shown"
+    page.screenshot(path=str(SHOTS / "cyborg-dashboard-lookback.png"))
+    page.click("#live")
+    expect(page.locator("#conn")).to_have_attribute("data-state", "open")
+
+
 def test_robot_moves_on_the_map(page: Page, sim: str) -> None:
     expect(page.locator("#map-message")).to_be_hidden()
     expect(page.locator("#map-caption")).to_contain_text("places")

@@ -71,8 +71,13 @@ def test_a_scripted_run_s_recording_read_by_the_mcap_library_holds_its_transcrip
     assert schemas["/map"] == ("foxglove.Grid", "protobuf")
     assert schemas["/places"] == ("foxglove.SceneUpdate", "protobuf")
     assert schemas["/cyborg_controller/state_change"] == ("cyborg.StateChange", "json")
-    events = open_recording(recording).events
+    read = open_recording(recording)
+    events = read.events
     assert {"event": "start", "sender": "cyborg_controller", "source": "module"} not in events
+    passed = [entry for entry in read.logs if entry["kind"] == "passed"]
+    said = [r["text"] for r in expected if r["type"] == "say"]
+    assert passed and passed[0]["detail"]["gatekeeper"] == "cyborg_speech_gatekeeper"
+    assert [entry["detail"]["message"] for entry in passed] == said, "each sentence said passed a gatekeeper"
     assert any(e["source"] == "motivator" for e in events), "the motivator's events carry their source"
 
 

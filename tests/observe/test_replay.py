@@ -25,7 +25,13 @@ def ask(api: ReplayAPI, *paths: str) -> list[tuple[int, Any]]:
             out = []
             for path in paths:
                 response = await client.get(path)
-                body = await response.json() if response.status == 200 else await response.text()
+                body: Any
+                if response.status != 200:
+                    body = await response.text()
+                elif response.content_type == "application/json":
+                    body = await response.json()
+                else:
+                    body = await response.read()
                 out.append((response.status, body))
             return out
 
@@ -55,6 +61,27 @@ def test_the_replay_api_answers_as_at_that_moment(tmp_path: Path) -> None:
     assert s3 == 400 and "'at' must be seconds" in bad
     assert log[-1] == entered or log[-1]["t_ns"] == entered["t_ns"]
     assert all(r["t_ns"] <= entered["t_ns"] for r in log)
+    # Served from a glance at the file: the start is answered from a window, the rest once read.
+    early = ReplayAPI.of_file(recording)
+    assert early.view is None
+    [(_, first), (_, loading), (_, start), (_, whole), (status, about), (png_status, png)] = ask(
+        early,
+        "/api/replay",
+        f"/api/status?at={just_before}",
+        "/api/records?at=30",
+        "/api/replay?wait=1",
+        "/api/map",
+        "/api/map.png",
+    )
+    assert first["loading"] is True and first["duration"] >= records[-1]["t"]
+    assert loading == before, "a moment early on is answered before the recording is read whole"
+    assert api.view is not None
+    assert start == api.view.records_at(30_000_000_000), "the window holds what the whole file does"
+    assert whole["loading"] is False and whole["records"] == len(records)
+    # The map the robot ran on, from the recording (drawn behind the track).
+    assert (status, png_status) == (200, 200) and png[:4] == b"\x89PNG"
+    assert about["cells"][0] > 100 and about["resolution"] > 0
+    assert "cafeteria" in {place["name"] for place in about["locations"]}
 
 
 @pytest.mark.browser
@@ -84,6 +111,7 @@ def test_dragging_the_slider_shows_that_moment(tmp_path: Path) -> None:
             page.goto(url)
             page.wait_for_selector("body[data-shown='0']")
             assert page.inner_text("#state") == "idle"
+            page.wait_for_selector("body[data-loaded]")
             slider = page.locator("#slider").bounding_box()
             assert slider is not None
             page.mouse.move(slider["x"] + 2, slider["y"] + slider["height"] / 2)
@@ -92,11 +120,15 @@ def test_dragging_the_slider_shows_that_moment(tmp_path: Path) -> None:
             page.mouse.up()
             page.wait_for_function("Number(document.body.dataset.shown) > 60")
             shown = float(page.get_attribute("body", "data-shown") or 0)
+            page.wait_for_selector("body[data-map='drawn']")  # the recorded map behind the track
+            page.wait_for_selector("body[data-graph='drawn']")  # the recorded machine, its state lit
             page.screenshot(path=str(Path("/tmp") / "replay-dragged.png"))
             api = ReplayAPI(open_recording(recording))
             expected = api.status_at(round(shown * 1e9))
             assert page.inner_text("#state") == expected["state"]
             assert page.inner_text("#emotion") == expected["emotion"]
+            lit = page.evaluate("document.querySelector('#graph .node.active')?.id")
+            assert lit == f"state:{expected['state']}", "the graph shows the state at the slider's moment"
             assert page.locator("#log li").count() > 0
             log_times = [float(t) for t in page.locator("#log .t").all_inner_texts()]
             assert max(log_times) <= shown + 0.05, "the log shows nothing after the slider's moment"

@@ -18,6 +18,7 @@ from typing import Any
 
 import pytest
 
+from cyborg.observe.recording import open_recording
 from cyborg.transport.messages import StateMachineAction
 from tests.support.paths import SCENARIOS
 from tests.support.ros import Observers, Processes, RosSession, yaml_path
@@ -35,13 +36,15 @@ def test_a_launch_stopped_normally_prints_no_traceback(
     processes: Processes, observe: Observers, tmp_path: Path, group: bool, signum: signal.Signals
 ) -> None:
     changes = observe.state_changes()
-    parts = ("cyborg_controller", "cyborg_idle")
+    # With Ctrl-C the flight recorder's node is launched too: it must finish its file on the way down.
+    parts = ("cyborg_controller", "cyborg_idle", *(("cyborg_recorder",) if group else ()))
     only = [arg for part in parts for arg in ("--only", part)]
     command = [sys.executable, "-m", "cyborg.cli", "launch", "--config", str(CONFIG), "--db", str(tmp_path)]
+    record = ["--record", str(tmp_path / "launch.mcap")] if group else []
     launch = processes.start(
         "cyborg_launch",
-        [*command, *only],
-        "launched 2 nodes",
+        [*command, *only, *record],
+        f"launched {len(parts)} nodes",
         env={**os.environ, "ROS_HOME": str(tmp_path / "ros_home")},
         new_session=True,
     )
@@ -56,6 +59,14 @@ def test_a_launch_stopped_normally_prints_no_traceback(
     log = launch.log()
     assert "Traceback" not in log, log[-5000:]
     assert "Exception" not in log, log[-5000:]
+    if group:
+        recording = open_recording(tmp_path / "launch.mcap")
+        assert recording.problem is None, recording.problem
+        assert recording.metadata["middleware"] == "ROS 1" and recording.metadata["clock"] == "real"
+        started = [r for r in recording.records if r["type"] == "state" and r["to"] == "idle"]
+        assert started and started[0]["event"] == "start", "the launch's recorder heard the controller start"
+        counters = [entry["detail"] for entry in recording.logs if entry["kind"] == "controller"]
+        assert counters and counters[-1]["handovers"] >= 1, "the controller node's counters are recorded"
 
 
 def test_a_scripted_run_over_ros_in_simulated_time_ends_without_a_traceback(

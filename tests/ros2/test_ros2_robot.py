@@ -241,6 +241,23 @@ def test_ros2_command_tool_and_api_drive_a_launched_robot(
     assert health["stats"]["handovers"] == 2
     assert _get(f"{api}/api/status")["valid_events"] == ["aborted", "succeeded"]
 
+    # The launch's recorder node records over ROS 2; the dashboard marks a moment and looks back.
+    recorder = _get(f"{api}/api/recorder")
+    assert recorder["recording"] is True, recorder
+    mark = urllib.request.Request(
+        f"{api}/api/mark", data=b'{"note": "while working"}', headers={"Content-Type": "application/json"}
+    )
+    with urllib.request.urlopen(mark, timeout=5) as answer:
+        assert json.loads(answer.read())["marked"] == "while working"
+    back: dict[str, Any] = {}
+    for _ in range(50):  # the mark goes over the graph to the recorder
+        back = _get(f"{api}/api/lookback/replay?minutes=5")
+        if back["marks"]:
+            break
+        time.sleep(0.1)
+    assert [m["note"] for m in back["marks"]] == ["while working"], back
+    assert _get(f"{api}/api/lookback/status")["state"] == "working"
+
     # Typed in the main venv (ROS 1's), a --ros2 command runs again in .venv-ros2 by itself.
     main_python = ROOT / ".venv" / "bin" / "python"
     assert main_python.exists(), "the main venv is where users type cyborg"
@@ -251,5 +268,8 @@ def test_ros2_command_tool_and_api_drive_a_launched_robot(
     process.send_signal(signal.SIGINT)
     output = process.communicate(timeout=30)[0]
     assert process.returncode == 0, output[-3000:]
-    assert "launched 4 nodes: cyborg_controller, cyborg_test_idle, cyborg_test_worker, cyborg_api" in output
+    assert (
+        "launched 5 nodes: cyborg_controller, cyborg_recorder, cyborg_test_idle, cyborg_test_worker, cyborg_api"
+        in output
+    )
     assert "stopping" in output and "Traceback" not in output, output[-3000:]

@@ -2,7 +2,8 @@
 
 Parts: ``cyborg_controller`` (state machine, emotion system and motivator, as in
 the thesis), every module of the YAML's ``modules:`` section by its node name,
-every gatekeeper by its name, and ``cyborg_api`` (the HTTP API and dashboard).
+every gatekeeper by its name, ``cyborg_recorder`` (the flight recorder, unless the configuration's
+``recording`` is off) and ``cyborg_api`` (the HTTP API and dashboard).
 ``cyborg launch`` starts them all, one process each. A part is built from the same
 pieces as the in-process robot (:mod:`cyborg.app.robot`), and a module's part imports
 only its own kind.
@@ -25,15 +26,18 @@ from cyborg.transport.base import Transport
 if TYPE_CHECKING:
     from cyborg.controller.runtime import Controller
 
-__all__ = ["API", "CONTROLLER", "Part", "build_part", "part_names"]
+__all__ = ["API", "CONTROLLER", "RECORDER", "Part", "build_part", "part_names"]
 
 CONTROLLER = "cyborg_controller"
 API = "cyborg_api"
+RECORDER = "cyborg_recorder"
 
 
 def part_names(config: LoadedConfig) -> list[str]:
-    """Every part ``cyborg node`` can run, in a sensible start order."""
-    return [CONTROLLER, *config.model.modules, *(g.name for g in config.model.gatekeepers), API]
+    """Every part ``cyborg node`` can run, in a sensible start order (the recorder before the
+    robot's modules, so that it hears them from the start)."""
+    recorder = [RECORDER] if config.model.recording.enabled else []
+    return [CONTROLLER, *recorder, *config.model.modules, *(g.name for g in config.model.gatekeepers), API]
 
 
 @dataclass
@@ -97,6 +101,8 @@ def build_part(
         return Part(name, [keeper])
     if name == API:
         return Part(name, [])  # built by the interface layer, which owns the HTTP server
+    if name == RECORDER:
+        return Part(name, [])  # built where the node runs (cyborg.run.node): the recorder is observe's
     raise ConfigError(
         f"no part called {name!r}; fix: use one of {', '.join(part_names(config))}", source=config.source
     )

@@ -98,7 +98,7 @@ class LazyGroup(click.Group):
         "node": (
             "cyborg.cli.ros:node",
             "Run one part of the robot as the ROS 1 node NAME (cyborg_controller, a module, a "
-            "gatekeeper, cyborg_api, or cyborg_scenario with --script); with --ros2 as a ROS 2 node.",
+            "gatekeeper, cyborg_recorder, cyborg_api, or cyborg_scenario with --script); with --ros2 as a ROS 2 node.",
         ),
         "rerun": (
             "cyborg.cli.recordings:rerun",

@@ -33,15 +33,21 @@ def record_options(command: Callable[..., Any]) -> Callable[..., Any]:
 
 
 def recorder_settings(
-    config: LoadedConfig, record_path: Path | None, no_record: bool, data_dir: Path | None
+    config: LoadedConfig,
+    record_path: Path | None,
+    no_record: bool,
+    data_dir: Path | None,
+    *,
+    enabled: bool | None = None,
 ) -> RecorderSettings | None:
-    """Where this run is recorded, or None (``--no-record``, or ``recording: {enabled: false}``)."""
+    """Where this run is recorded, or None (``--no-record``, or ``recording: {enabled: false}``
+    unless ``enabled`` overrides it)."""
     from cyborg.observe.recorder import RecorderSettings
 
     if no_record and record_path is not None:
         raise click.UsageError("--record and --no-record exclude each other: pick one")
     settings = config.model.recording
-    if no_record or (record_path is None and not settings.enabled):
+    if no_record or (record_path is None and not (settings.enabled if enabled is None else enabled)):
         return None
     common: dict[str, Any] = {
         "budget_bytes": int(settings.budget_mb * 1024**2),

@@ -109,7 +109,9 @@ def replay(file: Path, host: str, port: int) -> None:
     try:
         from cyborg.web.replay import ReplayAPI, serve_replay
 
-        api = ReplayAPI(_open(file))
+        api = ReplayAPI.of_file(file)
+        if api.recording is not None and api.recording.problem:
+            click.secho(f"warning: {api.recording.problem}", fg="yellow", err=True)
         serve_replay(api, host, port, lambda url: click.secho(f"replay of {file} at {url}", fg="green"))
     except CyborgError as exc:
         fail(exc)

@@ -29,6 +29,7 @@ from cyborg.cli.common import (
     parse_speed,
     ros2_option,
 )
+from cyborg.cli.recording import record_options, recorder_settings
 from cyborg.errors import CyborgError
 from cyborg.web.access import Access
 
@@ -91,6 +92,7 @@ _speed_help = "virtual time at this factor of real time (all nodes share one clo
 )
 @ros2_option("a ROS 2 node (rclpy, .venv-ros2; no master), with use_sim_time under --speed")
 @access_options
+@record_options
 def node(
     name: str,
     config_path: Path | None,
@@ -109,13 +111,16 @@ def node(
     fresh: bool,
     middleware: Middleware,
     access: Access,
+    record_path: Path | None,
+    no_record: bool,
 ) -> None:
     """Run one part of the robot as the ROS 1 node NAME (cyborg_controller, a module, a gatekeeper,
-    cyborg_api, or cyborg_scenario with --script); with --ros2 as a ROS 2 node."""
+    cyborg_recorder, cyborg_api, or cyborg_scenario with --script); with --ros2 as a ROS 2 node."""
     try:
         middleware.enter()  # ROS 2 from the main venv: returns only in a Python that has rclpy
     except CyborgError as exc:
         fail(exc)
+    from cyborg.app.parts import RECORDER
     from cyborg.run.local import default_data_dir
     from cyborg.run.node import ApiOptions, NodeOptions, run_node
     from cyborg.run.scenario import ScenarioFiles
@@ -125,9 +130,14 @@ def node(
         raise click.BadParameter(f"{speed!r} must be positive", param_hint="--speed")
     sim_time = SimTime(speed=speed, epoch=parse_epoch(epoch), start=parse_start(start_at), lockstep=lockstep)
     try:
+        config = load_or_default(config_path)
+        record = None
+        if name == RECORDER:
+            # the recorder node records even when the configuration's recording is off: it was asked for
+            record = recorder_settings(config, record_path, no_record, data_dir, enabled=True)
         options = NodeOptions(
             # the part checks its own module's settings, loading only its kind
-            config=load_or_default(config_path),
+            config=config,
             data_dir=data_dir or default_data_dir(),
             map_path=map_path,
             seed=seed,
@@ -136,6 +146,7 @@ def node(
             publish_clock=publish_clock,
             api=ApiOptions(host=host, port=port, access=access),
             scenario=ScenarioFiles(script_path, transcript_path) if script_path is not None else None,
+            record=record,
         )
         code = run_node(name, options, middleware)
     except CyborgError as exc:
@@ -169,6 +180,7 @@ def node(
     "ROS 2 nodes (rclpy, .venv-ros2): no master is started; with --speed each node sets use_sim_time"
 )
 @duration_option
+@record_options
 def launch_command(
     config_path: Path | None,
     data_dir: Path | None,
@@ -180,6 +192,8 @@ def launch_command(
     start_at: str | None,
     middleware: Middleware,
     duration: float | None,
+    record_path: Path | None,
+    no_record: bool,
 ) -> None:
     """Start the whole robot over ROS 1 (a master if none runs) or ROS 2 (--ros2), a process a part.
 
@@ -187,11 +201,13 @@ def launch_command(
     /use_sim_time is set and the simulated base publishes /clock. With --speed max the time moves
     in lockstep: to the next timer of any node once every node is idle and every message sent has
     arrived, so a run is as fast as its work and repeats exactly. With --ros2 the parts are ROS 2
-    nodes (no master; each node's use_sim_time parameter is set instead).
+    nodes (no master; each node's use_sim_time parameter is set instead). The cyborg_recorder node
+    records the run to MCAP (--record FILE.mcap names the file; --no-record: no recorder node).
     """
+    from cyborg.app.parts import RECORDER
     from cyborg.run.local import default_data_dir
     from cyborg.run.middleware import ROS1
-    from cyborg.run.roslaunch import all_parts, roslaunch_xml
+    from cyborg.run.roslaunch import all_parts, roslaunch_xml, with_recorder
     from cyborg.run.supervisor import Launch, launch
 
     parsed = parse_speed(speed)
@@ -209,6 +225,9 @@ def launch_command(
             raise CyborgError(
                 f"no part called {', '.join(unknown)}; fix: use one of {', '.join(all_parts(config))}"
             )
+        if no_record and record_path is not None:
+            raise click.UsageError("--record and --no-record exclude each other: pick one")
+        parts, extra = with_recorder(parts, record_path, no_record, default=RECORDER in parts)
         folder = (data_dir or default_data_dir()).resolve()
         if write_path is not None:
             if middleware is not ROS1:
@@ -231,6 +250,7 @@ def launch_command(
             lockstep=lockstep,
             start=start,
             middleware=middleware,
+            extra_args=extra,
         )
         launch(robot, duration=duration)
     except CyborgError as exc:

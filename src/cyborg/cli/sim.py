@@ -128,6 +128,8 @@ def sim(
                 transcript_path,
                 map_path,
                 middleware=middleware_for(over_ros2),
+                record_path=record_path,
+                no_record=no_record,
             )
             return
         record = recorder_settings(config, record_path, no_record, data_dir)
@@ -183,28 +185,36 @@ def _sim_over_ros(
     map_path: Path | None,
     *,
     middleware: Middleware,
+    record_path: Path | None = None,
+    no_record: bool = False,
 ) -> None:
+    from cyborg.app.parts import RECORDER
     from cyborg.run.local import default_data_dir
-    from cyborg.run.roslaunch import all_parts
+    from cyborg.run.roslaunch import all_parts, with_recorder
     from cyborg.run.scenario import run_scenario_ros
     from cyborg.run.supervisor import Launch, launch
 
+    if no_record and record_path is not None:
+        raise click.UsageError("--record and --no-record exclude each other: pick one")
     factor, lockstep = _ros_speed(speed)
     config_path = Path(config.source).resolve()
     if script_path is None:
         if transcript_path is not None:
             raise click.UsageError("--transcript goes with --script")
         folder = (data_dir or default_data_dir()).resolve()
+        parts = all_parts(config)
+        parts, extra = with_recorder(parts, record_path, no_record, default=RECORDER in parts)
         robot = Launch(
             config_path,
             config,
-            all_parts(config),
+            parts,
             folder,
             map_path,
             port,
             speed=factor,
             lockstep=lockstep,
             middleware=middleware,
+            extra_args=extra,
         )
         launch(robot, duration=duration)
         return
@@ -218,6 +228,7 @@ def _sim_over_ros(
         map_path=map_path.resolve() if map_path else None,
         echo=True,
         middleware=middleware,
+        record=None if no_record else record_path,
     )
     _echo_records(records)
     if transcript_path:

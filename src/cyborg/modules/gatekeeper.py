@@ -14,6 +14,9 @@ state's goal, but the module's first message may still arrive before the state c
 sender would have dropped in a state makes the gatekeeper read the parameter again (once per
 sender and state, so a flood costs no more reads), and it passes when the parameter already
 grants that sender the resource.
+
+Each message passed or dropped is also told, as JSON (gatekeeper, resource, holder, sender,
+message), on ``GATEKEEPER_PASSED`` or ``GATEKEEPER_DROPPED``: the flight recorder keeps both.
 """
 
 from __future__ import annotations
@@ -64,6 +67,7 @@ class Gatekeeper:
         self._retry: asyncio.TimerHandle | None = None  # the next read while reading fails
         self._output = node.publisher(output_topic, msg_type)
         self._drops = node.publisher(topics.GATEKEEPER_DROPPED, String, queue_size=100)
+        self._passes = node.publisher(topics.GATEKEEPER_PASSED, String, queue_size=100)
         node.subscribe(topics.STATE_CHANGE, SystemState, self._on_state_change)
         node.subscribe(input_topic, msg_type, self._on_message, queue_size=100)
 
@@ -131,15 +135,16 @@ class Gatekeeper:
         if not self._grants(info.sender) and info.sender not in self._read_for and self._retry is None:
             self._read_for.add(info.sender)
             self._read_resources()  # its state change may not have reached us yet (module docstring)
+        what = message.data if isinstance(message, String) else type(message).__name__
+        verdict = {"gatekeeper": self.node.name, "resource": self.resource, "holder": self.allowed}
         if self._grants(info.sender):
             self.stats.passed += 1
             self._output.publish(message)
+            self._passes.publish(String(json.dumps({**verdict, "sender": info.sender, "message": what})))
             return
         self.stats.dropped += 1
         self.stats.dropped_by_sender[info.sender] += 1
-        what = message.data if isinstance(message, String) else type(message).__name__
-        drop = {"gatekeeper": self.node.name, "resource": self.resource, "holder": self.allowed}
-        self._drops.publish(String(json.dumps({**drop, "sender": info.sender, "message": what})))
+        self._drops.publish(String(json.dumps({**verdict, "sender": info.sender, "message": what})))
         first_in_state = info.sender not in self._warned
         self._warned.add(info.sender)
         log.log(

@@ -24,6 +24,10 @@ RECORDER_STATUS_TOPIC = "/cyborg_recorder/status"
 """Where the recorder says what it records, or that it stopped (JSON in a std_msgs/String)."""
 MARK_TOPIC = "/cyborg_recorder/mark"
 """A note to put into the recording (the dashboard's "mark" button)."""
+FLUSH_TOPIC = "/cyborg_recorder/flush"
+"""A request (its text an id) to write out what the recorder holds back, so that the file can be
+read up to now (the live dashboard's look back); the status that follows carries the id as
+``flushed``."""
 
 RECORD_TOPICS: dict[str, str] = {
     "state": "/cyborg_controller/state_change",
@@ -42,7 +46,8 @@ EVENT_TOPIC = "/cyborg/events"
 INPUT_TOPIC = "/cyborg/inputs"
 """What came into the robot from outside (a script, the operator): what a re-run plays again."""
 DIAGNOSTIC_TOPIC = "/cyborg/diagnostics"
-"""Gatekeeper drops and module crashes."""
+"""Gatekeeper passes and drops, module crashes, the controller's counters (``kind``: passed,
+dropped, crashed, controller)."""
 MARK_CHANNEL = "/cyborg/marks"
 LOG_TOPIC = "/log"
 POSE_TOPIC = "/robot/pose"

@@ -14,7 +14,7 @@ import struct
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Any
 
 from mcap.exceptions import McapError
 from mcap.reader import make_reader
@@ -25,7 +25,10 @@ from cyborg.errors import CyborgError
 from cyborg.observe import channels as ch
 from cyborg.observe.records import Record, readable_seconds
 
-__all__ = ["Input", "Recording", "RecordingError", "open_recording"]
+if TYPE_CHECKING:
+    from cyborg.maps import OccupancyMap
+
+__all__ = ["Glance", "Input", "Recording", "RecordingError", "glance", "open_recording", "recorded_map"]
 
 MAGIC = b"\x89MCAP0\r\n"
 
@@ -58,9 +61,13 @@ class Recording:
     """Every event sent to the controller (``t_ns``, ``event``, ``sender``, ``source``)."""
     marks: list[dict[str, Any]] = field(default_factory=list)
     logs: list[dict[str, Any]] = field(default_factory=list)
-    """Warnings, errors and diagnostics (``t_ns``, ``level``, ``text``)."""
+    """Gatekeeper passes (level ``info``) and drops, module crashes, the controller node's counters
+    (``info``): ``t_ns``, ``level``, ``kind`` (passed, dropped, crashed, controller), ``sender``,
+    ``detail``."""
     problem: str | None = None
     """Why the file was read only in part (it was cut short), else None."""
+    scene: dict[str, tuple[Schema, bytes]] = field(default_factory=dict, repr=False)
+    """The first map (foxglove.Grid) and places (foxglove.SceneUpdate) messages, by topic, undecoded."""
     _times: list[int] = field(default_factory=list, repr=False)
 
     @property
@@ -163,6 +170,7 @@ def open_recording(path: Path) -> Recording:
     events: list[dict[str, Any]] = []
     marks: list[dict[str, Any]] = []
     logs: list[dict[str, Any]] = []
+    scene: dict[str, tuple[Schema, bytes]] = {}
     problem: str | None = None
     start_ns: int | None = None
     with path.open("rb") as file:
@@ -193,8 +201,12 @@ def open_recording(path: Path) -> Recording:
                     events.append({"t_ns": t_ns, **json.loads(message.data)})
                 elif topic == ch.MARK_CHANNEL:
                     marks.append({"t_ns": t_ns, **json.loads(message.data)})
+                elif topic in (ch.MAP_TOPIC, ch.PLACES_TOPIC) and _schema is not None:
+                    scene.setdefault(topic, (_schema, bytes(message.data)))
                 elif topic == ch.DIAGNOSTIC_TOPIC:
-                    logs.append({"t_ns": t_ns, "level": "warning", **json.loads(message.data)})
+                    diagnostic = json.loads(message.data)
+                    level = "warning" if diagnostic.get("kind") in ("dropped", "crashed") else "info"
+                    logs.append({"t_ns": t_ns, "level": level, **diagnostic})
         except (McapError, EOFError, ValueError, KeyError, struct.error) as exc:
             if metadata is None:
                 raise RecordingError(
@@ -207,7 +219,37 @@ def open_recording(path: Path) -> Recording:
             )
     if metadata is None:
         metadata = _check_metadata(path, None)
-    return Recording(path, metadata, attachments, records, inputs, events, marks, logs, problem)
+    return Recording(path, metadata, attachments, records, inputs, events, marks, logs, problem, scene)
+
+
+@dataclass(frozen=True)
+class Glance:
+    """What a finished recording's summary says, read without reading its messages."""
+
+    path: Path
+    metadata: dict[str, str]
+    end_ns: int
+    """The last message's time (``t_ns``)."""
+    messages: int
+
+
+def glance(path: Path) -> Glance | None:
+    """A look at the recording at ``path`` through its summary (milliseconds, however long it is);
+    :class:`RecordingError` if it is none this code reads; None if it has no summary (cut short:
+    read it whole)."""
+    _check_file(path)
+    with path.open("rb") as file:
+        reader = make_reader(file)
+        try:
+            summary = reader.get_summary()
+            found = [m for m in reader.iter_metadata() if m.name == ch.METADATA_NAME] if summary else []
+        except (McapError, EOFError, ValueError, struct.error):
+            return None
+        if summary is None or summary.statistics is None:
+            return None
+        metadata = _check_metadata(path, dict(found[0].metadata) if found else None)
+        end_ns = max(0, summary.statistics.message_end_time - int(metadata["start_ns"]))
+        return Glance(path, metadata, end_ns, summary.statistics.message_count)
 
 
 def window(path: Path, start_ns: int, end_ns: int, topics: Iterable[str] | None = None) -> list[Record]:
@@ -227,9 +269,53 @@ def window(path: Path, start_ns: int, end_ns: int, topics: Iterable[str] | None 
         wanted = list(topics) if topics is not None else list(ch.TYPE_OF_TOPIC)
         out: list[Record] = []
         for _schema, channel, message in reader.iter_messages(
-            topics=wanted, start_time=start + start_ns, end_time=start + end_ns + 1, log_time_order=True
-        ):
+            topics=wanted, starting_at=start + start_ns, ending_at=start + end_ns, log_time_order=False
+        ):  # in the order written, as a whole read gives them (the robot's clock only moves on)
             t_ns = message.log_time - start
             kind = ch.TYPE_OF_TOPIC.get(channel.topic, channel.topic)
             out.append({"t": readable_seconds(t_ns), "t_ns": t_ns, "type": kind, **json.loads(message.data)})
         return out
+
+
+def _decode(schema: Schema, data: bytes) -> Any:
+    """A protobuf message of a Foxglove schema, decoded with the descriptors the file carries."""
+    from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
+
+    files = descriptor_pb2.FileDescriptorSet.FromString(schema.data)
+    pool = descriptor_pool.DescriptorPool()
+    for file in files.file:
+        pool.Add(file)
+    return message_factory.GetMessageClass(pool.FindMessageTypeByName(schema.name)).FromString(data)
+
+
+def recorded_map(recording: Recording) -> OccupancyMap | None:
+    """The map the recording holds (its foxglove.Grid, with the places of its foxglove.SceneUpdate),
+    or None: the robot had no map, or the message cannot be decoded."""
+    import numpy as np
+
+    from cyborg.maps import Cell, NamedPose, OccupancyMap
+
+    found = recording.scene.get(ch.MAP_TOPIC)
+    if found is None:
+        return None
+    try:
+        grid = _decode(*found)
+        cols = int(grid.column_count)
+        values = np.frombuffer(grid.data, dtype=np.uint8)[: (len(grid.data) // cols) * cols]
+        cells = np.full(values.shape, Cell.UNKNOWN, dtype=np.uint8)
+        cells[values == 0] = Cell.FREE
+        cells[values == 100] = Cell.OCCUPIED
+        places: list[NamedPose] = []
+        if ch.PLACES_TOPIC in recording.scene:
+            for entity in _decode(*recording.scene[ch.PLACES_TOPIC]).entities:
+                for sphere in entity.spheres[:1]:
+                    places.append(NamedPose(entity.id, sphere.pose.position.x, sphere.pose.position.y, 0.0))
+        return OccupancyMap(
+            cells.reshape(-1, cols),
+            float(grid.cell_size.x),
+            (float(grid.pose.position.x), float(grid.pose.position.y)),
+            poses=tuple(places),
+            source=recording.path.name,
+        )
+    except Exception:  # a foreign or damaged map: the replay draws no map, and says nothing wrong
+        return None

@@ -19,6 +19,7 @@ from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Transport
 from cyborg.transport.clock import Clock, RealClock, VirtualClock
 from cyborg.transport.embedded import EmbeddedTransport
+from cyborg.transport.lockstep import LockstepClock
 from cyborg.transport.messages import String, SystemState
 
 log = logging.getLogger(__name__)
@@ -68,16 +69,24 @@ def start_recorder(
     """A recorder of this robot from now on, on its own node and record stream."""
     node = transport.node("cyborg_recorder")
     stream = RecordStream(node)
-    speed = getattr(clock, "speed", None)
-    kind = "real" if not clock.is_virtual else ("virtual" if speed is None else f"virtual x{speed:g}")
     facts = RunFacts(
         start_ns=to_ns(clock.now()),
-        clock=kind,
+        clock=clock_kind(clock),
         config_name=Path(config.source).name or "config.yaml",
         config_text=config.text,
     )
     base = robot.base()
     return Recorder(node, stream, settings, facts, occupancy=base.map if base is not None else None)
+
+
+def clock_kind(clock: Clock) -> str:
+    """What a recording says of its clock: ``real``, ``virtual`` (as fast as possible), ``virtual xN``."""
+    if not clock.is_virtual:
+        return "real"
+    if isinstance(clock, LockstepClock):
+        return "lockstep"
+    speed = getattr(clock, "speed", None)
+    return "virtual" if speed is None else f"virtual x{speed:g}"
 
 
 def _run(

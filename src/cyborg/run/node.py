@@ -5,7 +5,8 @@ middleware's graph and builds the part (or the ``cyborg_scenario`` node) with th
 root (:mod:`cyborg.app.parts`), plus the ``/clock`` and controller-statistics publishers;
 :func:`await_start` waits for the topics' connections and for the launch's shared origin of
 virtual time (:mod:`cyborg.run.simtime`); :func:`serve_node` runs the part until SIGINT/SIGTERM
-(the ``cyborg_api`` part serves the HTTP API and dashboard, :mod:`cyborg.web.build`) and says
+(the ``cyborg_api`` part serves the HTTP API and dashboard, :mod:`cyborg.web.build`; the
+``cyborg_recorder`` part records what it hears of the graph, :mod:`cyborg.observe.recorder`) and says
 with its exit code how it ended. Everything a node is told comes in one :class:`NodeOptions`.
 """
 
@@ -23,7 +24,7 @@ import click
 
 from cyborg.app.config import LoadedConfig
 from cyborg.app.context import BuildContext
-from cyborg.app.parts import API, Part, build_part
+from cyborg.app.parts import API, RECORDER, Part, build_part
 from cyborg.app.tuning import freeze_built
 from cyborg.errors import CyborgError
 from cyborg.run.middleware import Middleware
@@ -39,6 +40,7 @@ from cyborg.transport.messages import String
 from cyborg.web.access import DEFAULT_PORT, Access
 
 if TYPE_CHECKING:
+    from cyborg.observe.recorder import Recorder, RecorderSettings
     from cyborg.web.api import RobotAPI
 
 __all__ = ["ApiOptions", "BuiltNode", "NodeOptions", "await_start", "build_node", "run_node", "serve_node"]
@@ -73,6 +75,8 @@ class NodeOptions:
     api: ApiOptions = field(default_factory=ApiOptions)
     scenario: ScenarioFiles | None = None
     """What ``cyborg_scenario`` plays; only that part reads it."""
+    record: RecorderSettings | None = None
+    """Where ``cyborg_recorder`` records; only that part reads it."""
 
 
 @dataclass
@@ -202,6 +206,7 @@ async def serve_node(node: BuiltNode, options: NodeOptions) -> int:
         counters = publish_controller_stats(node.stats_publisher, controller)
         background.append(loop.create_task(counters, name="controller stats"))
     api = await _serve_api(node, options) if node.name == API else None
+    recorder = _start_recorder(node, options) if node.name == RECORDER else None
     freeze_built()  # what the part built lives as long as the node: out of GC's way (app.tuning)
     controller_task = controller.start() if controller is not None else None
     click.echo(f"node {node.name} running", err=True)
@@ -221,7 +226,41 @@ async def serve_node(node: BuiltNode, options: NodeOptions) -> int:
         await controller.stop()
     if api is not None:
         await api.stop()
+    if recorder is not None:
+        recorder.close()  # the file's summary and index: a finished, seekable recording
+        click.echo(f"node {node.name}: recorded to {recorder.files[-1] if recorder.files else '-'}", err=True)
     return code
+
+
+def _start_recorder(node: BuiltNode, options: NodeOptions) -> Recorder | None:
+    """The flight recorder of the graph, from now on (the clock is set: records start at 0)."""
+    from cyborg.observe.recorder import Recorder, RunFacts
+    from cyborg.observe.records import RecordStream, to_ns
+    from cyborg.run.local import clock_kind
+
+    if options.record is None:
+        click.echo(f"node {node.name}: recording is off (--no-record); it records nothing", err=True)
+        return None
+    config = options.config
+    recorder_node = node.transport.node(RECORDER)
+    facts = RunFacts(
+        start_ns=to_ns(node.clock.now()),
+        clock=clock_kind(node.clock),
+        seed=options.seed,
+        config_name=Path(config.source).name or "config.yaml",
+        config_text=config.text,
+        extra={"middleware": node.middleware.name},
+    )
+    has_base = any(
+        isinstance(m, dict) and m.get("kind") == "simulated_base" for m in config.model.modules.values()
+    )
+    occupancy = node.context.occupancy_map() if has_base else None
+    recorder = Recorder(
+        recorder_node, RecordStream(recorder_node), options.record, facts, occupancy=occupancy
+    )
+    node.part.components.append(recorder)  # closed with the part: its node leaves the graph
+    click.echo(f"node {node.name}: recording to {recorder.path or recorder.problem}", err=True)
+    return recorder
 
 
 async def _serve_api(node: BuiltNode, options: NodeOptions) -> RobotAPI:

@@ -6,9 +6,9 @@ import xml.sax.saxutils
 from pathlib import Path
 
 from cyborg.app.config import LoadedConfig
-from cyborg.app.parts import CONTROLLER, part_names
+from cyborg.app.parts import CONTROLLER, RECORDER, part_names
 
-__all__ = ["all_parts", "roslaunch_xml"]
+__all__ = ["all_parts", "roslaunch_xml", "with_recorder"]
 
 
 def roslaunch_xml(config_path: Path, parts: list[str], data_dir: Path) -> str:
@@ -30,3 +30,15 @@ def roslaunch_xml(config_path: Path, parts: list[str], data_dir: Path) -> str:
 
 def all_parts(config: LoadedConfig) -> list[str]:
     return part_names(config)
+
+
+def with_recorder(
+    parts: list[str], record_path: Path | None, no_record: bool, *, default: bool = True
+) -> tuple[list[str], dict[str, list[str]]]:
+    """The parts of a launch with the recorder node as asked (``--record FILE``: it records there;
+    ``--no-record``: none; else as ``default`` says), and the recorder's extra arguments."""
+    parts = [part for part in parts if part != RECORDER]
+    if no_record or (record_path is None and not default):
+        return parts, {}
+    parts.insert(1 if parts and parts[0] == CONTROLLER else 0, RECORDER)
+    return parts, ({RECORDER: ["--record", str(record_path.resolve())]} if record_path is not None else {})

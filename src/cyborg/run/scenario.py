@@ -20,7 +20,7 @@ import click
 
 from cyborg.app.config import LoadedConfig
 from cyborg.app.context import BuildContext
-from cyborg.app.parts import API, build_part, part_names
+from cyborg.app.parts import API, RECORDER, build_part, part_names
 from cyborg.errors import CyborgError
 from cyborg.run.middleware import ROS1, Middleware
 from cyborg.run.simtime import READY_TIMEOUT
@@ -142,9 +142,12 @@ def run_scenario_ros(
     echo: bool = False,
     say: Callable[[str], None] = click.echo,
     middleware: Middleware = ROS1,
+    record: Path | None = None,
 ) -> list[dict[str, Any]]:
     """Run a scenario on ``middleware``'s graph: the robot's nodes (no API) plus ``cyborg_scenario``;
-    return the records. ``speed``: virtual time at that factor of real time; None: in lockstep."""
+    return the records. ``speed``: virtual time at that factor of real time; None: in lockstep.
+    ``record``: the ``cyborg_recorder`` node records the run to this MCAP file (none otherwise: a
+    node more per scripted ROS run)."""
     from cyborg.sim.scenario import check_script, script_start
     from cyborg.sim.script import load_script
 
@@ -156,7 +159,13 @@ def run_scenario_ros(
         if transcript_path is None:
             transcript_path = data_dir / "transcript.jsonl"
         prepare_calendar(config, data_dir, map_path, script)
-        parts = [name for name in part_names(config) if name != API] + [SCENARIO]
+        parts = [name for name in part_names(config) if name not in (API, RECORDER)] + [SCENARIO]
+        extra_args = {
+            SCENARIO: ["--script", str(script_path.resolve()), "--transcript", str(transcript_path)]
+        }
+        if record is not None:
+            parts.insert(1, RECORDER)
+            extra_args[RECORDER] = ["--record", str(record.resolve())]
         robot = Launch(
             config_path,
             config,
@@ -168,9 +177,7 @@ def run_scenario_ros(
             lockstep=speed is None,
             start=script_start(script),
             seed=script.seed,
-            extra_args={
-                SCENARIO: ["--script", str(script_path.resolve()), "--transcript", str(transcript_path)]
-            },
+            extra_args=extra_args,
             say=say,
             middleware=middleware,
         )

@@ -31,8 +31,10 @@ EMOTION_ENABLED_PARAM = "/cyborg_controller/emotion_enabled"
 TEXT_TO_SPEECH = "/text_to_speech"
 TEXT_FROM_SPEECH = "/text_from_speech"
 # Ours: what observers (scenario runs) learn of things that went wrong quietly, as JSON
-# (std_msgs/String): a message a gatekeeper dropped, a module goal that raised.
+# (std_msgs/String): a message a gatekeeper dropped, a module goal that raised; and what a
+# gatekeeper passed (the flight recorder keeps both).
 GATEKEEPER_DROPPED = "/cyborg_diagnostics/dropped"
+GATEKEEPER_PASSED = "/cyborg_diagnostics/passed"
 MODULE_CRASHED = "/cyborg_diagnostics/crashed"
 # Ours: a problem a module has and cannot fix itself (no sound device, a base that does not
 # answer), and when it is over, as JSON {module, key, problem, fix, active} (std_msgs/String).

@@ -8,5 +8,6 @@ the machine's graph, a websocket) and :mod:`~cyborg.web.openapi` its description
 :mod:`~cyborg.web.access` is the access policy as the command line sees it (no aiohttp), and
 :mod:`~cyborg.web.security` the server's checks of it, :mod:`~cyborg.web.request_log` what the server logs of bad requests
 (one short line at most every few seconds). :mod:`~cyborg.web.replay` serves the
-dashboard on a recording (``cyborg replay``).
+dashboard on a recording (``cyborg replay``), and :mod:`~cyborg.web.lookback` lets the live
+dashboard mark a moment and look back at the last minutes from the running robot's recording.
 """

@@ -22,13 +22,15 @@ from cyborg.transport.base import Node, Transport
 from cyborg.web.access import Access, announcement
 from cyborg.web.api import RobotAPI
 from cyborg.web.dashboard import register as register_dashboard
+from cyborg.web.lookback import register as register_lookback
 
 __all__ = ["EXTENSIONS", "build_api", "serve_api", "start_api"]
 
 Stop = Callable[[], Awaitable[None]]
 
-EXTENSIONS: list[Callable[[RobotAPI, RobotView], None]] = [register_dashboard]
-"""Functions that add routes to the API of a robot (the dashboard registers itself here)."""
+EXTENSIONS: list[Callable[[RobotAPI, RobotView], None]] = [register_dashboard, register_lookback]
+"""Functions that add routes to the API of a robot (the dashboard and its look back at the
+recording register themselves here)."""
 
 
 def build_api(

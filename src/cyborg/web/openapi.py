@@ -146,6 +146,28 @@ OPENAPI: dict[str, Any] = {
                 "responses": {"200": {"description": "prototypes"}},
             }
         },
+        "/api/recorder": {
+            "get": {
+                "summary": "The flight recorder: recording (true/false), state, file, problem (why it stopped)",
+                "responses": {"200": {"description": "the recorder's status"}},
+            }
+        },
+        "/api/mark": _command(
+            "Put a note into the recording at this moment (the dashboard's mark button); 400 when "
+            "the robot is not recording",
+            {"type": "object", "properties": {"note": {"type": "string", "maxLength": 500}}},
+        ),
+        "/api/lookback/replay": {
+            "get": {
+                "summary": "The last minutes of the recording (as cyborg replay's /api/replay); then "
+                "/api/lookback/status?at=SECONDS and /api/lookback/records?at=SECONDS answer as at that moment",
+                "parameters": [{"name": "minutes", "in": "query", "schema": {"type": "number"}}],
+                "responses": {
+                    "200": {"description": "span, marks, track and emotion plot"},
+                    "400": {"description": "the robot is not recording; 'error' says why"},
+                },
+            }
+        },
         "/api/ws": {
             "get": {
                 "summary": "Websocket: a hello with the status, then every record as JSON",

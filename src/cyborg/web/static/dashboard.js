@@ -699,6 +699,34 @@
     box.hidden = !unsaved;
   }
 
+  // The flight recorder: on, or stopped and why (the robot runs on); marks and the look back need it.
+  async function refreshRecorder() {
+    let status;
+    try {
+      status = await getJSON("/api/recorder");
+    } catch (error) {
+      return;
+    }
+    const pill = $("recorder"), on = Boolean(status.recording);
+    $("recorder-state").textContent = on ? "on" : status.state === "failed" ? "stopped" : "off";
+    pill.classList.toggle("alert", status.state === "failed");
+    pill.title = on ? `recording to ${status.file}` : status.problem || "this robot is not recording";
+    $("mark").disabled = !on;
+    $("lookback").hidden = !on;
+  }
+
+  async function markNow(event) {
+    event.preventDefault();
+    const box = $("mark-note");
+    try {
+      const answer = await post("/api/mark", { note: box.value || "mark" });
+      box.value = "";
+      say(`marked: ${answer.marked}`);
+    } catch (error) {
+      say(error.message, true);
+    }
+  }
+
   // true / false, or null where the robot cannot tell (the ROS API node has seen no on/off message yet).
   function showEmotionSwitch(enabled) {
     const sw = $("emotion-switch");
@@ -1438,6 +1466,9 @@
     connect();
     await refreshHealth();
     setInterval(refreshHealth, 1000);
+    $("mark-form").addEventListener("submit", markNow);
+    refreshRecorder();
+    setInterval(refreshRecorder, 2000);
     refreshRoute();
     setInterval(scheduleDraw, 1000);
   }
