@@ -173,3 +173,56 @@ def test_segments_rotate_by_robot_time_and_the_folder_keeps_its_budget(tmp_path:
     back = [r for p in segments for r in open_recording(p).records]
     assert back == list(records), "every record is in one segment, in order"
     assert all(open_recording(p).attachments for p in segments), "each segment carries the configuration"
+
+
+def test_problems_and_mutes_are_recorded_for_the_mcap_reader(tmp_path: Path) -> None:
+    """A module's problem (with its fix) and the modules muted in a parallel state reach the file."""
+    import json as _json
+
+    from cyborg.modules import ProblemReporter
+    from cyborg.observe.recorder import Recorder, RunFacts
+    from cyborg.observe.records import RecordStream
+    from cyborg.transport import topics
+    from cyborg.transport.clock import VirtualClock
+    from cyborg.transport.embedded import EmbeddedTransport
+    from cyborg.transport.messages import String
+
+    clock = VirtualClock()
+    transport = EmbeddedTransport(clock)
+    file = tmp_path / "run.mcap"
+    node = transport.node("cyborg_recorder")
+    recorder = Recorder(
+        node, RecordStream(node), RecorderSettings(file=file), RunFacts(start_ns=0, clock="virtual")
+    )
+    tts = ProblemReporter(transport.node("cyborg_tts"))
+    mutes = transport.node("cyborg_controller").publisher(topics.RESOURCE_MUTES, String)
+
+    async def main() -> None:
+        tts.report("the robot cannot speak aloud: no sound device", "plug in the speaker", key="sound")
+        mutes.publish(
+            String(_json.dumps({"states": ["music", "battery_warning"], "muted": [{"resource": "speaker"}]}))
+        )
+        await clock.sleep(1.0)
+
+    clock.run(main())
+    recorder.close()
+    transport.shutdown()
+    clock.close()
+    seen: dict[str, list[dict[str, object]]] = {}
+    with file.open("rb") as opened:
+        for _schema, channel, message in make_reader(opened).iter_messages():
+            if channel.topic in ("/cyborg/problems", "/cyborg/diagnostics", "/log"):
+                seen.setdefault(channel.topic, []).append(
+                    _json.loads(message.data) if channel.topic != "/log" else {}
+                )
+    [problems] = seen["/cyborg/problems"]
+    assert problems["module"] == "cyborg_tts"
+    assert problems["open"] == [
+        {
+            "key": "sound",
+            "problem": "the robot cannot speak aloud: no sound device",
+            "fix": "plug in the speaker",
+        }
+    ]
+    [muted] = [d for d in seen["/cyborg/diagnostics"] if d["kind"] == "muted"]
+    assert muted["sender"] == "cyborg_controller" and muted["detail"]["muted"] == [{"resource": "speaker"}]  # type: ignore[index]

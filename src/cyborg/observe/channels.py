@@ -37,6 +37,7 @@ RECORD_TOPICS: dict[str, str] = {
     "heard": "/cyborg/speech/heard",
     "recognised": "/cyborg/speech/recognised",
     "pose": "/cyborg/pose",
+    "problems": "/cyborg/problems",
 }
 """Record type -> the JSON channel that holds it."""
 TYPE_OF_TOPIC = {topic: kind for kind, topic in RECORD_TOPICS.items()}
@@ -46,8 +47,8 @@ EVENT_TOPIC = "/cyborg/events"
 INPUT_TOPIC = "/cyborg/inputs"
 """What came into the robot from outside (a script, the operator): what a re-run plays again."""
 DIAGNOSTIC_TOPIC = "/cyborg/diagnostics"
-"""Gatekeeper passes and drops, module crashes, the controller's counters (``kind``: passed,
-dropped, crashed, controller)."""
+"""Gatekeeper passes and drops, module crashes, the controller's counters, the modules muted in a
+parallel state (``kind``: passed, dropped, crashed, controller, muted)."""
 MARK_CHANNEL = "/cyborg/marks"
 LOG_TOPIC = "/log"
 POSE_TOPIC = "/robot/pose"
@@ -63,6 +64,7 @@ SCHEMA_NAMES: dict[str, str] = {
     "heard": "cyborg.Heard",
     "recognised": "cyborg.Recognised",
     "pose": "cyborg.Pose",
+    "problems": "cyborg.Problems",
 }
 
 _TEXT = {"type": "string"}
@@ -87,6 +89,7 @@ RECORD_SCHEMAS: dict[str, dict[str, Any]] = {
     "heard": {"text": _TEXT},
     "recognised": {"text": _TEXT, "confidence": _NUMBER, "accepted": {"type": "boolean"}},
     "pose": {"x": _NUMBER, "y": _NUMBER, "theta": _NUMBER},
+    "problems": {"module": _TEXT, "open": {"type": "array"}},
 }
 
 OTHER_SCHEMAS: dict[str, tuple[str, dict[str, Any]]] = {

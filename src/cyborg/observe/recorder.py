@@ -256,6 +256,7 @@ class Recorder:
         node.subscribe(topics.GATEKEEPER_PASSED, String, self._on_passed, queue_size=1000)
         node.subscribe(topics.CONTROLLER_STATS, String, self._on_controller_stats, queue_size=100)
         node.subscribe(topics.MODULE_CRASHED, String, self._on_crashed, queue_size=100)
+        node.subscribe(topics.RESOURCE_MUTES, String, self._on_muted, queue_size=100)
         node.subscribe(ch.MARK_TOPIC, String, self._on_mark, queue_size=100)
         node.subscribe(ch.FLUSH_TOPIC, String, self._on_flush, queue_size=10)
         stream.listeners.append(self.on_record)
@@ -410,6 +411,10 @@ class Recorder:
             elif kind == "state":
                 text = f"{fields['from'] or '-'} --{fields['event']}--> {fields['to']}"
                 self._log_entry(text, "controller", LogLevel.Info, t_ns)
+            elif kind == "problems":
+                for problem in fields["open"]:
+                    fix = f"; fix: {problem['fix']}" if problem["fix"] else ""
+                    self._log_entry(f"{problem['problem']}{fix}", str(fields["module"]), LogLevel.Warning, t_ns)
         except (OSError, RuntimeError) as exc:
             self._fail(exc)
 
@@ -467,6 +472,10 @@ class Recorder:
         """The controller node's counters (handovers, preempt timeouts, connect failures...), as
         they change: a launch's health over time (in one process nobody publishes them)."""
         self._diagnostic("controller", message, info, None)
+
+    def _on_muted(self, message: String, info: MessageInfo) -> None:
+        """Who is muted in a parallel state, and by whom, as it changes (docs/parallel.md)."""
+        self._diagnostic("muted", message, info, None)
 
     def _on_crashed(self, message: String, info: MessageInfo) -> None:
         self._diagnostic("crashed", message, info, LogLevel.Error)
