@@ -61,6 +61,11 @@ class TimeoutsModel(BaseModel):
 
     connect: float = Field(2.0, gt=0, description="seconds to wait for a module's action server")
     preempt: float = Field(2.0, gt=0, description="seconds to wait for a module to acknowledge a cancel")
+    event_age: float = Field(
+        10.0,
+        gt=0,
+        description="seconds an event may wait for the controller; an older one is dropped as stale",
+    )
 
 
 class MachineModel(BaseModel):
@@ -207,7 +212,11 @@ def build_machine(
     machine = MachineSpec(
         states=states,
         initial=model.initial,
-        timeouts=Timeouts(connect=model.timeouts.connect, preempt=model.timeouts.preempt),
+        timeouts=Timeouts(
+            connect=model.timeouts.connect,
+            preempt=model.timeouts.preempt,
+            event_age=model.timeouts.event_age,
+        ),
     )
     for leaf in machine.leaves():
         if machine.lookup(leaf.name, ABORTED) is None:

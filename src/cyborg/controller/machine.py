@@ -39,6 +39,7 @@ class StateSpec:
 class Timeouts:
     connect: float = 2.0
     preempt: float = 2.0
+    event_age: float = 10.0  # seconds an event may wait in the controller's queue
 
 
 @dataclass(frozen=True)
