@@ -23,6 +23,8 @@ import enum
 from collections import Counter, deque
 from dataclasses import dataclass, field
 
+from cyborg.errors import ConfigError
+
 __all__ = ["DropCounter", "DropReason", "EventIntake", "QueuedEvent"]
 
 
@@ -47,7 +49,7 @@ class EventIntake:
 
     def __init__(self, size: int, max_age: float) -> None:
         if size < 1:
-            raise ValueError(f"an event queue of {size} events holds nothing; give at least 1")
+            raise ConfigError(f"an event queue of {size} events holds nothing; fix: give at least 1")
         self.size = size
         self.max_age = max_age
         self._lines: dict[str, deque[QueuedEvent]] = {}  # sender -> its events; dict order = turn order
