@@ -116,6 +116,7 @@ def node(
         middleware.enter()  # ROS 2 from the main venv: returns only in a Python that has rclpy
     except CyborgError as exc:
         fail(exc)
+    from cyborg.run.census import NAME_TAKEN_EXIT, NameTaken
     from cyborg.run.local import default_data_dir
     from cyborg.run.node import ApiOptions, NodeOptions, run_node
     from cyborg.run.scenario import ScenarioFiles
@@ -138,6 +139,9 @@ def node(
             scenario=ScenarioFiles(script_path, transcript_path) if script_path is not None else None,
         )
         code = run_node(name, options, middleware)
+    except NameTaken as exc:
+        click.secho(f"node {name} refused to start: {exc}", fg="red", err=True)
+        sys.exit(NAME_TAKEN_EXIT)  # a launch stops the robot instead of starting the node again
     except CyborgError as exc:
         fail(exc)
         return

@@ -232,12 +232,13 @@ async def _serve_api(node: BuiltNode, options: NodeOptions) -> RobotAPI:
         isinstance(m, dict) and m.get("kind") == "simulated_base" for m in config.model.modules.values()
     )
     mirror = remote_robot(api_node, config, node.context.occupancy_map() if has_base else None)
+    graph = node.middleware.graph_name()  # which graph the dashboard shows: another robot's is not this one
     api = build_api(
         api_node,
         config,
         mirror,
         access=options.api.access,
-        extra_status=lambda: {"emotion_enabled": mirror.emotion_enabled()},
+        extra_status=lambda: {"emotion_enabled": mirror.emotion_enabled(), "graph": graph},
     )
     await start_api(
         api,

@@ -22,7 +22,10 @@ from cyborg.web.access import Access, announcement
 from cyborg.web.api import RobotAPI
 from cyborg.web.dashboard import register as register_dashboard
 
-__all__ = ["EXTENSIONS", "build_api", "serve_api", "start_api"]
+__all__ = ["EXTENSIONS", "IN_PROCESS_GRAPH", "build_api", "serve_api", "start_api"]
+
+IN_PROCESS_GRAPH = "in this process (no ROS graph)"
+"""The status's ``graph`` of the in-process robot (a ROS node's names its domain or master)."""
 
 Stop = Callable[[], Awaitable[None]]
 
@@ -94,6 +97,7 @@ def serve_api(
                 "gatekeepers": {name: g.report() for name, g in gatekeepers.items()},
                 "emotion_enabled": robot.emotion.enabled,
                 "storage": robot.store.save_status.as_json(),
+                "graph": IN_PROCESS_GRAPH,
             },
             settle=robot.store.flush,
         )

@@ -237,6 +237,7 @@
   async function refreshStatus() {
     try {
       const status = await getJSON("/api/status");
+      $("top-graph").textContent = status.graph || "–";
       applyStatus({ valid_events: status.valid_events, state: status.state,
         previous_state: status.previous_state, event: status.event });
     } catch (error) {
