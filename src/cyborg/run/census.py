@@ -35,6 +35,7 @@ __all__ = [
     "NAME_TAKEN_EXIT",
     "NameTaken",
     "graph_name",
+    "robot_taken_message",
     "ros1_live_nodes",
     "ros2_domain_problem",
     "taken_message",
@@ -44,7 +45,7 @@ __all__ = [
 NAME_TAKEN_EXIT = 76
 """Exit code of ``cyborg node`` refusing a name in use (the launch stops instead of retrying)."""
 DISCOVERY_SETTLE = 1.0  # seconds a ROS 2 node looks at the graph before it takes its name
-GHOST_WAIT = 2.5  # seconds a ROS 2 name seen may take to vanish (a just-killed process's lease)
+GHOST_WAIT = 2.0  # seconds a ROS 2 name seen may take to vanish (a just-killed process's lease)
 PING_TIMEOUT = 1.0  # seconds a ROS 1 node's XML-RPC server has to answer
 ROS2_DEFAULT_RANGE = "SUBNET"  # ROS_AUTOMATIC_DISCOVERY_RANGE when it is not set (ROS 2 Jazzy and later)
 
@@ -100,16 +101,23 @@ def taken_message(name: str, graph: str, where: str = "", *, home: bool = False)
             "that process, or give this robot a graph of its own (ROS_DOMAIN_ID=N, docs/security.md)"
         )
     if name == "cyborg_controller":
-        return (
-            f"another robot runs on {graph}: its node /{name} answers there{at}; two robots on one "
-            "graph take each other's events and state changes and say every sentence twice; fix: "
-            "stop that robot, or give this one a graph of its own (ROS 2: ROS_DOMAIN_ID=N, 0-101, one "
-            "per robot; ROS 1: ROS_MASTER_URI=http://localhost:PORT; docs/security.md)"
-        )
+        return robot_taken_message(name, graph, where)
     return (
         f"a node /{name} already runs on {graph}{at}; two nodes of one name break its topics and "
         f"actions (every goal of a module would end LOST); fix: stop that one first (it may be part "
         "of a `cyborg launch`), or run this one on another graph"
+    )
+
+
+def robot_taken_message(name: str, graph: str, where: str = "") -> str:
+    """A robot's part ``name`` is taken on ``graph``: another robot runs there (or that part, by hand)."""
+    at = f" ({where})" if where else ""
+    return (
+        f"another robot runs on {graph}: its node /{name} answers there{at} (or that part was "
+        "started by hand); two robots on one graph take each other's events and state changes and "
+        "say every sentence twice; fix: stop that robot, or give this one a graph of its own (ROS 2: "
+        "ROS_DOMAIN_ID=N, 0-101, one per robot; ROS 1: ROS_MASTER_URI=http://localhost:PORT; "
+        "docs/security.md)"
     )
 
 

@@ -34,7 +34,7 @@ import click
 from cyborg.app.config import LoadedConfig
 from cyborg.app.parts import API, CONTROLLER
 from cyborg.errors import CyborgError
-from cyborg.run.census import NAME_TAKEN_EXIT
+from cyborg.run.census import NAME_TAKEN_EXIT, robot_taken_message
 from cyborg.run.lockstep import TimeServer
 from cyborg.run.middleware import ROS1, LaunchGraph, Middleware, exit_description
 from cyborg.run.simtime import EPOCH_MARGIN, READY_TIMEOUT, Rendezvous, clock_owner_of
@@ -225,8 +225,8 @@ class Launch:
         """Raise a :class:`CyborgError` when node ``name`` refused to start: its name is taken."""
         if process.returncode == NAME_TAKEN_EXIT:
             raise CyborgError(
-                f"node {name} refused to start: this graph ({self.middleware.graph_name()}) has a node "
-                "of its name already (its reason and the fix are above); the whole robot is stopped"
+                f"node {name} refused to start (see above): {robot_taken_message(name, self.middleware.graph_name())}; "
+                "the whole robot is stopped"
             )
 
     def wait(

@@ -43,9 +43,9 @@ class OnlyFrom:
             return True
         if not self.ignored[name]:
             log.warning(
-                "ignored %s on %s from %s: only %s publish them; something else publishes on this "
-                "robot's graph (another robot, a test, a stranger; further ones from it are counted, "
-                "not logged); fix: give each robot a graph of its own (docs/security.md)",
+                "ignored %s on %s from %s: they are taken from %s only; something else publishes on "
+                "this robot's graph (another robot, a test, a stranger; further ones from it are "
+                "counted, not logged); fix: give each robot a graph of its own (docs/security.md)",
                 self.what,
                 self.topic,
                 name or "an unknown node",
