@@ -110,11 +110,10 @@ def taken_message(name: str, graph: str, where: str = "", *, home: bool = False)
 
 
 def robot_taken_message(name: str, graph: str, where: str = "") -> str:
-    """A robot's part ``name`` is taken on ``graph``: another robot runs there (or that part, by hand)."""
+    """The controller's node ``name`` is taken on ``graph``: another robot runs there."""
     at = f" ({where})" if where else ""
     return (
-        f"another robot runs on {graph}: its node /{name} answers there{at} (or that part was "
-        "started by hand); two robots on one graph take each other's events and state changes and "
+        f"another robot runs on {graph}: its node /{name} answers there{at}; two robots on one graph take each other's events and state changes and "
         "say every sentence twice; fix: stop that robot, or give this one a graph of its own (ROS 2: "
         "ROS_DOMAIN_ID=N, 0-101, one per robot; ROS 1: ROS_MASTER_URI=http://localhost:PORT; "
         "docs/security.md)"

@@ -34,7 +34,7 @@ import click
 from cyborg.app.config import LoadedConfig
 from cyborg.app.parts import API, CONTROLLER
 from cyborg.errors import CyborgError
-from cyborg.run.census import NAME_TAKEN_EXIT, robot_taken_message
+from cyborg.run.census import NAME_TAKEN_EXIT
 from cyborg.run.lockstep import TimeServer
 from cyborg.run.middleware import ROS1, LaunchGraph, Middleware, exit_description
 from cyborg.run.simtime import EPOCH_MARGIN, READY_TIMEOUT, Rendezvous, clock_owner_of
@@ -45,6 +45,7 @@ __all__ = ["Launch", "launch"]
 RESPAWN_DELAY = 1.0  # seconds before a stopped node is started again
 RESPAWN_STEADY = 10.0  # a node that ran this long before it stopped is started again after RESPAWN_DELAY
 RESPAWN_MAX_DELAY = 30.0  # a node stopping again and again waits at most this long
+REFUSAL_GRACE = 5.0  # seconds a refused node's launch waits for the controller's own reason
 
 
 @dataclass
@@ -223,11 +224,22 @@ class Launch:
 
     def _check_refused(self, name: str, process: subprocess.Popen[bytes]) -> None:
         """Raise a :class:`CyborgError` when node ``name`` refused to start: its name is taken."""
-        if process.returncode == NAME_TAKEN_EXIT:
-            raise CyborgError(
-                f"node {name} refused to start (see above): {robot_taken_message(name, self.middleware.graph_name())}; "
-                "the whole robot is stopped"
-            )
+        if process.returncode != NAME_TAKEN_EXIT:
+            return
+        graph = self.middleware.graph_name()
+        controller = self.processes.get(CONTROLLER)
+        if controller is not None and name != CONTROLLER:
+            # Its reason says more (another robot's controller, a leftover parameter home): wait
+            # for it, as long as a node takes to look at the graph.
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                controller.wait(timeout=REFUSAL_GRACE)
+        raise CyborgError(
+            f"node {name} refused to start: {graph} is taken (the reasons are above: another robot "
+            "runs there, a part of this robot was started by hand, or a node was left over); the whole "
+            "robot is stopped; fix: stop that robot or node, or give this robot a graph of its own "
+            "(ROS 2: ROS_DOMAIN_ID=N, one per robot; ROS 1: ROS_MASTER_URI=http://localhost:PORT; "
+            "docs/security.md)"
+        )
 
     def wait(
         self, *, until: str | None = None, timeout: float | None = None, virtual: float | None = None
