@@ -38,12 +38,29 @@ def test_a_full_queue_drops_the_fullest_senders_oldest_event_not_a_persons() -> 
     assert len(intake) == 3 and names(intake, 0.0) == ["flooder:f1", "person:stop", "flooder:f2"]
 
 
+def test_an_event_taken_supersedes_the_older_backlog_of_other_senders_not_their_newer_events() -> None:
+    intake = EventIntake(size=100, max_age=10.0)
+    for n in range(5):
+        intake.offer(QueuedEvent(f"old{n}", "flooder", 0.1 * n))  # arrived before the person's
+    intake.offer(QueuedEvent("music_play", "person", 1.0))
+    intake.offer(QueuedEvent("new", "flooder", 2.0))
+    first, _ = intake.take(2.0)
+    assert first is not None and first.name == "old0"
+    taken, dropped = intake.take(2.0)
+    assert taken is not None and taken.name == "music_play"
+    assert [(e.name, reason) for e, reason in dropped] == [
+        (f"old{n}", DropReason.SUPERSEDED) for n in range(1, 5)
+    ]
+    assert names(intake, 2.0) == ["flooder:new"]
+
+
 def test_events_older_than_max_age_are_dropped_when_their_turn_comes() -> None:
     intake = EventIntake(size=10, max_age=5.0)
     intake.offer(QueuedEvent("old", "a", 0.0))
     intake.offer(QueuedEvent("new", "a", 4.0))
-    event, stale = intake.take(6.0)
-    assert [e.name for e in stale] == ["old"] and event is not None and event.name == "new"
+    event, dropped = intake.take(6.0)
+    assert dropped == [(QueuedEvent("old", "a", 0.0), DropReason.STALE)]
+    assert event is not None and event.name == "new"
     assert intake.take(6.0) == (None, [])
 
 

@@ -11,7 +11,12 @@ make the robot deaf to a person:
   still gets in, and that one's oldest event is dropped instead (a flooder loses its own events,
   not a person's); the fullest sender's own newcomer is dropped;
 - an event older than ``max_age`` when its turn comes is dropped as stale: after a minute of
-  handovers it no longer means what its sender meant.
+  handovers it no longer means what its sender meant;
+- a sender's last queued event, taken, supersedes the events of other senders that arrived
+  before it and still wait (only a flooder's backlog lets a newer event's turn come first):
+  handled after it, they would undo what it asked for with what was asked earlier. A flooder's
+  event, with more of its own behind it, supersedes nothing, so two flooders cannot push a
+  person's event out between them.
 
 :class:`DropCounter` turns the drops into few log lines: the first drop of a burst, then one
 summary per period naming who sent what was dropped.
@@ -42,6 +47,7 @@ class DropReason(enum.StrEnum):
 
     OVERFLOW = "overflow"  # the queue was full
     STALE = "stale"  # it waited longer than the queue's max_age
+    SUPERSEDED = "superseded"  # a newer event of another sender was taken before it
 
 
 class EventIntake:
@@ -73,9 +79,9 @@ class EventIntake:
         self._count += 1
         return dropped
 
-    def take(self, now: float) -> tuple[QueuedEvent | None, list[QueuedEvent]]:
-        """The next event by turn, and the stale events dropped on the way to it."""
-        stale: list[QueuedEvent] = []
+    def take(self, now: float) -> tuple[QueuedEvent | None, list[tuple[QueuedEvent, DropReason]]]:
+        """The next event by turn, and the events dropped on the way to it (stale, superseded)."""
+        dropped: list[tuple[QueuedEvent, DropReason]] = []
         while self._lines:
             sender = next(iter(self._lines))
             line = self._lines.pop(sender)
@@ -84,10 +90,16 @@ class EventIntake:
             if line:
                 self._lines[sender] = line  # to the back: the other senders' turns first
             if now - event.received_at > self.max_age:
-                stale.append(event)
+                dropped.append((event, DropReason.STALE))
                 continue
-            return event, stale
-        return None, stale
+            for other in [] if line else list(self._lines):
+                waiting = self._lines[other]
+                while waiting and waiting[0].received_at < event.received_at:
+                    dropped.append((waiting.popleft(), DropReason.SUPERSEDED))
+                    self._count -= 1
+                self._forget_if_empty(other)
+            return event, dropped
+        return None, dropped
 
     def has(self, wanted: set[str]) -> bool:
         """Whether an event named one of ``wanted`` is queued."""

@@ -14,7 +14,7 @@ flood of them. Everything is driven by messages; nothing polls.
 Events from the topic wait in an :class:`~cyborg.controller.intake.EventIntake`: bounded by
 size and by age (``timeouts.event_age``), each sender in its own line, the lines taking turns,
 so a flood from one sender neither makes the robot replay a minute of stale events nor drops a
-person's event. Drops are counted (``events_overflow``, ``events_stale``) and logged once per
+person's event. Drops are counted (``events_overflow``, ``events_stale``, ``events_superseded``) and logged once per
 burst and then as one summary every DROP_REPORT_PERIOD seconds.
 """
 
@@ -71,6 +71,7 @@ class ControllerStats:
     events_invalid: int = 0
     events_overflow: int = 0
     events_stale: int = 0
+    events_superseded: int = 0
     handovers: int = 0
     preempt_timeouts: int = 0
     connect_failures: int = 0
@@ -182,19 +183,21 @@ class Controller:
     def _dropped(self, event: QueuedEvent, reason: DropReason) -> None:
         if reason is DropReason.OVERFLOW:
             self.stats.events_overflow += 1
-        else:
+        elif reason is DropReason.STALE:
             self.stats.events_stale += 1
+        else:
+            self.stats.events_superseded += 1
         if not self._drops.note(reason, event.sender):
             return
-        why = (
-            f"{self._intake.size} events already queued, the limit"
-            if reason is DropReason.OVERFLOW
-            else f"it waited {self.node.clock.monotonic() - event.received_at:.1f} s, over the "
-            f"limit of {self._intake.max_age:g} s (timeouts.event_age)"
-        )
+        why = {
+            DropReason.OVERFLOW: f"{self._intake.size} events already queued, the limit",
+            DropReason.STALE: f"it waited {self.node.clock.monotonic() - event.received_at:.1f} s, "
+            f"over the limit of {self._intake.max_age:g} s (timeouts.event_age)",
+            DropReason.SUPERSEDED: "a newer event of another sender was taken before it",
+        }[reason]
         log.warning(
             "event %r from %s dropped: %s; events come faster than the robot takes them: further "
-            "drops are counted (events_overflow, events_stale) and summed up every %g s",
+            "drops are counted (events_overflow, events_stale, events_superseded) and summed up every %g s",
             event.name,
             event.sender,
             why,
@@ -235,9 +238,9 @@ class Controller:
         """The active module's outcome first, then the topic's next event by turn (stale ones dropped)."""
         if self._results:
             return self._results.popleft()
-        queued, stale = self._intake.take(self.node.clock.monotonic())
-        for event in stale:
-            self._dropped(event, DropReason.STALE)
+        queued, dropped = self._intake.take(self.node.clock.monotonic())
+        for event, reason in dropped:
+            self._dropped(event, reason)
         return None if queued is None else _Event(queued.name, EventSource.TOPIC)
 
     def _on_goal_done(self, handle: _Handle, seq: int) -> None:

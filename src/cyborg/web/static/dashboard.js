@@ -571,7 +571,7 @@
     const stats = $("health-stats");
     stats.replaceChildren();
     const labels = {
-      events_received: "events", events_invalid: "invalid", events_overflow: "overflow", events_stale: "stale",
+      events_received: "events", events_invalid: "invalid", events_overflow: "overflow", events_stale: "stale", events_superseded: "superseded",
       handovers: "handovers", preempt_timeouts: "preempt timeouts",
       connect_failures: "connect failures", succeeded_fallbacks: "fallbacks",
       retries_delayed: "retries paused",
