@@ -2,6 +2,7 @@
 
 :mod:`~cyborg.controller.machine` is the machine as data (states, superstates, transitions;
 pure), :mod:`~cyborg.controller.config` its YAML schema, and :mod:`~cyborg.controller.runtime`
-the controller that hands control from module to module over actions. Drawing it is
+the controller that hands control from module to module over actions, its events waiting in
+:mod:`~cyborg.controller.intake` (bounded by size and age, fair to senders). Drawing it is
 :mod:`cyborg.drawing`'s.
 """
