@@ -44,7 +44,7 @@ __all__ = [
 
 NAME_TAKEN_EXIT = 76
 """Exit code of ``cyborg node`` refusing a name in use (the launch stops instead of retrying)."""
-DISCOVERY_SETTLE = 1.0  # seconds a ROS 2 node looks at the graph before it takes its name
+DISCOVERY_SETTLE = 1.5  # seconds a ROS 2 node looks at the graph before it takes its name (best effort: discovery under heavy load can take longer)
 GHOST_WAIT = 2.0  # seconds a ROS 2 name seen may take to vanish (a just-killed process's lease)
 PING_TIMEOUT = 1.0  # seconds a ROS 1 node's XML-RPC server has to answer
 ROS2_DEFAULT_RANGE = "SUBNET"  # ROS_AUTOMATIC_DISCOVERY_RANGE when it is not set (ROS 2 Jazzy and later)
