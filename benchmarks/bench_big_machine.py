@@ -61,7 +61,7 @@ def main() -> None:
             pauses.append((info["generation"], (time.perf_counter() - began.pop()) * 1000))
 
     with tempfile.TemporaryDirectory() as scratch:
-        robot = build_robot(config, transport, data_dir=Path(scratch), rng=random.Random(1))
+        robot = build_robot(config, transport, data_dir=Path(scratch), seed=1)
         controller = robot.controller
         api = RobotAPI(transport.node("cyborg_api"), machine=config.machine)
         dashboard = Dashboard(api, robot)

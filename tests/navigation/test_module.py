@@ -13,7 +13,6 @@ from __future__ import annotations
 import functools
 import itertools
 import math
-import random
 import re
 import typing
 from collections.abc import Callable, Iterator
@@ -117,14 +116,15 @@ class Cyborg:
         seed: int = 1,
         map_path: Path | None = None,
         kinds: dict[str, ModuleKind[typing.Any]] | None = None,
+        config: LoadedConfig | None = None,
     ) -> None:
         self.clock = clock
         self.transport = EmbeddedTransport(clock)
         self.robot = build_robot(
-            small_config(),
+            config or small_config(),
             self.transport,
             data_dir=data_dir,
-            rng=random.Random(seed),
+            seed=seed,
             map_path=map_path or default_map_path(),  # the example campus unless a test says otherwise
             kinds=module_kinds(
                 {"simulated_base": ModuleKind(SimulatedBaseSettings, simulated_base), **(kinds or {})}
@@ -285,9 +285,10 @@ def wall_near(point: Point) -> Point:
 
 # --- "go to X" ----------------------------------------------------------------------------------
 
-DRIFTING = {"bored", "dignified"}
+DRIFTING = {"bored", "dignified", "loved"}
 """Emotions the two-minute trip itself changes: moving raises arousal, being bossed around
-lowers dominance. The opinion then fits the emotion the robot has when it arrives."""
+lowers dominance, and the cubic decay of every feedback takes loved's pleasure (0.89) to
+curious's before the arrival's reward. The opinion then fits the emotion the robot has when it arrives."""
 
 
 @pytest.mark.parametrize("emotion", EMOTIONS)

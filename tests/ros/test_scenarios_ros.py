@@ -5,7 +5,8 @@ nodes and the ``cyborg_scenario`` node on the session's roscore, in lockstep tim
 time server grants the next timer once every node is idle and every message has arrived, so a
 loaded machine changes nothing but the wall time); the simulated base publishes that time on
 /clock. The transcript must pass the same checks as the embedded run
-(tests/scenarios/expectations.py).
+(tests/scenarios/expectations.py), and its state, say, heard and emotion records must be the
+embedded run's, to the nanosecond (tests/support/transcripts.py).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from cyborg.sim.script import load_script
 from tests.scenarios.expectations import check_transcript
 from tests.support.paths import SCENARIOS
 from tests.support.ros import Observers, RosSession
+from tests.support.transcripts import assert_same_as_in_process
 
 
 @pytest.mark.parametrize("name", ["scenario_a", "scenario_b", "scenario_c", "scenario_d"])
@@ -40,6 +42,7 @@ def test_scenario_over_ros(name: str, ros: RosSession, observe: Observers, tmp_p
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
     records = [json.loads(line) for line in transcript.read_text().splitlines()]
     check_transcript(name, records, transcript)
+    assert_same_as_in_process(name, records)
     assert records[-1]["t"] <= script.until + 1
 
     # Simulated time on /clock, from the simulated base, starting at the script's start.

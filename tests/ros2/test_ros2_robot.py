@@ -3,7 +3,8 @@
 ``cyborg sim --ros2 --script FILE`` plays the thesis's four scenarios (10.2) on the robot's ROS 2
 nodes in lockstep time (``--speed max``), the simulated base publishing it on
 /clock; the transcript must pass the checks of the embedded and ROS 1 runs
-(tests/scenarios/expectations.py, and the scripts' own ``expect:`` steps, which fail the run).
+(tests/scenarios/expectations.py, and the scripts' own ``expect:`` steps, which fail the run),
+and its state, say, heard and emotion records must be the embedded run's, to the nanosecond.
 ``cyborg launch --ros2`` starts the robot with its API node; the command tool (``--ros2``) and
 the HTTP API drive and read it. Runs in .venv-ros2 (tests/ros2/conftest.py), on this process's
 ROS_DOMAIN_ID, discovery on this host.
@@ -36,13 +37,13 @@ from cyborg.transport.messages import Clock, String
 from tests.scenarios.expectations import check_transcript
 from tests.support.paths import ROOT, SCENARIOS
 from tests.support.ros2 import Ros2Session, isolate
+from tests.support.transcripts import assert_same_as_in_process
 
 TOOLS = Path(__file__).resolve().parent / "tools.yaml"
 
 
-# A, B and C run over ROS 1 (in lockstep) and in process; over ROS 2 in lockstep they cost 1.5 to
-# 2.5 minutes each on 2 loaded cores (docs/lockstep.md), more than the suite can pay.
-@pytest.mark.parametrize("name", ["scenario_d"])
+# B runs over ROS 1 and in process only: the suite's time pays for A, C and D over ROS 2.
+@pytest.mark.parametrize("name", ["scenario_a", "scenario_c", "scenario_d"])
 def test_ros2_scenario(name: str, own_session: Ros2Session, tmp_path: Path) -> None:
     # The robot and this process (to hear /clock) on a domain of the test's own: on the session's
     # domain the contract suite's parameter home and nodes were there too, and scenario A's
@@ -70,11 +71,10 @@ def test_ros2_scenario(name: str, own_session: Ros2Session, tmp_path: Path) -> N
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
     records = [json.loads(line) for line in transcript.read_text().splitlines()]
     check_transcript(name, records, transcript)
+    assert_same_as_in_process(name, records)
     assert records[-1]["t"] <= script.until + 1
     assert "in lockstep" in result.stdout and f"wrote {len(records)} records" in result.stdout
-    # Not asserted here yet, unlike over ROS 1: a goal that ends as soon as it is accepted (C's
-    # planning while the robot waits at the cafeteria) has its result come only when the time
-    # moves on, so the time server writes it off after 2 s (docs/lockstep.md).
+    assert "written off" not in result.stdout + result.stderr, "every message was counted in and out"
     assert re.search(r"cyborg_scenario: (\d+) of \1 expectations? met", result.stdout), result.stdout[-2000:]
 
     # Simulated time on /clock, from the simulated base's process, starting at the script's start.

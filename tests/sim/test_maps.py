@@ -363,7 +363,6 @@ def test_segment_through_a_corner_counts_the_cells_it_grazes() -> None:
 
 def test_a_map_without_goals_leaves_the_last_maps_places_behind(tmp_path: Path) -> None:
     """The same data folder, first the campus map, then Willow (no goals): no campus place is a target."""
-    import random
 
     from cyborg.app.config import load_config, packaged_config
     from cyborg.app.robot import build_robot
@@ -375,9 +374,7 @@ def test_a_map_without_goals_leaves_the_last_maps_places_behind(tmp_path: Path) 
     for map_path in (None, WILLOW):
         clock = VirtualClock()
         try:
-            build_robot(
-                config, EmbeddedTransport(clock), data_dir=tmp_path, rng=random.Random(0), map_path=map_path
-            )
+            build_robot(config, EmbeddedTransport(clock), data_dir=tmp_path, seed=0, map_path=map_path)
         finally:
             clock.close()
         db = NavigationDatabase(tmp_path / "navigation.db")

@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from cyborg.app.registry import KindRegistry
     from cyborg.maps import OccupancyMap
 
-__all__ = ["BuildContext", "calendar_of", "heard_by", "relays_of"]
+__all__ = ["BuildContext", "ModuleContext", "calendar_of", "heard_by", "relays_of"]
 
 
 def relays_of(config: LoadedConfig) -> dict[str, tuple[str, ...]]:
@@ -40,7 +40,8 @@ class BuildContext:
     """What module factories may use besides their node (a :class:`cyborg.modules.BuildContext`)."""
 
     data_dir: Path
-    rng: random.Random = field(default_factory=lambda: random.Random(0))
+    seed: int = 0
+    """Seeds the robot's random source and each module's own (:meth:`for_module`)."""
     map_path: Path | None = None
     heard: Callable[[], Listening] | None = field(default=None, repr=False)
     """Gathers what the configured modules listen for (called on the first :meth:`listening`)."""
@@ -52,6 +53,20 @@ class BuildContext:
     """Output topic -> the configured gatekeepers that publish on it (None: no configuration)."""
     _map: OccupancyMap | None = field(default=None, repr=False)
     _listening: Listening | None = field(default=None, repr=False)
+    _rng: random.Random | None = field(default=None, repr=False)
+
+    @property
+    def rng(self) -> random.Random:
+        """The robot's random source, seeded with :attr:`seed` (a module draws from its own)."""
+        if self._rng is None:
+            self._rng = random.Random(self.seed)
+        return self._rng
+
+    def for_module(self, name: str) -> ModuleContext:
+        """What module ``name``'s factory builds with: this context, and a random source of the
+        module's own, seeded from :attr:`seed` and the name. A module so draws the same numbers
+        whether the robot runs in one process or as one ROS node per part."""
+        return ModuleContext(self, random.Random(f"{self.seed}:{name}"))
 
     def occupancy_map(self) -> OccupancyMap:
         """The map of the world (``--map``, else Glassgården if found, else the campus), loaded once."""
@@ -73,6 +88,31 @@ class BuildContext:
         if self._listening is None:
             self._listening = self.heard() if self.heard is not None else Listening()
         return self._listening
+
+
+@dataclass(frozen=True)
+class ModuleContext:
+    """One module's view of a :class:`BuildContext`: the robot's folder, map and ears, its own random source."""
+
+    robot: BuildContext
+    rng: random.Random
+
+    @property
+    def data_dir(self) -> Path:
+        return self.robot.data_dir
+
+    @property
+    def base_api(self) -> BaseApi:
+        return self.robot.base_api
+
+    def occupancy_map(self) -> OccupancyMap:
+        return self.robot.occupancy_map()
+
+    def listening(self) -> Listening:
+        return self.robot.listening()
+
+    def relays_to(self, topic: str) -> tuple[str, ...] | None:
+        return self.robot.relays_to(topic)
 
 
 def heard_by(config: LoadedConfig, kinds: KindRegistry) -> Callable[[], Listening]:

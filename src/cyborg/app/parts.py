@@ -87,7 +87,7 @@ def build_part(
             kind,
             transport.node(name),
             settings,
-            context,
+            context.for_module(name),
             source=config.source,
             where=config.where("modules", name),
         )

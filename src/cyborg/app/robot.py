@@ -171,7 +171,7 @@ def build_robot(
     transport: Transport,
     *,
     data_dir: Path,
-    rng: random.Random | None = None,
+    seed: int = 0,
     map_path: Path | None = None,
     kinds: KindRegistry | None = None,
 ) -> Robot:
@@ -184,7 +184,7 @@ def build_robot(
     store, controller, emotion, motivator = build_controller(config, transport, data_dir)
     place = BuildContext(
         data_dir=data_dir,
-        rng=rng or random.Random(0),
+        seed=seed,
         map_path=map_path,
         heard=heard_by(config, registry),
         relays=relays_of(config),
@@ -198,7 +198,7 @@ def build_robot(
                 kind,
                 transport.node(name),
                 settings,
-                place,
+                place.for_module(name),
                 source=config.source,
                 where=config.where("modules", name),
             )

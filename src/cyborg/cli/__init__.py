@@ -6,7 +6,8 @@ below it, but a command imports only what it needs, so that ``cyborg --help`` lo
 alone, the command tool (``cyborg say``) click and urllib, and ``cyborg node`` only its own part.
 :mod:`~cyborg.cli.common` holds what the commands share (loading a configuration, failing with a
 readable message, checking options); :mod:`~cyborg.cli.recording` the ``--record`` options and
-where recordings go; :mod:`~cyborg.cli.recordings` ``rerun``, ``replay`` and ``export``.
+where recordings go; :mod:`~cyborg.cli.recordings` ``rerun``, ``replay`` and ``export``;
+:mod:`~cyborg.cli.doctor` ``doctor`` and :mod:`~cyborg.cli.service` ``service`` (the real robot).
 """
 
 from __future__ import annotations
@@ -110,6 +111,14 @@ class LazyGroup(click.Group):
         "replay": (
             "cyborg.cli.recordings:replay",
             "Serve the dashboard on the recording FILE: a time slider, play/pause and speed.",
+        ),
+        "doctor": (
+            "cyborg.cli.doctor:doctor",
+            "Check this machine (and with --ros/--ros2 the running graph) against the configuration.",
+        ),
+        "service": (
+            "cyborg.cli.service:service_group",
+            "Start the robot when the computer boots: install, status or uninstall a systemd unit.",
         ),
         "launch": (
             "cyborg.cli.ros:launch_command",

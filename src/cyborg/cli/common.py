@@ -35,14 +35,27 @@ def load_config(path: Path) -> LoadedConfig:
 
 
 def load_or_default(path: Path | None) -> LoadedConfig:
-    """The configuration at ``path``, else the packaged Cyborg's (the demo when that is missing)."""
+    """The configuration at ``path``, else the packaged Cyborg's (the demo when that is missing).
+
+    A bare name that is no file here (``robot``, ``cyborg``, ``demo``) is the packaged
+    configuration of that name (:func:`resolve_config`)."""
     from cyborg.app.config import packaged_config
 
     if path is None:
         path = packaged_config(DEFAULT_CONFIG)
         if not path.exists():
             path = packaged_config("demo.yaml")
-    return load_config(path)
+    return load_config(resolve_config(path))
+
+
+def resolve_config(path: Path) -> Path:
+    """``path``, or the packaged ``NAME.yaml`` when ``path`` is a bare NAME that is no file here."""
+    from cyborg.app.config import packaged_config
+
+    if path.exists() or len(path.parts) != 1 or path.suffix:
+        return path
+    shipped = packaged_config(f"{path.name}.yaml")
+    return shipped if shipped.exists() else path
 
 
 def check_modules(loaded: LoadedConfig) -> None:
@@ -106,7 +119,8 @@ config_option = click.option(
     "--config",
     "config_path",
     type=click.Path(path_type=Path),
-    help="state machine YAML (default: the packaged Cyborg)",
+    help="state machine YAML, or a packaged one by name: cyborg (the default, simulated), robot "
+    "(the real Cyborg), demo",
 )
 """``--config FILE``: the robot's configuration (the command receives ``config_path``)."""
 

@@ -95,6 +95,7 @@ class EmotionSystem:
         self.resumed = False
         """True when this start took over the stored emotion (a restart after a crash)."""
         self._last_decay = node.clock.now()
+        self._instant: list[tuple[str, PAD]] = []  # feedback of this instant, applied once it settles
         if store is not None:
             self._start_from(store, resume)
         self.emotion = self._name(None)
@@ -196,8 +197,23 @@ class EmotionSystem:
             self.stats.rejected += 1
             log.warning("rejected feedback from %s: %s", info.sender, exc)
             return
+        if not self._instant:
+            self.node.clock.when_settled(self._take_instant)
+        self._instant.append((info.sender.lstrip("/"), delta))
+
+    def _take_instant(self) -> None:
+        """Apply the feedback of one instant, in order of sender and value: in one process and
+        over ROS the messages of an instant come in different orders, and the update is not
+        commutative (its cubic decay term). A set or a switch first applies what came before it."""
+        if not self._instant:
+            return
+        instant, self._instant = sorted(self._instant, key=lambda item: (item[0], item[1].as_tuple())), []
+        if not self.enabled:
+            self.stats.ignored_while_off += len(instant)
+            return
         self._apply_time_decay()
-        self.pad = update(self.pad, delta, self.settings.decay_rate)
+        for _, delta in instant:
+            self.pad = update(self.pad, delta, self.settings.decay_rate)
         self._changed()
 
     def set_named(self, name: str) -> None:
@@ -206,6 +222,7 @@ class EmotionSystem:
         Raises :class:`UnknownEmotion` (a ValueError) naming the known names if there is none.
         """
         name = self.settings.resolve(name)
+        self._take_instant()
         self.pad = PAD(0.0, 0.0, 0.0) if name == NEUTRAL else PAD.of(self.settings.prototypes[name])
         self._last_decay = self.node.clock.now()
         self._changed()
@@ -223,6 +240,7 @@ class EmotionSystem:
             self.stats.rejected += 1
             log.warning("rejected PAD values %s from %s: each must be in [-1, 1]", values, info.sender)
             return
+        self._take_instant()
         self.pad = PAD.of(clamp(v) for v in values)
         self._last_decay = self.node.clock.now()
         self._changed()
@@ -235,6 +253,7 @@ class EmotionSystem:
                 "emotional_controller expects 'on' or 'off', got %r from %s", message.data, info.sender
             )
             return
+        self._take_instant()
         self.enabled = word == "on"
         self._last_decay = self.node.clock.now()
         if self.store is not None:

@@ -18,7 +18,7 @@ import numpy as np
 from cyborg.hearing import HearingError
 from cyborg.hearing.recogniser import SAMPLE_RATE
 
-__all__ = ["Microphone", "read_wav", "to_recogniser_rate", "wav_bytes"]
+__all__ = ["Microphone", "probe_microphone", "read_wav", "to_recogniser_rate", "wav_bytes"]
 
 NO_PORTAUDIO = (
     "the audio library PortAudio is missing ({detail}); fix: run scripts/install-system-deps "
@@ -92,3 +92,19 @@ class Microphone:
         """Stop recording."""
         self._stream.stop()
         self._stream.close()
+
+
+def probe_microphone(device: str | int | None = None) -> str:
+    """The name of the input device the robot would listen to; a HearingError naming the fix when
+    there is none. It is looked up, not opened: the ears' node may hold it open right now."""
+    try:
+        import sounddevice
+    except OSError as exc:
+        raise HearingError(NO_PORTAUDIO.format(detail=exc)) from exc
+    try:
+        info = sounddevice.query_devices(device, "input")
+    except (sounddevice.PortAudioError, ValueError) as exc:
+        raise HearingError(NO_MICROPHONE.format(detail=exc)) from exc
+    if not info or not int(info.get("max_input_channels", 0)):
+        raise HearingError(NO_MICROPHONE.format(detail=f"{device or 'the default device'} records nothing"))
+    return str(info["name"])

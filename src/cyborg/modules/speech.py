@@ -2,9 +2,10 @@
 
 Speaks one sentence at a time from a bounded queue. Every sentence is logged
 and published on ``/cyborg_tts/spoken`` (what the robot actually said, after
-the gatekeeper). It speaks only what a gatekeeper passed: with ``speak_from`` (the configured
-gatekeepers in front of it) a sentence another node publishes on its input topic is ignored,
-and one over the API's text limit too (each logged once per sender). With an audio device it speaks through espeak-ng; it can also
+the gatekeeper). It speaks only what a gatekeeper passed: with ``speak_from`` (the
+configured gatekeepers in front of it) a sentence another node publishes on its input
+topic is ignored, and one over the API's text limit too (each logged once per sender).
+With an audio device it speaks through espeak-ng; it can also
 write each sentence to a WAV file. A sentence occupies the speaker for its
 estimated duration on the injected clock, so virtual time behaves like real.
 Registered as the module kind ``tts``.
@@ -38,6 +39,44 @@ def audio_device_present() -> bool:
     return bool(glob.glob("/dev/snd/pcmC*p")) or "PULSE_SERVER" in os.environ
 
 
+SOUND_RETRY = 30.0
+"""Seconds after a failed sound output before the speaker is tried again (plugged back in)."""
+NO_SOUND_FIX = (
+    "fix: plug in the speaker and check it with `aplay -l` and `speaker-test -c 2 -l 1`, or set the "
+    "module's play_audio: false; meanwhile the robot goes on and what it says shows on the dashboard"
+)
+
+
+def sound_failure(returncode: int | None, stderr: str) -> str | None:
+    """What went wrong when espeak-ng spoke (None: it played). espeak-ng exits 0 even when it cannot
+    open the sound device; it then says ``error:`` (and ALSA explains on stderr)."""
+    lines = [line.strip() for line in stderr.splitlines() if line.strip()]
+    errors = [
+        line for line in lines if line.lower().startswith(("error", "alsa lib")) or "pcm" in line.lower()
+    ]
+    if not returncode and not errors:
+        return None
+    detail = errors[-1] if errors else f"exit code {returncode}"
+    return f"no sound output: espeak-ng could not play on the default sound device ({detail})"
+
+
+def probe_sound_output(espeak: str | None = None, timeout: float = 10.0) -> str | None:
+    """Play a silent word on the default sound device; what is wrong with the fix, or None."""
+    import subprocess
+
+    espeak = espeak or shutil.which("espeak-ng")
+    if espeak is None:
+        return "espeak-ng is not installed; fix: run scripts/setup (or apt-get install espeak-ng)"
+    try:
+        done = subprocess.run(
+            [espeak, "-a", "0", "-v", "en", "ok"], capture_output=True, text=True, timeout=timeout
+        )
+    except (OSError, subprocess.TimeoutExpired) as exc:
+        return f"espeak-ng could not run ({exc}); fix: reinstall espeak-ng"
+    problem = sound_failure(done.returncode, done.stderr)
+    return None if problem is None else f"{problem}; {NO_SOUND_FIX}"
+
+
 def estimated_duration(text: str) -> float:
     return 0.4 + len(text.split()) / WORDS_PER_SECOND
 
@@ -69,6 +108,14 @@ class TextToSpeech:
         self.espeak = shutil.which("espeak-ng")
         wants_audio = audio_device_present() if play_audio is None else play_audio
         self.play_audio = bool(wants_audio and self.espeak and not node.clock.is_virtual)
+        self.sound_problem: str | None = None
+        """Why the last sentence was not heard (no sound device), until the speaker works again."""
+        self._sound_retry_at = -float("inf")
+        if play_audio and not self.espeak:
+            self.sound_problem = (
+                "espeak-ng is not installed; fix: run scripts/setup (or apt-get install espeak-ng)"
+            )
+            log.warning("the robot cannot speak aloud: %s", self.sound_problem)
         self.wav_dir = wav_dir
         if wav_dir is not None:
             wav_dir.mkdir(parents=True, exist_ok=True)
@@ -109,13 +156,27 @@ class TextToSpeech:
         self._spoken_pub.publish(String(data=text))
         if self.wav_dir is not None and self.espeak:
             path = self.wav_dir / f"{self.sentences:04d}.wav"
-            await self._espeak("-w", str(path), text)
-        if self.play_audio:
-            await self._espeak(text)
+            problem = await self._espeak("-w", str(path), text)
+            if problem is not None:
+                log.warning("could not write %s: %s", path, problem)
+        clock = self.node.clock
+        if self.play_audio and (self.sound_problem is None or clock.monotonic() >= self._sound_retry_at):
+            started = clock.monotonic()
+            problem = await self._espeak(text)
+            if problem is None:
+                if self.sound_problem is not None:
+                    log.warning("sound output works again: the robot speaks aloud")
+                self.sound_problem = None
+                return
+            if self.sound_problem is None:  # said once per outage, not per sentence
+                log.warning("the robot cannot speak aloud: %s; %s", problem, NO_SOUND_FIX)
+            self.sound_problem, self._sound_retry_at = problem, clock.monotonic() + SOUND_RETRY
+            await clock.sleep(max(0.0, estimated_duration(text) - (clock.monotonic() - started)))
         else:
-            await self.node.clock.sleep(estimated_duration(text))
+            await clock.sleep(estimated_duration(text))
 
-    async def _espeak(self, *args: str) -> None:
+    async def _espeak(self, *args: str) -> str | None:
+        """Run espeak-ng with ``args``; what went wrong playing (None: fine)."""
         assert self.espeak is not None
         try:
             process = await asyncio.create_subprocess_exec(
@@ -127,10 +188,9 @@ class TextToSpeech:
                 stderr=asyncio.subprocess.PIPE,
             )
             _, err = await process.communicate()
-            if process.returncode:
-                log.warning("espeak-ng failed (%s): %s", process.returncode, err.decode().strip())
         except OSError as exc:
-            log.warning("espeak-ng could not run: %s", exc)
+            return f"espeak-ng could not run: {exc}"
+        return sound_failure(process.returncode, err.decode(errors="replace"))
 
 
 class TtsSettings(ModuleSettings):

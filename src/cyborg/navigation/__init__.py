@@ -2,7 +2,8 @@
 
 - :mod:`~cyborg.navigation.module`: the module itself, serving the planning, moving and talking
   states; :mod:`~cyborg.navigation.kind`: its settings and factory; :mod:`~cyborg.navigation.base_link`:
-  how it drives the base (ROSARNL's interface or nav2's).
+  how it drives the base (ROSARNL's interface or nav2's); :mod:`~cyborg.navigation.watchdog`: when a
+  trip is given up (a base that never answers, a pose gone silent).
 - :mod:`~cyborg.navigation.behaviour` (where to go, what to say),
   :mod:`~cyborg.navigation.dialogue` (what the talking state answers a request, and requests that
   wait for a yes or no) and :mod:`~cyborg.navigation.keywords` (what was asked): its pure decisions.

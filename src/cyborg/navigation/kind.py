@@ -35,6 +35,19 @@ class NavigationSettings(ModuleSettings):
         "(navigate_to_pose); default: the graph's (nav2 on ROS 2, rosarnl otherwise)",
     )
 
+    base_answer_timeout: float | None = Field(
+        None,
+        gt=0,
+        description="seconds the base may take to accept a goal before the trip is given up "
+        "(default: no limit; the real robot's configuration sets one)",
+    )
+    pose_timeout: float | None = Field(
+        None,
+        gt=0,
+        description="seconds of silence on the pose topic while driving before the robot stops and "
+        "gives the trip up (default: no limit; the real robot's configuration sets one)",
+    )
+
     def serves(self) -> tuple[str, ...]:
         return (PLANNING_ACTION, MOVING_ACTION, TALKING_ACTION)
 
@@ -80,6 +93,8 @@ def _build(node: Node, settings: NavigationSettings, context: BuildContext) -> N
         feedback_interval=settings.feedback_interval,
         wander_limit=settings.wander_limit,
         base_api=settings.base_api or context.base_api,
+        base_answer_timeout=settings.base_answer_timeout,
+        pose_timeout=settings.pose_timeout,
     )
     module.owns_db = True
     return module

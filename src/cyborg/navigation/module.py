@@ -38,6 +38,7 @@ from cyborg.navigation.database import NavigationDatabase
 from cyborg.navigation.dialogue import Answer, Reply, ReplyKind, Request, after_answer, reply_to
 from cyborg.navigation.keywords import Intent, detect_answer, detect_navigation
 from cyborg.navigation.models import CalendarEvent, Location, ResponseType
+from cyborg.navigation.watchdog import TripWatch
 from cyborg.transport import topics
 from cyborg.transport.base import GoalStatus, MessageInfo, Node
 from cyborg.transport.messages import PoseWithCovarianceStamped, SystemState
@@ -80,6 +81,8 @@ class NavigationModule(BehaviourModule):
         feedback_interval: float = 15.0,
         wander_limit: float = 600.0,
         base_api: BaseApi = BaseApi.ROSARNL,
+        base_answer_timeout: float | None = None,
+        pose_timeout: float | None = None,
     ) -> None:
         super().__init__(node)
         self.db = db
@@ -91,7 +94,11 @@ class NavigationModule(BehaviourModule):
         self.answer_timeout = answer_timeout
         self.feedback_interval = feedback_interval
         self.wander_limit = wander_limit
+        self.base_answer_timeout = base_answer_timeout
+        self.pose_timeout = pose_timeout
         self.pose: tuple[float, float] | None = None
+        self.pose_at = -math.inf
+        """When the last pose came (clock seconds, monotonic)."""
         self.requested: Location | None = None
         self.asked: Location | None = None
         self.scheduled: Location | None = None
@@ -181,6 +188,7 @@ class NavigationModule(BehaviourModule):
 
     def _on_pose(self, message: PoseWithCovarianceStamped, info: MessageInfo) -> None:
         self.pose = (message.pose.pose.position.x, message.pose.pose.position.y)
+        self.pose_at = self.node.clock.monotonic()
 
     def _on_emotion_change(self, emotion: str, previous: str) -> None:
         self.emotion_since = self.node.clock.monotonic()
@@ -345,14 +353,32 @@ class NavigationModule(BehaviourModule):
         x, y = target.position
         self.heading_to = target
         self.trip = Trip(self.origin, target)
+        clock = self.node.clock
+        watch = TripWatch(
+            self.base.name,
+            topics.AMCL_POSE,
+            clock.monotonic(),
+            answer_timeout=self.base_answer_timeout,
+            pose_timeout=self.pose_timeout,
+        )
         handle = self.base.go(x, y, target.heading)
+        step = watch.step(self.feedback_interval)
+        last_feedback = clock.monotonic()
         try:
             while True:
                 try:
-                    status = await asyncio.wait_for(asyncio.shield(handle.wait()), self.feedback_interval)
+                    status = await asyncio.wait_for(asyncio.shield(handle.wait()), step)
                     break
                 except TimeoutError:
-                    self.send_emotion(*MOVING_FEEDBACK)
+                    now = clock.monotonic()
+                    if now - last_feedback >= self.feedback_interval - 1e-9:
+                        self.send_emotion(*MOVING_FEEDBACK)
+                        last_feedback = now
+                    problem = watch.problem(now, handle.status is not GoalStatus.PENDING, self.pose_at)
+                    if problem is not None:
+                        self.failed_target, self.trip = target, None  # given up: not to go on with
+                        log.warning("giving up the trip to %s: %s", target.name, problem)
+                        raise Abort(problem) from None
         finally:
             self.heading_to = None
             if not handle.status.is_terminal:

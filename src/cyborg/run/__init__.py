@@ -15,4 +15,7 @@
 - :mod:`~cyborg.run.simtime`: virtual time shared by processes (the origin, ``/clock``);
   :mod:`~cyborg.run.lockstep`: the time server of lockstep time (``--speed max`` over ROS).
 - :mod:`~cyborg.run.scenario`: a scenario script over ROS (the ``cyborg_scenario`` node).
+- :mod:`~cyborg.run.doctor`: does this machine and its graph have what a configuration needs
+  (``cyborg doctor``); :mod:`~cyborg.run.service`: the systemd unit that starts the robot at
+  boot (``cyborg service``).
 """

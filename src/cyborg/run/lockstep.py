@@ -55,6 +55,7 @@ class _Participant:
     gen: int = -1  # the grant its last report answered
     busy: bool = False  # it holds the time (LockstepClock.hold)
     pending: int = 0  # messages it holds for the next grant (a delta cycle)
+    settle: bool = False  # work waits for this instant to settle (Clock.when_settled)
     next_ns: int | None = None
     sent: Counter[str] = field(default_factory=Counter)
     received: Counter[str] = field(default_factory=Counter)
@@ -174,6 +175,7 @@ class TimeServer:
         if participant.busy:
             return
         participant.pending = int(message.get("pending", 0))
+        participant.settle = bool(message.get("settle"))
         participant.next_ns = None if message.get("next") is None else int(message["next"])
         touched: set[str] = set()
         for channel, count in message.get("sent", {}).items():
@@ -296,8 +298,12 @@ class TimeServer:
                 "; ".join(f"{n} message(s) on {c} ({self._who(c)})" for c, n in sorted(short.items())),
             )
         self._short_since = None
-        if any(p.pending for p in participants if p.name):
-            t_ns = self.time_ns  # a delta cycle: the messages of this instant are taken
+        holding = any(p.pending for p in participants if p.name)
+        settling = not holding and any(p.settle for p in participants if p.name)
+        if holding or settling:
+            # A delta cycle: the messages of this instant are taken; once none is held anywhere,
+            # the work that waits for the instant to settle runs.
+            t_ns = self.time_ns
             self.deltas += 1
         else:
             deadlines = [p.next_ns for p in participants if p.name and p.next_ns is not None]
@@ -315,6 +321,7 @@ class TimeServer:
                 continue
             due = (
                 p.pending
+                or (settling and p.settle)
                 or (p.next_ns is not None and p.next_ns <= t_ns)
                 or (moved and p.name in self.always)
             )

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import asyncio
 import logging
-import random
 import signal
 import time
 from dataclasses import dataclass, field
@@ -119,7 +118,7 @@ def build_node(name: str, options: NodeOptions, middleware: Middleware) -> Built
     transport = middleware.transport(clock, name, use_sim_time=options.time.virtual)
     context = BuildContext(
         data_dir=options.data_dir,
-        rng=random.Random(options.seed),
+        seed=options.seed,
         map_path=options.map_path,
         resume=options.resume,
         base_api=middleware.base_api,

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import contextlib
 import json
-import random
 import tempfile
 import time
 from collections.abc import Callable
@@ -108,7 +107,7 @@ def prepare_calendar(config: LoadedConfig, data_dir: Path, map_path: Path | None
     from cyborg.sim.scenario import add_calendar
     from cyborg.transport.embedded import EmbeddedTransport
 
-    context = BuildContext(data_dir=data_dir, rng=random.Random(0), map_path=map_path)
+    context = BuildContext(data_dir=data_dir, seed=0, map_path=map_path)
     clock = VirtualClock()
     transport = EmbeddedTransport(clock)
     parts = []

@@ -11,7 +11,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-import random
 import signal
 import tempfile
 from collections import deque
@@ -332,7 +331,7 @@ class ScenarioRun:
                 config,
                 self.transport,
                 data_dir=data_dir,
-                rng=random.Random(script.seed),
+                seed=script.seed,
                 map_path=map_path,
                 kinds=kinds,
             )

@@ -22,7 +22,6 @@ milliseconds), and nothing else does.
 from __future__ import annotations
 
 import asyncio
-import random
 import tempfile
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -124,7 +123,7 @@ class ModuleHarness:
         self.transport = EmbeddedTransport(self.clock)
         self._tmp = tempfile.TemporaryDirectory(prefix="cyborg-test-") if data_dir is None else None
         folder = data_dir if data_dir is not None else Path(self._tmp.name) if self._tmp else Path()
-        self.place = BuildContext(data_dir=folder, rng=random.Random(seed), map_path=map_path)
+        self.place = BuildContext(data_dir=folder, seed=seed, map_path=map_path)
         self.said: list[str] = []
         self.events: list[str] = []
         self.feedback: list[Feedback] = []
@@ -162,7 +161,7 @@ class ModuleHarness:
             _, chosen = module_kinds({"under_test": kind}).parse(
                 node_name, {"kind": "under_test", **(settings or {})}, source="ModuleHarness settings"
             )
-        return kind.build(node, chosen, self.place)
+        return kind.build(node, chosen, self.place.for_module(node_name))
 
     # --- what the module does -----------------------------------------------------------
 

@@ -6,6 +6,7 @@
   seconds); :mod:`~cyborg.transport.lockstep`: a node's side of virtual time granted across
   processes, and :mod:`~cyborg.transport.ledger`: what it counts; :mod:`~cyborg.transport.messages`
   and :mod:`~cyborg.transport.topics`: the thesis's messages and names;
+  :mod:`~cyborg.transport.graph`: what a ROS graph holds at one moment (``cyborg doctor``);
 - :mod:`~cyborg.transport.embedded`: the in-process graph (the default, also the test fake);
   :mod:`~cyborg.transport.ros` (ROS 1) and :mod:`~cyborg.transport.ros2` (ROS 2);
 - :mod:`~cyborg.transport.guards`: what a subscriber believes of the graph (one sender only,

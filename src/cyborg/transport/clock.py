@@ -123,6 +123,17 @@ class Clock(ABC):
     def call_soon(self, callback: Callable[..., object], *args: Any) -> asyncio.Handle:
         return self.loop.call_soon(callback, *args)
 
+    def when_settled(self, callback: Callable[[], object]) -> None:
+        """Run ``callback`` on the loop once the current instant has settled: with virtual time
+        at ``--speed max`` (in one process or in lockstep), after every message of this instant
+        has been taken and before the time moves on; otherwise soon.
+
+        For work that must not depend on the order in which the messages of one instant came
+        (the emotion system applies the feedback of one instant in a fixed order): that order
+        differs between one process and a graph of them, the settled instant does not.
+        """
+        self.loop.call_soon(callback)
+
     def every(
         self,
         seconds: float,
@@ -303,6 +314,9 @@ class _VirtualTimeSelector(DelegatingSelector):
             if real_timeout and before_origin > 0:  # time stands still until the origin
                 real_timeout = None if math.isinf(before_origin) else real_timeout + before_origin
             return self._inner.select(real_timeout)
+        if self._clock._settling and (timeout is None or timeout > 0):
+            self._clock._settle()  # nothing else is left at this instant
+            return []
         if timeout is None:
             # Nothing is scheduled: only I/O or another thread can wake us.
             return self._inner.select(None)
@@ -392,6 +406,7 @@ class VirtualClock(Clock):
             tuple[tuple[str, int, str, int], Callable[..., object] | None, tuple[Any, ...]]
         ] = []
         self._inbox_lock = threading.Lock()
+        self._settling: list[Callable[[], object]] = []
         self._arrivals: dict[tuple[str, str], int] = {}
         self._start_epoch = start.timestamp() if isinstance(start, datetime) else float(start)
         self._virtual_elapsed = 0.0
@@ -413,8 +428,9 @@ class VirtualClock(Clock):
             self._arrivals[key] = arrival = self._arrivals.get(key, 0) + 1
             self._inbox.append(((base, _LEG_ORDER.get(leg, 0), sender, arrival), callback, args))
 
-    def _release(self) -> None:
-        """Hand the messages that arrived in the last delta cycle to the loop, in their order."""
+    def _release(self) -> int:
+        """Hand the messages that arrived in the last delta cycle to the loop, in their order;
+        return how many there were."""
         with self._inbox_lock:
             inbox, self._inbox = self._inbox, []
         inbox.sort(key=lambda item: item[0])
@@ -422,6 +438,19 @@ class VirtualClock(Clock):
         for _, callback, args in inbox:
             if callback is not None:
                 loop.call_soon(callback, *args)
+        return len(inbox)
+
+    def when_settled(self, callback: Callable[[], object]) -> None:
+        if self.speed is None:
+            self._settling.append(callback)
+        else:
+            self.loop.call_soon(callback)
+
+    def _settle(self) -> None:
+        """The instant has settled: run what waited for it (:meth:`Clock.when_settled`)."""
+        settling, self._settling = self._settling, []
+        for callback in settling:
+            self.loop.call_soon(callback)
 
     def anchor(self, real_origin: float) -> None:
         """Read ``start`` at wall-clock time ``real_origin`` (Unix seconds) and run at ``speed`` from there.

@@ -16,8 +16,9 @@ next timer; a grant goes only to the nodes that have something to do, and every 
 granted time from a small shared file (:class:`SharedTime`) when it wakes.
 
 The wire protocol is JSON lines over a TCP connection to the server: ``{"hello": NAME}``, then
-reports ``{"gen", "next", "pending", "sent", "recv", "listen"}`` (counts since the last report;
-``next`` the next timer in integer nanoseconds of virtual time, or null; ``{"gen", "busy": true}``
+reports ``{"gen", "next", "pending", "sent", "recv", "listen", "settle"}`` (counts since the last
+report; ``next`` the next timer in integer nanoseconds of virtual time, or null; ``settle`` true
+while work waits for the instant to settle, :meth:`Clock.when_settled`; ``{"gen", "busy": true}``
 while the node holds the time, :meth:`Clock.hold`); the server answers ``{"start": true,
 "time_file": PATH}`` once every node has said hello, then grants ``{"gen", "t"}``.
 """
@@ -214,7 +215,7 @@ class LockstepClock(VirtualClock):
         self._link: _Link | None = None
         self._shared: SharedTime | None = None
         self._gen = 0
-        self._reported: tuple[int, int | None, int] | None = None
+        self._reported: tuple[int, int | None, int, bool] | None = None
         self._time_ns = 0
         self._holds = 0
         self.on_advance: list[Callable[[], object]] = []
@@ -284,13 +285,15 @@ class LockstepClock(VirtualClock):
         next_ns = None if next_due is None else max(self._time_ns, round(next_due * NS))
         changes = self.ledger.take_changes()
         with self._inbox_lock:
-            state = (self._gen, next_ns, len(self._inbox))
+            state = (self._gen, next_ns, len(self._inbox), bool(self._settling))
         if changes is None and state == self._reported:
             return
         self._reported = state
-        with self._inbox_lock:
-            pending = len(self._inbox)
-        link.send({"gen": self._gen, "next": next_ns, "pending": pending, **(changes or {})})
+        _, _, pending, settle = state
+        report: dict[str, Any] = {"gen": self._gen, "next": next_ns, "pending": pending, **(changes or {})}
+        if settle:
+            report["settle"] = True
+        link.send(report)
 
     def _take_grants(self, granted: bool) -> None:
         """After the loop woke: take the granted time (every node reads it from the shared file;
@@ -299,8 +302,7 @@ class LockstepClock(VirtualClock):
         assert self._link is not None and self._shared is not None
         moved = False
         grants = self._link.take_grants() if granted else []
-        if grants:
-            self._release()
+        released = self._release() if grants else 0
         gen, t_ns = self._shared.read()
         for grant in grants:
             gen, t_ns = max(gen, int(grant["gen"])), max(t_ns, int(grant["t"]))
@@ -316,6 +318,8 @@ class LockstepClock(VirtualClock):
         if moved:
             for callback in self.on_advance:
                 self.loop.call_soon(callback)
+        elif grants and not released and self._settling:
+            self._settle()  # the server grants the instant again once nothing is held anywhere
 
     @property
     def time_ns(self) -> int:

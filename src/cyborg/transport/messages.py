@@ -8,6 +8,8 @@ working. Each type carries its ROS type name in ``ros_type``.
 from __future__ import annotations
 
 import dataclasses
+import math
+import struct
 from dataclasses import dataclass, field
 from typing import Any, ClassVar, Generic, TypeVar
 
@@ -25,6 +27,31 @@ class Message:
 
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)
+
+
+def float32(value: float) -> float:
+    """``value`` as a ROS ``float32`` field carries it, written with the fewest digits that give
+    that ``float32`` back (0.1 stays 0.1; 0.123456789 becomes 0.12345679; out of range: infinite)."""
+    try:
+        wire = struct.unpack("<f", struct.pack("<f", value))[0]
+    except OverflowError:
+        return math.copysign(math.inf, value)
+    except (struct.error, TypeError):
+        return value  # not a number: what takes the message says so
+    if not math.isfinite(wire) or wire == 0.0:
+        return float(wire)
+    for digits in range(1, 10):
+        shortest = float(f"{wire:.{digits}g}")
+        if struct.unpack("<f", struct.pack("<f", shortest))[0] == wire:
+            return shortest
+    return float(wire)
+
+
+def _as_float32(message: Message, *names: str) -> None:
+    """Round the ``float32`` fields of a new message as the wire does (:func:`float32`), in one
+    process too: a robot in one process then computes with the numbers its ROS graph receives."""
+    for name in names:
+        object.__setattr__(message, name, float32(getattr(message, name)))
 
 
 M = TypeVar("M", bound=Message)
@@ -79,6 +106,9 @@ class EmotionalFeedback(Message):
     delta_arousal: float = 0.0
     delta_dominance: float = 0.0
 
+    def __post_init__(self) -> None:
+        _as_float32(self, "delta_pleasure", "delta_arousal", "delta_dominance")
+
 
 @dataclass(frozen=True)
 class EmotionalState(Message):
@@ -88,6 +118,9 @@ class EmotionalState(Message):
     current_pleasure: float = 0.0
     current_arousal: float = 0.0
     current_dominance: float = 0.0
+
+    def __post_init__(self) -> None:
+        _as_float32(self, "current_pleasure", "current_arousal", "current_dominance")
 
 
 @dataclass(frozen=True)
@@ -102,6 +135,9 @@ class EmotionalStateServiceResponse(Message):
     current_pleasure: float = 0.0
     current_arousal: float = 0.0
     current_dominance: float = 0.0
+
+    def __post_init__(self) -> None:
+        _as_float32(self, "current_pleasure", "current_arousal", "current_dominance")
 
 
 @dataclass(frozen=True)

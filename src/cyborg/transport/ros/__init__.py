@@ -18,6 +18,7 @@ Its modules, one idea each:
 * :mod:`.convert`: our messages to and from the generated ROS classes;
 * :mod:`.master`: calls to the master, and living through its outage or restart;
   :mod:`.connections`: waiting until this process's topics are connected;
+  :mod:`.graph`: the graph as the master lists it, each node asked whether it answers;
 * :mod:`.patches`: rospy's behaviour changed, installed when a RosTransport is made
   (importing changes nothing).
 

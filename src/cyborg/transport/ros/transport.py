@@ -40,6 +40,8 @@ from cyborg.transport.base import (
     normalize_node_name,
 )
 from cyborg.transport.clock import Clock
+from cyborg.transport.graph import GraphView
+from cyborg.transport.lockstep import LockstepClock
 from cyborg.transport.messages import ActionType, ServiceType
 from cyborg.transport.ros import patches
 from cyborg.transport.ros.actions import RosActionClient, RosActionServer
@@ -69,8 +71,19 @@ class RosTransport(Transport):
 
     def _ensure_init(self, first: str) -> None:
         if not rospy.core.is_initialized():
-            rospy.init_node(self.process_name or first, anonymous=False, disable_signals=True)
+            lockstep = isinstance(self.clock, LockstepClock)
+            # In lockstep rospy's time is set from the granted time in this process: a /clock
+            # subscription in every node would wake every process at every step of the time.
+            rospy.init_node(
+                self.process_name or first, anonymous=False, disable_signals=True, disable_rostime=lockstep
+            )
+            if isinstance(self.clock, LockstepClock):
+                self.clock.on_advance.append(self._set_rostime)
+                self._set_rostime()
         WATCH.start(self)
+
+    def _set_rostime(self) -> None:
+        rospy.rostime._set_rostime(rospy.Time.from_sec(self.clock.now()))
 
     @property
     def ros_name(self) -> str:
@@ -97,6 +110,12 @@ class RosTransport(Transport):
         from cyborg.transport.ros.connections import wait_for_connections
 
         return [f"{missing} on {missing.topic}" for missing in wait_for_connections(timeout)]
+
+    def graph(self) -> GraphView:
+        """The master's graph, each node asked whether it answers (see :mod:`.graph`)."""
+        from cyborg.transport.ros.graph import ros1_graph
+
+        return ros1_graph()
 
     def subscribers_of(self, topic: str) -> list[str]:
         """The nodes the master lists as subscribers of ``topic`` (empty if it does not answer)."""

@@ -73,6 +73,11 @@ RESULT_KEPT = 5
 _ACCEPT, _REJECT, _RECALL = "accept", "reject", "recall"
 
 
+RESULT_HALVES_KEPT = 1000
+_ENDED = "ended"
+_ASKED = "asked"
+
+
 def _nothing() -> None:
     """What a counted arrival without a callback runs."""
 
@@ -177,7 +182,7 @@ class _Ros2ServerGoalHandle(ServerGoalHandle[G, R, F]):
             self._status = status
             self.outcome = (status, result if result is not None else self._server.action_type.result())
         self._server.publish_text(self._id, text)
-        self._server.count_sent("result")
+        self._server.result_ready(self._id)
         self.finished.set()
 
     def cancel_requested_now(self) -> bool:  # executor thread: a cancel came; True if it is new
@@ -209,6 +214,11 @@ class _RclServer(RclActionServer):  # type: ignore[misc]
         _RclServer._deciding.goal_id = bytes(request_header_and_message[1].goal_id.uuid)
         await super()._execute_goal_request(request_header_and_message)
 
+    async def _execute_get_result_request(self, request_header_and_message: Any) -> None:
+        if self.owner is not None:
+            self.owner.result_requested(bytes(request_header_and_message[1].goal_id.uuid))
+        await super()._execute_get_result_request(request_header_and_message)
+
     async def _execute_cancel_request(self, request_header_and_message: Any) -> None:
         if self.owner is not None:
             self.owner.cancel_pending(request_header_and_message[1])
@@ -237,11 +247,15 @@ class Ros2ActionServer(ActionServer[G, R, F]):
         self._on_cancel = on_cancel
         self._goals: dict[bytes, _Ros2ServerGoalHandle[G, R, F]] = {}
         self._lock = threading.Lock()
+        # Lockstep: a goal's result goes out once the module has ended the goal AND its client
+        # has asked for it (ROS 2 pulls results); the first of the two to come is noted here.
+        self._result_halves: dict[bytes, str] = {}
         self._closed = False
         self._ledger = transport.clock.ledger
         if self._ledger is not None:
             self._ledger.listen(f"{name}#goal", Channel.UNICAST)
             self._ledger.listen(f"{name}#cancel", Channel.UNICAST)
+            self._ledger.listen(f"{name}#get_result", Channel.UNICAST)
         self._text = node.create_publisher(RosString, f"{name}/{TEXT_TOPIC}", volatile_qos(100))
         self._server = _RclServer(
             node,
@@ -265,6 +279,35 @@ class Ros2ActionServer(ActionServer[G, R, F]):
         """Lockstep time: count one message of ``leg`` (accept, result, text) sent."""
         if self._ledger is not None:
             self._ledger.sent(f"{self.name}#{leg}")
+
+    def result_ready(self, goal_id: bytes) -> None:
+        """The module ended the goal (on the loop): in lockstep, the result is on its way if its
+        client has asked for it already."""
+        if self._ledger is not None and self._result_half(goal_id, _ENDED):
+            self.count_sent("result")
+
+    def result_requested(self, goal_id: bytes) -> None:  # executor thread
+        """A client asked for a goal's result: in lockstep, count the request received, and the
+        result sent if rclpy answers at once (the module has ended the goal, or it is unknown)."""
+        if self._ledger is None:
+            return
+        if self._result_half(goal_id, _ASKED):
+            self.count_sent("result")
+        leg = f"{self.name}#get_result"
+        self._transport.arrive(leg, "", _nothing, counted=(leg,))  # wakes the loop to report
+
+    def _result_half(self, goal_id: bytes, half: str) -> bool:
+        """Note ``half`` of a goal's result; True when the result goes out now."""
+        with self._lock:
+            other = self._result_halves.pop(goal_id, None)
+            if other is not None and other != half:
+                return True
+            if half == _ASKED and goal_id not in self._goals:
+                return True  # rclpy answers a goal it no longer runs (or never knew) at once
+            self._result_halves[goal_id] = half
+            if len(self._result_halves) > RESULT_HALVES_KEPT:  # ended goals nobody asked about
+                del self._result_halves[next(iter(self._result_halves))]
+            return False
 
     # executor threads
     def _goal(self, ros_goal: Any) -> GoalResponse:
@@ -526,6 +569,7 @@ class Ros2ActionClient(ActionClient[G, R, F]):
             response = future.result() if future.exception() is None else None
             arrive(f"{name}#result", "", self._resulted, handle, response, counted=(f"{name}#result",))
 
+        self._count_sent("get_result")
         self._client.when_done(ros_handle.get_result_async(), result)
         if handle.cancel_asked:
             self.send_cancel(handle)

@@ -41,6 +41,7 @@ from rclpy.context import Context
 from rclpy.node import Node as RclNode
 from rclpy.parameter import Parameter as RclParameter
 from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
+from rclpy.time import Time as RclTime
 
 from cyborg.errors import TransportError
 from cyborg.transport.base import (
@@ -63,6 +64,8 @@ from cyborg.transport.base import (
     Transport,
 )
 from cyborg.transport.clock import Clock
+from cyborg.transport.graph import GraphNode, GraphView
+from cyborg.transport.lockstep import LockstepClock
 from cyborg.transport.messages import ActionType, ServiceType
 from cyborg.transport.ros2.actions import Ros2ActionClient, Ros2ActionServer
 from cyborg.transport.ros2.convert import ros2_class, ros2_type_name
@@ -167,6 +170,7 @@ class Ros2Transport(Transport):
         self._params_lock = threading.Lock()
         self._param_node: RclNode | None = None
         self._param_clients: dict[str, Any] = {}
+        self._lockstep_clocks: list[Any] = []  # the rclpy clocks set from lockstep time
         self._spinner = threading.Thread(target=self._spin, name="ros2 executor", daemon=True)
         self._spinner.start()
 
@@ -217,8 +221,30 @@ class Ros2Transport(Transport):
                 f"cannot make the ROS 2 node {name!r} ({exc}); fix: a node name has letters, digits and "
                 "underscores and does not start with a digit"
             ) from exc
+        if self.use_sim_time and isinstance(self.clock, LockstepClock):
+            self._follow_lockstep(rcl)
         self.executor.add_node(rcl)
         return rcl
+
+    def _follow_lockstep(self, rcl: RclNode) -> None:
+        """In lockstep the node's ROS time is set from the granted time in this process: a /clock
+        subscription in every node would wake every process at every step of the time."""
+        source = getattr(rcl, "_time_source", None)
+        subscription = getattr(source, "_clock_sub", None)
+        if subscription is None:
+            return  # another rclpy: it follows /clock as a foreign node does
+        rcl.destroy_subscription(subscription)
+        source._clock_sub = None  # type: ignore[union-attr]
+        if not self._lockstep_clocks:
+            assert isinstance(self.clock, LockstepClock)
+            self.clock.on_advance.append(self._set_ros_time)
+        self._lockstep_clocks.append(rcl.get_clock())
+        self._set_ros_time()
+
+    def _set_ros_time(self) -> None:
+        now = RclTime(nanoseconds=round(self.clock.now() * 1e9))
+        for clock in self._lockstep_clocks:
+            clock.set_ros_time_override(now)
 
     def drop_rcl_node(self, rcl: RclNode) -> None:
         """Take ``rcl`` off the graph, and wait (up to NODE_GONE_WAIT s) until the graph has lost it.
@@ -229,6 +255,8 @@ class Ros2Transport(Transport):
         the graph names their node _NODE_NAME_UNKNOWN_ for good, and a gatekeeper drops what
         they send (seen when a test or a restarted module makes a node of a name just freed).
         """
+        with contextlib.suppress(ValueError):
+            self._lockstep_clocks.remove(rcl.get_clock())
         name, namespace = rcl.get_name(), rcl.get_namespace()
         probe = self._graph_probe()
         before = self._count_nodes(probe, name, namespace)
@@ -277,6 +305,29 @@ class Ros2Transport(Transport):
     def wake(self) -> None:
         """Wake the executor, so that it takes up what another thread made or finished."""
         self.executor.wake()
+
+    def graph(self) -> GraphView:
+        """Every node discovery shows now (this process's hidden probe left out), with what it
+        publishes, subscribes and serves; actions show as their hidden ``_action`` topics and services."""
+        probe = self._graph_probe()
+        nodes: dict[str, GraphNode] = {}
+        for name, namespace in probe.get_node_names_and_namespaces():
+            if (name, namespace) == (probe.get_name(), probe.get_namespace()):
+                continue
+            try:
+                pubs = probe.get_publisher_names_and_types_by_node(name, namespace)
+                subs = probe.get_subscriber_names_and_types_by_node(name, namespace)
+                srvs = probe.get_service_names_and_types_by_node(name, namespace)
+            except Exception:  # gone between the two calls (rclpy raises NodeNameNonExistentError)
+                continue
+            full = f"{namespace.rstrip('/')}/{name}".lstrip("/")
+            nodes[full] = GraphNode(
+                full,
+                frozenset(t for t, _ in pubs),
+                frozenset(t for t, _ in subs),
+                frozenset(t for t, _ in srvs),
+            )
+        return GraphView(nodes)
 
     def subscribers_of(self, topic: str) -> list[str]:
         """The nodes the graph knows as subscribers of ``topic`` (discovery may lag a moment)."""
