@@ -170,7 +170,7 @@ def test_a_module_that_speaks_in_a_state_without_the_speech_grant_is_warned_abou
 def test_the_packaged_robots_declare_what_they_publish_and_validate_without_warnings() -> None:
     from cyborg.app.config import load_config, packaged_config
 
-    for name in ("cyborg.yaml", "demo.yaml"):
+    for name in ("cyborg.yaml", "demo.yaml", "monitor.yaml"):
         config = load_config(packaged_config(name))
         assert robot_warnings(config, module_kinds()) == [], name
     navigation = module_kinds().parse("cyborg_navigation", {"kind": "navigation"})[1]

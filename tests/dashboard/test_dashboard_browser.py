@@ -325,6 +325,28 @@ def test_without_a_base_the_map_panel_says_so(browser: Browser, tmp_path: Path) 
     assert not errors, "the page logged errors:\n" + "\n".join(errors)
 
 
+def test_a_parallel_state_shows_one_lane_per_region_and_both_states_in_control(
+    browser: Browser, tmp_path: Path
+) -> None:
+    robot = Sim(tmp_path / "data", config=packaged_config("monitor.yaml"))
+    errors: list[str] = []
+    page = open_page(browser, robot.url + "/", errors)
+    try:
+        lanes = page.locator("#health-regions .lane")
+        expect(lanes).to_have_count(2)
+        expect(lanes.nth(0)).to_contain_text("monitor (priority 10)")
+        expect(lanes.nth(0)).to_contain_text("battery_ok")
+        expect(lanes.nth(1)).to_contain_text("behaviour (priority 1)")
+        expect(page.locator('[id="state:battery_ok"]')).to_have_class(re.compile(r"\bactive\b"))
+        expect(page.locator('[id="state:idle"]')).to_have_class(re.compile(r"\bactive\b"))
+        expect(page.locator("#health-stats")).to_contain_text("mutes")
+        page.screenshot(path=str(SHOTS / "cyborg-dashboard-parallel.png"))
+    finally:
+        page.context.close()
+        robot.stop()
+    assert not errors, "the page logged errors:\n" + "\n".join(errors)
+
+
 SMALL = (1280, 800)  # the smallest window the layout is made for
 Box = Mapping[str, Any]  # a bounding box (x, y, width, height), a place label's with its name
 

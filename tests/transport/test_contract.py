@@ -611,3 +611,102 @@ def test_close_shuts_every_node_down_and_refuses_new_ones(graph: Graph) -> None:
         assert ran == ["closed"], "a second close does nothing"
     finally:
         clock.close()
+
+
+def test_a_parallel_state_runs_its_regions_over_the_wire(graph: Graph) -> None:
+    """The controller in a parallel state on this transport: both regions' goals at once, an event
+    that moves one region only, one state_change per region, the arbitrated resources in
+    /state_resources, the muted module on /cyborg_controller/muted, and leaving while both
+    modules ignore the cancel: they are waited for together (one preempt timeout, not two)."""
+    from cyborg.app.config import parse_config
+    from cyborg.controller.runtime import Controller
+    from cyborg.transport import topics
+
+    preempt = 1.0
+    act = {name: graph.name(f"/par/{name}") for name in ("idle", "a1", "a2", "b1")}
+    machine = parse_config(
+        f"""
+initial: idle
+timeouts: {{connect: {graph.timeout(2.0)}, preempt: {preempt}}}
+resource_policy: {{speaker: arbitrated}}
+states:
+  idle: {{action: "{act["idle"]}", transitions: {{go: busy, aborted: idle}}}}
+  busy:
+    parallel: true
+    transitions: {{stop: idle, aborted: idle}}
+    states:
+      a:
+        priority: 1
+        states:
+          a1: {{action: "{act["a1"]}", resources: {{speaker: a_node}}, transitions: {{flip: a2}}}}
+          a2: {{action: "{act["a2"]}"}}
+      b:
+        priority: 2
+        states:
+          b1: {{action: "{act["b1"]}", resources: {{speaker: b_node}}}}
+"""
+    ).machine
+    goals: list[tuple[str, float]] = []
+    cancels: list[str] = []
+    cancelled_at: dict[str, float] = {}
+    modules = graph.node("par_modules")
+    for name, action in act.items():
+
+        def on_goal(h: Handle, name: str = name) -> None:
+            h.accept()
+            goals.append((name, graph.clock.monotonic()))
+
+        def on_cancel(h: Handle, name: str = name) -> None:
+            cancels.append(name)
+            cancelled_at[name] = graph.clock.monotonic()
+            if name in ("idle", "a1"):  # a2 and b1 ignore the cancel
+                h.canceled()
+
+        modules.action_server(action, StateMachineAction, on_goal, on_cancel)
+    observer = graph.node("par_observer")
+    changes: list[tuple[str, str, str]] = []
+    muted: list[str] = []
+    observer.subscribe(
+        topics.STATE_CHANGE,
+        SystemState,
+        lambda m, i: changes.append((m.from_system_state, m.event, m.to_system_state)),
+        queue_size=100,
+    )
+    observer.subscribe(topics.RESOURCE_MUTES, String, lambda m, i: muted.append(m.data), queue_size=100)
+    events = observer.publisher(topics.REGISTER_EVENT, String)
+    controller = Controller(graph.node("par_controller"), machine)
+
+    async def main() -> float:
+        controller.start()
+        await graph.until(lambda: [g for g, _ in goals] == ["idle"], "idle's goal", timeout=2.0)
+        await graph.connected(events)
+        await graph.until(lambda: bool(changes), "the first state change", timeout=2.0)
+        events.publish(String("go"))
+        await graph.until(lambda: {g for g, _ in goals} == {"idle", "a1", "b1"}, "both regions' goals")
+        await graph.until(lambda: len(changes) == 3 and bool(muted), "the changes and the mutes")
+        assert changes == [("", "start", "idle"), ("idle", "go", "b1"), ("idle", "go", "a1")]
+        assert observer.get_param(topics.STATE_RESOURCES_PARAM) == {"speaker": "b_node"}
+        assert '"node": "a_node"' in muted[-1] and '"holder": "b_node"' in muted[-1]
+        events.publish(String("flip"))
+        await graph.until(lambda: len(goals) == 4, "a2's goal")
+        assert goals[-1][0] == "a2" and cancels == ["idle", "a1"], "b1 keeps its goal"
+        await graph.until(lambda: len(changes) == 4, "a1 -> a2 published")
+        assert changes[-1] == ("a1", "flip", "a2")
+        sent = graph.clock.monotonic()
+        events.publish(String("stop"))
+        await graph.until(
+            lambda: goals[-1][0] == "idle" and len(goals) == 5, "idle again", timeout=3 * preempt
+        )
+        return goals[-1][1] - sent
+
+    try:
+        took = graph.run(main())
+    finally:
+        graph.run(controller.stop())
+    assert sorted(cancels[2:4]) == ["a2", "b1"]
+    skew = abs(cancelled_at["a2"] - cancelled_at["b1"])
+    assert skew < preempt / 2, (
+        f"the cancels came {skew:.2f} s apart: one region was waited for before the other"
+    )
+    assert preempt <= took < 3 * preempt, f"leaving took {took:.2f} s, not the one preempt timeout"
+    assert controller.stats.preempt_timeouts == 2

@@ -86,3 +86,73 @@ def test_the_time_waits_for_a_message_on_its_way(server: TimeServer) -> None:
         thread.join(timeout=30)
     assert order == ["delivered", "taken by b", "a at 0.2"]
     assert not server.written_off
+
+
+def test_work_that_waits_for_the_instant_to_settle_runs_after_every_message_of_it(server: TimeServer) -> None:
+    """B waits for 0.1 s to settle; A's message of 0.1 s reaches B late (0.3 real s): B's settled
+    work still sees it, and runs before the time moves on to A's next timer."""
+    a, b = LockstepClock(server.address), LockstepClock(server.address)
+    b.ledger.listen("/chat", Channel.BROADCAST)
+    order: list[str] = []
+
+    def deliver_late() -> None:
+        time.sleep(0.3)
+        b.deliver("/chat", "a", order.append, "taken by b", counted=("/chat",))
+
+    async def main_a() -> None:
+        await asyncio.sleep(0.1)
+        a.ledger.sent("/chat")
+        threading.Thread(target=deliver_late, daemon=True).start()
+        await asyncio.sleep(0.1)
+        order.append(f"a at {a.monotonic():.1f}")
+
+    async def main_b() -> None:
+        await asyncio.sleep(0.1)
+        b.when_settled(lambda: order.append(f"b settled at {b.monotonic():.1f}"))
+        while b.monotonic() < 0.3:
+            await asyncio.sleep(0.05)
+
+    threads = [run_node(a, "a", main_a), run_node(b, "b", main_b)]
+    for thread in threads:
+        thread.join(timeout=30)
+    assert order == ["taken by b", "b settled at 0.1", "a at 0.2"]
+
+
+def test_a_node_outside_the_lockstep_is_named_and_the_time_waits_for_quiet(
+    server: TimeServer, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A reports the graph: a student's node that is not in the lockstep is named to every node,
+    and no new time comes while it is on the graph and the graph is not quiet (a window of an hour
+    here); once it has left, the time moves on."""
+    import cyborg.run.lockstep as server_module
+    import cyborg.transport.lockstep as node_module
+
+    monkeypatch.setattr(server_module, "FOREIGN_QUIET", 3600.0)
+    monkeypatch.setattr(node_module, "GRAPH_LOOK", 0.05)
+    graph = ["a", "b", "rosout", "a_clock", "_cyborg_graph_1", "student_module"]
+    a, b = LockstepClock(server.address), LockstepClock(server.address)
+    named: list[tuple[str, ...]] = []
+    b.on_foreign.append(named.append)
+    reached: list[float] = []
+
+    async def main_a() -> None:
+        a.watch_graph(lambda: list(graph))
+        await asyncio.sleep(0.1)
+        reached.append(a.monotonic())
+
+    async def main_b() -> None:
+        await asyncio.sleep(0.2)
+        reached.append(b.monotonic())
+
+    threads = [run_node(a, "a", main_a), run_node(b, "b", main_b)]
+    deadline = time.monotonic() + 10
+    while not named and time.monotonic() < deadline:
+        time.sleep(0.02)
+    time.sleep(0.3)
+    assert named == [("student_module",)] and server.foreign == ("student_module",)
+    assert reached == [] and server.time_ns == 0, "the time waited for the quiet window"
+    graph.remove("student_module")
+    for thread in threads:
+        thread.join(timeout=30)
+    assert named == [("student_module",), ()]
+    assert reached == [0.1, 0.2] and server.foreign_seen == {"student_module"}

@@ -44,6 +44,14 @@ def validate(file: Path, strict: bool) -> None:
         sys.exit(1)
     note = f", {len(warnings)} warning(s) above" if warnings else ""
     click.echo(f"{file}: valid ({leaves} states, initial {loaded.machine.initial!r}{note})")
+    if any(state.parallel for state in loaded.machine.states.values()):
+        from cyborg.controller.clashes import explore
+
+        found = explore(loaded.machine)
+        click.echo(
+            f"parallel state(s): {found.parallel_configurations} combinations of their regions' states "
+            "reachable, no exclusive clash"
+        )
 
 
 @click.command()

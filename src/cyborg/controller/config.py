@@ -32,7 +32,8 @@ from functools import partial
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from cyborg.configfile import Fixes, KeyRules, Location, key_lines, name_location, suggest
-from cyborg.controller.machine import ABORTED, MachineSpec, StateSpec, Timeouts
+from cyborg.controller.clashes import explore
+from cyborg.controller.machine import ABORTED, MachineSpec, ResourcePolicy, StateSpec, Timeouts
 from cyborg.errors import ConfigError, InvalidValueError
 
 # --- schema ------------------------------------------------------------------------
@@ -47,6 +48,12 @@ class StateModel(BaseModel):
     resources: dict[str, str] = Field(default_factory=dict, description="resource: node that may use it")
     initial: str | None = Field(None, description="substate entered first (default: the first listed)")
     states: dict[str, StateModel] | None = Field(None, description="substates of this superstate")
+    parallel: bool = Field(
+        False, description="a superstate whose substates (regions) all run at once, each with a priority"
+    )
+    priority: int | None = Field(
+        None, description="a region's rank in its parallel state: the higher wins an arbitrated resource"
+    )
 
     @field_validator("action")
     @classmethod
@@ -76,6 +83,11 @@ class MachineModel(BaseModel):
     initial: str = Field("idle", description="state the controller enters at start")
     timeouts: TimeoutsModel = Field(default_factory=TimeoutsModel)  # type: ignore[arg-type]
     states: dict[str, StateModel] = Field(description="the states: name: state")
+    resource_policy: dict[str, ResourcePolicy] = Field(
+        default_factory=dict,
+        description="per resource, what two parallel regions holding it means: exclusive (the default: "
+        "refused by validation) or arbitrated (the higher-priority region wins, the other is muted)",
+    )
 
 
 # --- messages -----------------------------------------------------------------------
@@ -99,6 +111,12 @@ MACHINE_FIXES: Fixes = {
     ("states",): "write states as a mapping name: state, e.g. states: {idle: {action: cyborg_idle/idle, "
     "transitions: {aborted: idle}}}",
     ("initial",): "name the state the controller starts in, e.g. initial: idle",
+    (StateModel, "parallel"): "write parallel: true on a superstate whose substates all run at once",
+    (StateModel, "priority"): "give each region of a parallel state a whole number, e.g. priority: 10 "
+    "(the higher wins an arbitrated resource)",
+    ("resource_policy",): "write resource_policy as a mapping resource: policy, e.g. resource_policy: "
+    "{speaker: arbitrated}",
+    ("resource_policy", "*"): "a resource's policy is exclusive or arbitrated, e.g. speaker: arbitrated",
     ("timeouts",): "write timeouts as a mapping, e.g. timeouts: {connect: 2.0, preempt: 2.0}",
 }
 """How to write each part of the machine, for values of the wrong type (see describe_errors)."""
@@ -160,6 +178,9 @@ MACHINE_KEYS = KeyRules(
 """Duplicate-key advice for the robot's YAML (a state twice, an event twice in a state...)."""
 
 
+MAX_CLASHES_SHOWN = 20
+"""Exclusive-resource clashes listed one by one (the shortest traces first); the rest are counted."""
+
 # --- the machine ----------------------------------------------------------------------
 
 
@@ -186,6 +207,7 @@ def build_machine(
         )
     states: dict[str, StateSpec] = {}
     _flatten(model.states, None, states, problems, _Lines(lines, ()))
+    problems.extend(_region_problems(states, _Lines(lines, ()).of_state))
     names = sorted(states)
     where = _Lines(lines, ()).of_state
     for state in states.values():
@@ -217,6 +239,7 @@ def build_machine(
             preempt=model.timeouts.preempt,
             event_age=model.timeouts.event_age,
         ),
+        resource_policy=dict(model.resource_policy),
     )
     for leaf in machine.leaves():
         if machine.lookup(leaf.name, ABORTED) is None:
@@ -228,6 +251,17 @@ def build_machine(
         problems.extend(check(machine))
     if problems:
         raise ConfigError(problems, source=source)
+    clashes = explore(machine).clashes if any(state.parallel for state in states.values()) else ()
+    if clashes:
+        shown = [
+            f"{where(states, clash.parallel)}{clash.describe()}" for clash in clashes[:MAX_CLASHES_SHOWN]
+        ]
+        if len(clashes) > MAX_CLASHES_SHOWN:
+            shown.append(
+                f"... and {len(clashes) - MAX_CLASHES_SHOWN} more pairs of states clash on exclusive "
+                f"resources ({', '.join(sorted({c.resource for c in clashes}))}); fix: as above"
+            )
+        raise ConfigError(shown, source=source)
     reachable = machine.reachable()
     warnings = [
         f"{source}: {where(states, name)}state {name!r} is unreachable from {model.initial!r}: "
@@ -235,7 +269,57 @@ def build_machine(
         for name in names
         if name not in reachable
     ]
+    held = {resource for state in states.values() for resource in state.resources}
+    warnings.extend(
+        f"{source}: {_Lines(lines, ()).at('resource_policy', resource)}resource_policy names "
+        f"{resource!r}, which no state grants{suggest(resource, sorted(held))}; fix: correct its spelling "
+        "or remove it"
+        for resource in model.resource_policy
+        if resource not in held
+    )
     return machine, warnings
+
+
+def _region_problems(states: dict[str, StateSpec], where: Callable[..., str]) -> list[str]:
+    """Parallel states: distinct priorities, and no transition from one region into another."""
+    problems: list[str] = []
+    for parallel in (s for s in states.values() if s.parallel):
+        by_priority: dict[int, str] = {}
+        for region in parallel.children:
+            priority = states[region].priority
+            if priority in by_priority:
+                problems.append(
+                    f"{where(states, region, 'priority')}state {region!r}: has the same priority "
+                    f"({priority}) as region {by_priority[priority]!r} of parallel state {parallel.name!r}; "
+                    "fix: give every region its own priority (the higher wins an arbitrated resource)"
+                )
+            by_priority.setdefault(priority, region)
+        for region in parallel.children:
+            for name in _under(states, region):
+                for event, target in states[name].transitions.items():
+                    other = _region_holding(states, parallel, target)
+                    if other is not None and other != region:
+                        problems.append(
+                            f"{where(states, name, 'transitions', event)}state {name!r}: transition "
+                            f"{event!r} leads from region {region!r} into region {other!r} of parallel "
+                            f"state {parallel.name!r}; fix: regions move on their own: target a state of "
+                            f"region {region!r}, or one outside {parallel.name!r} to leave it"
+                        )
+    return problems
+
+
+def _under(states: dict[str, StateSpec], name: str) -> list[str]:
+    return [name, *(inner for child in states[name].children for inner in _under(states, child))]
+
+
+def _region_holding(states: dict[str, StateSpec], parallel: StateSpec, target: str) -> str | None:
+    """The region of ``parallel`` that ``target`` is in, if any."""
+    current: str | None = target
+    while current is not None and current in states:
+        if states[current].parent == parallel.name:
+            return current
+        current = states[current].parent
+    return None
 
 
 @dataclass(frozen=True)
@@ -270,6 +354,9 @@ def _flatten(
     out: dict[str, StateSpec],
     problems: list[str],
     lines: _Lines,
+    *,
+    parallel_around: str | None = None,
+    parent_parallel: bool = False,
 ) -> None:
     for name, model in states.items():
         at = _Lines(lines.lines, (*lines.prefix, "states", name)).at
@@ -298,6 +385,10 @@ def _flatten(
                 f"{at()}state {name!r}: sets initial {initial!r} but has no substates; fix: remove 'initial:' "
                 "(only a superstate, one with 'states:', has an initial substate)"
             )
+        problems.extend(_parallel_problems(name, model, parallel_around, parent_parallel, at))
+        if model.parallel and model.states and initial is None:
+            # entering it enters every region; machine.enter() stands for that with the first one
+            initial = max(children, key=lambda child: (model.states or {})[child].priority or 0)
         if children and initial is None:
             initial = children[0]
         out[name] = StateSpec(
@@ -309,6 +400,50 @@ def _flatten(
             initial=initial if children else None,
             children=children,
             description=model.description,
+            parallel=model.parallel,
+            priority=model.priority or 0,
         )
         if model.states:
-            _flatten(model.states, name, out, problems, _Lines(lines.lines, (*lines.prefix, "states", name)))
+            _flatten(
+                model.states,
+                name,
+                out,
+                problems,
+                _Lines(lines.lines, (*lines.prefix, "states", name)),
+                parallel_around=name if model.parallel else parallel_around,
+                parent_parallel=model.parallel,
+            )
+
+
+def _parallel_problems(
+    name: str, model: StateModel, parallel_around: str | None, parent_parallel: bool, at: Callable[..., str]
+) -> list[str]:
+    problems: list[str] = []
+    regions = len(model.states or ())
+    if model.parallel and parallel_around is not None:
+        problems.append(
+            f"{at('parallel')}state {name!r}: a parallel state inside parallel state {parallel_around!r}; "
+            "fix: parallel states do not nest: make it a plain superstate, or move its regions up into "
+            f"{parallel_around!r}"
+        )
+    if model.parallel and regions < 2:
+        problems.append(
+            f"{at('parallel')}state {name!r}: parallel with {regions} region(s); fix: give it at least two "
+            "substates (its regions, each with a priority), or remove 'parallel: true'"
+        )
+    if model.parallel and model.initial is not None:
+        problems.append(
+            f"{at('initial')}state {name!r}: a parallel state sets initial {model.initial!r}; fix: remove "
+            "'initial:' (every region starts when it is entered; set 'initial:' inside a region instead)"
+        )
+    if parent_parallel and model.priority is None:
+        problems.append(
+            f"{at()}state {name!r}: a region of parallel state {parallel_around!r} without a priority; fix: "
+            "add 'priority: <whole number>' (the higher wins an arbitrated resource)"
+        )
+    if not parent_parallel and model.priority is not None:
+        problems.append(
+            f"{at('priority')}state {name!r}: sets priority {model.priority} but is no region of a parallel "
+            "state; fix: remove 'priority:' (only the substates of a state with 'parallel: true' have one)"
+        )
+    return problems

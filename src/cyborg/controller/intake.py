@@ -40,6 +40,7 @@ class QueuedEvent:
     name: str
     sender: str
     received_at: float  # clock.monotonic() when it arrived
+    order: int = 0  # when it arrived among everything the controller queues (its results too)
 
 
 class DropReason(enum.StrEnum):
@@ -100,6 +101,12 @@ class EventIntake:
                 self._forget_if_empty(other)
             return event, dropped
         return None, dropped
+
+    def next_order(self) -> int | None:
+        """The arrival order of the event whose turn is next (None: nothing queued)."""
+        for line in self._lines.values():
+            return line[0].order
+        return None
 
     def has(self, wanted: set[str]) -> bool:
         """Whether an event named one of ``wanted`` is queued."""

@@ -9,6 +9,7 @@ No I/O here: the controller runtime wires this to the transport.
 
 from __future__ import annotations
 
+import enum
 from collections import deque
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
@@ -29,10 +30,23 @@ class StateSpec:
     initial: str | None = None
     children: tuple[str, ...] = ()
     description: str = ""
+    parallel: bool = False
+    """A superstate whose children (regions) all run at once (see :mod:`cyborg.controller.regions`)."""
+    priority: int = 0
+    """A region's rank in its parallel state: the higher wins an arbitrated resource."""
 
     @property
     def is_leaf(self) -> bool:
         return self.action is not None
+
+
+class ResourcePolicy(enum.StrEnum):
+    """What two regions of a parallel state holding one resource at once means."""
+
+    EXCLUSIVE = "exclusive"
+    """Never allowed: validation refuses a machine where it can happen."""
+    ARBITRATED = "arbitrated"
+    """Allowed: the higher-priority region's node gets it, the other is muted."""
 
 
 @dataclass(frozen=True)
@@ -49,6 +63,11 @@ class MachineSpec:
     states: Mapping[str, StateSpec]
     initial: str
     timeouts: Timeouts = field(default_factory=Timeouts)
+    resource_policy: Mapping[str, ResourcePolicy] = field(default_factory=dict)
+    """Per resource; one not listed is exclusive."""
+
+    def policy(self, resource: str) -> ResourcePolicy:
+        return self.resource_policy.get(resource, ResourcePolicy.EXCLUSIVE)
 
     def ancestors(self, name: str) -> Iterator[StateSpec]:
         """The state itself, then its superstates outwards."""
@@ -89,6 +108,15 @@ class MachineSpec:
                 merged.setdefault(resource, node)
         return merged
 
+    def companions(self, leaf: str) -> list[str]:
+        """The initial leaves of the other regions when ``leaf`` is in a parallel state's region."""
+        child = leaf
+        for scope in self.ancestors(leaf):
+            if scope.parallel:
+                return [self.enter(region) for region in scope.children if region != child]
+            child = scope.name
+        return []
+
     def leaves(self) -> list[StateSpec]:
         return [s for s in self.states.values() if s.is_leaf]
 
@@ -99,7 +127,9 @@ class MachineSpec:
         queue = deque([start])
         while queue:
             current = queue.popleft()
-            for target in self.transitions_of(current).values():
+            targets = list(self.transitions_of(current).values())
+            targets.extend(self.companions(current))
+            for target in targets:
                 if target not in seen:
                     seen.add(target)
                     queue.append(target)

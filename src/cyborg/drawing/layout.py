@@ -31,7 +31,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
 
-from cyborg.controller.machine import MachineSpec
+from cyborg.controller.machine import MachineSpec, StateSpec
 from cyborg.errors import CyborgError
 
 __all__ = [
@@ -290,6 +290,15 @@ def choose(owner: str, options: list[_Laid]) -> _Laid:
     return min(options, key=elongation)
 
 
+def _box_style(machine: MachineSpec, state: StateSpec) -> str:
+    """A superstate's border: dashed; a parallel state's bold, its regions' dotted (docs/parallel.md)."""
+    if state.parallel:
+        return "rounded,bold"
+    if state.parent is not None and machine.states[state.parent].parallel:
+        return "rounded,dotted"
+    return "rounded,dashed"
+
+
 def box_size(laid_width: float, laid_height: float, title: str) -> tuple[float, float]:
     """The box (points) a superstate needs around its laid out contents and its title."""
     return max(laid_width + 2 * PAD, len(title) * CHAR + 2 * PAD), laid_height + 2 * PAD + LABEL
@@ -332,7 +341,7 @@ def compose(
             out.append(f"{indent}subgraph {_quote('cluster_' + name)} {{")
             out.append(
                 f'{indent}  graph [bb="{left:.2f},{bottom:.2f},{left + w:.2f},{bottom + h:.2f}" label={_quote(name)} '
-                f'lp="{ax:.2f},{bottom + h - LABEL / 2 - 2:.2f}" style="rounded,dashed" color="#888888" '
+                f'lp="{ax:.2f},{bottom + h - LABEL / 2 - 2:.2f}" style="{_box_style(machine, state)}" color="#888888" '
                 f"id={_quote('super:' + name)}];"
             )
             place(name, ax - inner.width / 2, bottom + PAD, indent + "  ")

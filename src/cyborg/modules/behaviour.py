@@ -32,7 +32,7 @@ from datetime import datetime
 from typing import Any
 
 from cyborg.transport import topics
-from cyborg.transport.base import GoalStatus, MessageInfo, Node, ServerGoalHandle
+from cyborg.transport.base import GoalStatus, MessageInfo, Node, ServerGoalHandle, normalize_node_name
 from cyborg.transport.guards import TextLimit
 from cyborg.transport.messages import (
     EmotionalFeedback,
@@ -279,6 +279,39 @@ class BehaviourModule:
                 callback(message.data, info)
 
         self.node.subscribe(topics.TEXT_FROM_SPEECH, String, on_text)
+
+    def on_muted(self, callback: Callable[[frozenset[str]], None]) -> None:
+        """Call ``callback(resources)`` whenever the resources this node is muted on change.
+
+        In a parallel state (docs/parallel.md) a higher-priority region may hold a resource this
+        node's state holds too: what it sends there is dropped until the set is empty again. The
+        controller says so on ``/cyborg_controller/muted``; a module that must be heard can wait or
+        give up (end its goal)."""
+        me = normalize_node_name(self.node.name)
+        muted: list[frozenset[str]] = [frozenset()]
+
+        def on_message(message: String, info: MessageInfo) -> None:
+            try:
+                entries = json.loads(message.data).get("muted", [])
+                mine = frozenset(
+                    str(e["resource"]) for e in entries if normalize_node_name(str(e.get("node", ""))) == me
+                )
+            except (ValueError, AttributeError, KeyError, TypeError):
+                log.warning(
+                    "%s: %s is not a list of mutes: %.80r",
+                    self.node.name,
+                    topics.RESOURCE_MUTES,
+                    message.data,
+                )
+                return
+            if mine != muted[0]:
+                muted[0] = mine
+                try:
+                    callback(mine)
+                except Exception:
+                    log.exception("%s: a mute listener failed; the module carries on", self.node.name)
+
+        self.node.subscribe(topics.RESOURCE_MUTES, String, on_message, queue_size=10)
 
     def on_emotion_change(self, callback: Callable[[str, str], None]) -> None:
         """Call ``callback(emotion, previous)`` whenever the robot's emotion changes its name."""

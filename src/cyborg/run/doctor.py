@@ -195,7 +195,9 @@ def machine_checks(needs: Needs, data_dir: Path) -> list[Check]:
     checks = [_timed_now(lambda: _data_folder(data_dir))]
     for name, settings in needs.of_kind("tts"):
         if settings.play_audio is not False:
-            checks.append(_timed_now(functools.partial(_speaker, name)))
+            # play_audio unset: the module speaks aloud only where a sound device is, silently elsewhere
+            speaker = functools.partial(_speaker, name, required=settings.play_audio is True)
+            checks.append(_timed_now(speaker))
     for name, settings in needs.of_kind("speech_input"):
         if settings.source == "microphone":
             checks.append(_timed_now(functools.partial(_microphone, name, settings.device)))
@@ -219,13 +221,18 @@ def _data_folder(folder: Path) -> Check:
     return _passed(name, f"writable, {free / 1000:.1f} GB free")
 
 
-def _speaker(module: str) -> Check:
+def _speaker(module: str, *, required: bool = True) -> Check:
     from cyborg.modules.speech import probe_sound_output
 
     problem = probe_sound_output()
     if problem is None:
         return _passed(f"speech output ({module})", "espeak-ng plays on the default sound device")
     what, _, fix = problem.partition("; fix: ")
+    if not required:
+        what += " (play_audio is not set: the module speaks silently here)"
+        return Check(
+            f"speech output ({module})", CheckStatus.NOTE, what, "set play_audio: true to require it"
+        )
     return _failed(f"speech output ({module})", what, fix)
 
 

@@ -44,7 +44,23 @@ __all__ = ["TimeServer"]
 log = logging.getLogger(__name__)
 
 PATIENCE = 2.0  # real seconds a short channel may stay short while every node is idle
+FOREIGN_QUIET = 0.1
+"""Real seconds without a report before a new time, while nodes outside the lockstep are on the
+graph: they follow /clock, and may still be answering what they received."""
 SURPLUS_SETTLE = 0.05  # real seconds without a report before a surplus counts as from outside
+
+
+def _infrastructure(name: str, ours: set[str]) -> bool:
+    """A node that is part of the launch or of ROS itself, not a module outside the lockstep:
+    a launched part, one of its extra nodes (``rosarnl_node_clock``), ROS 1's rosout, a hidden
+    node (ROS 2's ``_`` names), or the launch's own helpers (the API, the parameter home)."""
+    return (
+        name in ours
+        or name.startswith("_")
+        or name in {"rosout", "cyborg_api", "cyborg_parameters", "cyborg_launch"}
+        or any(name.startswith(f"{part}_") for part in ours)
+        or name.startswith("cyborg_tool")
+    )
 
 
 @dataclass
@@ -56,6 +72,7 @@ class _Participant:
     busy: bool = False  # it holds the time (LockstepClock.hold)
     pending: int = 0  # messages it holds for the next grant (a delta cycle)
     settle: bool = False  # work waits for this instant to settle (Clock.when_settled)
+    nodes: frozenset[str] = frozenset()  # the graph's nodes of its process
     next_ns: int | None = None
     sent: Counter[str] = field(default_factory=Counter)
     received: Counter[str] = field(default_factory=Counter)
@@ -89,6 +106,9 @@ class TimeServer:
         """Grants each node was woken by (it had a timer due or messages to take)."""
         self.deltas = 0
         self.started = False
+        self.foreign: tuple[str, ...] = ()
+        """Nodes on the graph that do not take part in the lockstep (a plain rospy/rclpy node)."""
+        self.foreign_seen: set[str] = set()
         self.written_off: Counter[str] = Counter()
         """Messages written off per channel (short channels; surpluses are not counted here)."""
         self._offset: Counter[str] = Counter()
@@ -162,6 +182,7 @@ class TimeServer:
     def _take(self, participant: _Participant, message: dict[str, Any]) -> None:
         if "hello" in message:
             participant.name = str(message["hello"])
+            participant.nodes = frozenset(str(n).lstrip("/") for n in message.get("nodes", ()))
             if self.started:  # a node started again: it joins at the current time
                 participant.gen = -1
                 self._send(participant, {"start": True, "time_file": self._shared.path})
@@ -176,6 +197,8 @@ class TimeServer:
             return
         participant.pending = int(message.get("pending", 0))
         participant.settle = bool(message.get("settle"))
+        if "graph" in message:
+            self._graph_seen(message["graph"])
         participant.next_ns = None if message.get("next") is None else int(message["next"])
         touched: set[str] = set()
         for channel, count in message.get("sent", {}).items():
@@ -194,6 +217,26 @@ class TimeServer:
             touched.add(channel)
         for channel in touched:
             self._recount(channel)
+
+    def _graph_seen(self, names: list[str]) -> None:
+        ours = {p.name for p in self._participants.values() if p.name} | self.expected
+        ours.update(*(p.nodes for p in self._participants.values()))
+        foreign = tuple(sorted(name for name in names if not _infrastructure(name, ours)))
+        if foreign == self.foreign:
+            return
+        self.foreign = foreign
+        self.foreign_seen.update(foreign)
+        if foreign:
+            log.warning(
+                "lockstep: not lockstepped: %s (on the graph, not taking part): the time waits %.1f s "
+                "of quiet real time before each new time while they are there; a module built on "
+                "cyborg.modules takes part when `cyborg launch` runs it (docs/lockstep.md)",
+                ", ".join(foreign),
+                FOREIGN_QUIET,
+            )
+        for p in self._participants.values():
+            if p.name:
+                self._send(p, {"foreign": list(foreign)})
 
     def _leave(self, participant: _Participant) -> None:
         self._selector.unregister(participant.sock)
@@ -299,6 +342,9 @@ class TimeServer:
             )
         self._short_since = None
         holding = any(p.pending for p in participants if p.name)
+        quiet = time.monotonic() - self._last_report >= FOREIGN_QUIET
+        if self.foreign and not holding and not quiet:
+            return  # a node outside the lockstep may still be answering at this time
         settling = not holding and any(p.settle for p in participants if p.name)
         if holding or settling:
             # A delta cycle: the messages of this instant are taken; once none is held anywhere,

@@ -33,6 +33,7 @@ from cyborg.run.tasks import watch_tasks
 from cyborg.transport import topics
 from cyborg.transport.base import Publisher, Transport
 from cyborg.transport.clock import Clock, VirtualClock
+from cyborg.transport.graph import acting_nodes
 from cyborg.transport.lockstep import LockstepClock
 from cyborg.transport.messages import Clock as ClockMessage
 from cyborg.transport.messages import String
@@ -165,7 +166,7 @@ def await_start(node: BuiltNode, sim_time: SimTime) -> bool:
     clock = node.clock
     try:
         if isinstance(clock, LockstepClock):
-            clock.join(node.name)  # returns once every node of the launch has joined
+            clock.join(node.name, node.transport.node_names())  # once every node of the launch has
             return True
         rendezvous = sim_time.rendezvous
         if rendezvous is not None:
@@ -189,6 +190,9 @@ async def serve_node(node: BuiltNode, options: NodeOptions) -> int:
         clock, clock_publisher = node.clock, node.clock_publisher
         clock.on_advance.append(lambda: clock_publisher.publish(ClockMessage(clock.now())))
         clock_publisher.publish(ClockMessage(clock.now()))
+        graph = getattr(node.transport, "graph", None)
+        if callable(graph):  # the nodes outside the lockstep: /clock's publisher looks for them
+            clock.watch_graph(lambda: acting_nodes(graph(ask_nodes=False)))
     elif node.clock_publisher is not None:
         assert isinstance(node.clock, VirtualClock)
         background.append(loop.create_task(publish_clock(node.clock_publisher, node.clock), name="clock"))

@@ -28,6 +28,7 @@ from cyborg.run.supervisor import Launch
 from cyborg.sim.transcript import TranscriptWriter
 from cyborg.transport.base import Node
 from cyborg.transport.clock import VirtualClock
+from cyborg.transport.lockstep import LockstepClock
 from cyborg.transport.messages import String
 
 if TYPE_CHECKING:
@@ -59,6 +60,11 @@ class ScenarioNode:
         self.driver = ScenarioDriver(node, self.script, keep_records=files.transcript is None)
         self._out: IO[str] | None = None
         self._writer: TranscriptWriter | None = None
+        clock = node.clock
+        if isinstance(clock, LockstepClock):  # named in the transcript: they may make a run differ
+            clock.on_foreign.append(
+                lambda names: self.driver.stream.emit("lockstep", not_lockstepped=list(names))
+            )
         if files.transcript is not None:
             self._out = files.transcript.open("w", encoding="utf-8")
             self._writer = TranscriptWriter(self._out)

@@ -38,6 +38,7 @@ __all__ = [
     "MasterRendezvous",
     "Rendezvous",
     "SimTime",
+    "check_virtual_time",
     "clock_owner_of",
     "is_simulated_base",
     "publish_clock",
@@ -175,6 +176,19 @@ async def publish_clock(publisher: Publisher[ClockMessage], clock: VirtualClock)
 def is_simulated_base(config: LoadedConfig, name: str) -> bool:
     raw = config.model.modules.get(name)
     return isinstance(raw, dict) and raw.get("kind") == "simulated_base"
+
+
+def check_virtual_time(config: LoadedConfig) -> None:
+    """Refuse virtual time for a configuration that drives a real base: the navigation module's
+    base moves in real time, and no simulated base serves its names."""
+    modules = config.model.modules.values()
+    kinds = {raw.get("kind") for raw in modules if isinstance(raw, dict)}
+    if "navigation" in kinds and "simulated_base" not in kinds:
+        raise CyborgError(
+            f"{config.source}: --speed runs virtual time, but this configuration drives a real base "
+            "(a navigation module and no simulated_base): a real robot moves in real time; fix: drop "
+            "--speed, or use a configuration with a simulated base (the packaged cyborg.yaml)"
+        )
 
 
 def clock_owner_of(config: LoadedConfig, parts: Sequence[str]) -> str:

@@ -37,7 +37,7 @@ from cyborg.errors import CyborgError
 from cyborg.run.census import NAME_TAKEN_EXIT
 from cyborg.run.lockstep import TimeServer
 from cyborg.run.middleware import ROS1, LaunchGraph, Middleware, exit_description
-from cyborg.run.simtime import EPOCH_MARGIN, READY_TIMEOUT, Rendezvous, clock_owner_of
+from cyborg.run.simtime import EPOCH_MARGIN, READY_TIMEOUT, Rendezvous, check_virtual_time, clock_owner_of
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, NS
 
 __all__ = ["Launch", "launch"]
@@ -83,6 +83,10 @@ class Launch:
     _started_at: dict[str, float] = field(default_factory=dict)
     _respawn_delay: dict[str, float] = field(default_factory=dict)
     _respawn_at: dict[str, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.speed is not None or self.lockstep:
+            check_virtual_time(self.config)
 
     def command(self, name: str, clock_owner: str | None, *, fresh: bool = True) -> list[str]:
         """The command line of part ``name``'s process."""
@@ -282,6 +286,11 @@ class Launch:
                     f"({server.deltas} of them delta cycles); nodes woken most: "
                     + ", ".join(f"{name} {count}" for name, count in server.woken.most_common(4))
                     + (f"; written off: {dict(server.written_off)}" if server.written_off else "")
+                    + (
+                        f"; not lockstepped: {', '.join(sorted(server.foreign_seen))}"
+                        if server.foreign_seen
+                        else ""
+                    )
                 )
             if self._graph is not None:
                 self._graph.close()

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-__all__ = ["GraphNode", "GraphView"]
+__all__ = ["GraphNode", "GraphView", "acting_nodes"]
 
 
 @dataclass(frozen=True)
@@ -42,3 +42,30 @@ class GraphView:
     def alive(self, name: str) -> bool:
         node = self.nodes.get(name)
         return node is not None and node.alive
+
+
+_ROS_OWN_TOPICS = frozenset({"/rosout", "/parameter_events"})
+_ROS_OWN_SERVICE_ENDS = (
+    "/get_loggers",
+    "/set_logger_level",
+    "/describe_parameters",
+    "/get_parameters",
+    "/get_parameter_types",
+    "/list_parameters",
+    "/set_parameters",
+    "/set_parameters_atomically",
+    "/get_type_description",
+    "/get_logger_levels",
+    "/set_logger_levels",
+)
+
+
+def acting_nodes(view: GraphView) -> list[str]:
+    """The nodes of ``view`` that publish or serve something of their own (not only ROS's own
+    log, parameter and logger endpoints): a node that only listens changes nothing."""
+    return sorted(
+        node.name
+        for node in view.nodes.values()
+        if node.publishes - _ROS_OWN_TOPICS
+        or any(not service.endswith(_ROS_OWN_SERVICE_ENDS) for service in node.services)
+    )

@@ -15,12 +15,16 @@ grants the same time again (a delta cycle) while any node holds messages, else t
 next timer; a grant goes only to the nodes that have something to do, and every node reads the
 granted time from a small shared file (:class:`SharedTime`) when it wakes.
 
-The wire protocol is JSON lines over a TCP connection to the server: ``{"hello": NAME}``, then
+The wire protocol is JSON lines over a TCP connection to the server: ``{"hello": NAME, "nodes":
+[the graph's nodes of the process]}``, then
 reports ``{"gen", "next", "pending", "sent", "recv", "listen", "settle"}`` (counts since the last
 report; ``next`` the next timer in integer nanoseconds of virtual time, or null; ``settle`` true
-while work waits for the instant to settle, :meth:`Clock.when_settled`; ``{"gen", "busy": true}``
+while work waits for the instant to settle, :meth:`Clock.when_settled`; ``graph`` the graph's node
+names when they changed, from the node that looks, :meth:`LockstepClock.watch_graph`;
+``{"gen", "busy": true}``
 while the node holds the time, :meth:`Clock.hold`); the server answers ``{"start": true,
-"time_file": PATH}`` once every node has said hello, then grants ``{"gen", "t"}``.
+"time_file": PATH}`` once every node has said hello, then grants ``{"gen", "t"}``, and
+``{"foreign": [NAME, ...]}`` when the nodes on the graph that are not in the lockstep change.
 """
 
 from __future__ import annotations
@@ -28,6 +32,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
+import logging
 import math
 import mmap
 import os
@@ -35,7 +40,8 @@ import selectors
 import socket
 import struct
 import tempfile
-from collections.abc import Callable, Iterator, Mapping, Sequence
+import threading
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from datetime import datetime
 from typing import Any
 
@@ -45,7 +51,10 @@ from cyborg.transport.ledger import Ledger
 
 __all__ = ["LockstepClock", "SharedTime"]
 
+log = logging.getLogger(__name__)
+
 LARGE_TIME_NS = 2**22 * NS
+GRAPH_LOOK = 2.0  # real seconds between looks at the graph's node names (the clock owner's)
 CONNECT_TIMEOUT = 30.0  # real seconds a node tries to reach the time server
 START_TIMEOUT = 180.0  # real seconds a node waits for every other node to say hello
 
@@ -99,7 +108,7 @@ def _nothing() -> None:
 class _Link:
     """The connection to the time server: send reports, take grants (on the loop's thread)."""
 
-    def __init__(self, address: str, name: str) -> None:
+    def __init__(self, address: str, name: str, nodes: Sequence[str] = ()) -> None:
         host, _, port = address.rpartition(":")
         try:
             self.sock = socket.create_connection((host, int(port)), timeout=CONNECT_TIMEOUT)
@@ -110,7 +119,7 @@ class _Link:
             ) from None
         self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self._buffer = b""
-        self.send({"hello": name})
+        self.send({"hello": name, "nodes": list(nodes)})
 
     def send(self, message: Mapping[str, Any]) -> None:
         self.sock.sendall(json.dumps(message, separators=(",", ":")).encode() + b"\n")
@@ -219,6 +228,11 @@ class LockstepClock(VirtualClock):
         self._time_ns = 0
         self._holds = 0
         self.on_advance: list[Callable[[], object]] = []
+        self.foreign: tuple[str, ...] = ()
+        """Nodes on the graph that are not in the lockstep (the server says which)."""
+        self.on_foreign: list[Callable[[tuple[str, ...]], object]] = []
+        self._graph: tuple[str, ...] | None = None  # node names seen, not yet reported
+        self._graph_stop = threading.Event()
 
     def deliver(
         self,
@@ -238,6 +252,27 @@ class LockstepClock(VirtualClock):
         if not loop.is_closed():
             loop.call_soon_threadsafe(_nothing)  # wakes the loop, which reports the arrival
 
+    def watch_graph(self, names: Callable[[], Iterable[str]]) -> None:
+        """Look at the graph's node names every GRAPH_LOOK real seconds (on a thread of its own)
+        and report them: the server names the nodes that are not in the lockstep and gives them
+        a quiet window of real time before each new time. One node of a launch does this."""
+
+        def look() -> None:
+            seen: tuple[str, ...] | None = None
+            while not self._graph_stop.wait(0 if seen is None else GRAPH_LOOK):
+                try:
+                    now = tuple(sorted({name.lstrip("/") for name in names()}))
+                except Exception as exc:  # a master that does not answer: the next look
+                    log.debug("lockstep: could not list the graph's nodes (%s)", exc)
+                    continue
+                if now != seen:
+                    seen = self._graph = now
+                    loop = self.loop
+                    if not loop.is_closed():
+                        loop.call_soon_threadsafe(_nothing)  # wakes the loop, which reports them
+
+        threading.Thread(target=look, name="lockstep graph", daemon=True).start()
+
     @property
     def is_lockstep(self) -> bool:
         return True
@@ -254,9 +289,10 @@ class LockstepClock(VirtualClock):
 
     monotonic = _loop_time
 
-    def join(self, name: str) -> None:
-        """Connect to the time server as ``name`` and wait until every node of the launch has."""
-        link = _Link(self.address, name)
+    def join(self, name: str, nodes: Sequence[str] = ()) -> None:
+        """Connect to the time server as ``name`` (whose process runs the graph's ``nodes``) and
+        wait until every node of the launch has."""
+        link = _Link(self.address, name, nodes)
         self._shared = SharedTime.open(link.wait_for_start())
         self._link = link
         selector = self.loop._selector  # type: ignore[attr-defined]
@@ -286,13 +322,16 @@ class LockstepClock(VirtualClock):
         changes = self.ledger.take_changes()
         with self._inbox_lock:
             state = (self._gen, next_ns, len(self._inbox), bool(self._settling))
-        if changes is None and state == self._reported:
+        if changes is None and state == self._reported and self._graph is None:
             return
         self._reported = state
         _, _, pending, settle = state
         report: dict[str, Any] = {"gen": self._gen, "next": next_ns, "pending": pending, **(changes or {})}
         if settle:
             report["settle"] = True
+        graph, self._graph = self._graph, None
+        if graph is not None:
+            report["graph"] = list(graph)
         link.send(report)
 
     def _take_grants(self, granted: bool) -> None:
@@ -302,6 +341,11 @@ class LockstepClock(VirtualClock):
         assert self._link is not None and self._shared is not None
         moved = False
         grants = self._link.take_grants() if granted else []
+        for notice in [grant for grant in grants if "foreign" in grant]:
+            grants.remove(notice)
+            self.foreign = tuple(notice["foreign"])
+            for on_foreign in self.on_foreign:
+                self.loop.call_soon(on_foreign, self.foreign)
         released = self._release() if grants else 0
         gen, t_ns = self._shared.read()
         for grant in grants:
@@ -327,6 +371,7 @@ class LockstepClock(VirtualClock):
         return self._time_ns
 
     def close(self) -> None:
+        self._graph_stop.set()
         super().close()
         if self._link is not None:
             self._link.close()

@@ -13,6 +13,10 @@ STATE_CHANGE = "/cyborg_controller/state_change"
 STATE_RESOURCES_PARAM = "/state_resources"
 # Ours, not the thesis's: the controller's counters as JSON (std_msgs/String).
 CONTROLLER_STATS = "/cyborg_controller/stats"
+# Ours: in a parallel state, the region modules muted because a higher-priority region holds
+# their resource, as JSON {states: [...], muted: [{resource, node, state, region, holder}]}
+# (std_msgs/String, latched; published whenever the parallel state's configuration changes).
+RESOURCE_MUTES = "/cyborg_controller/muted"
 # Ours: each state's transitions ({state: [event, ...]}), set once when the controller starts,
 # so tools over ROS can tell whether an event would be taken.
 TRANSITIONS_PARAM = "/cyborg_controller/transitions"

@@ -22,6 +22,7 @@ from typing import Any
 from aiohttp import WSCloseCode, WSMsgType, web
 
 from cyborg.controller.machine import MachineSpec
+from cyborg.controller.regions import Lanes, Regions
 from cyborg.emotion.model import EmotionSettings
 from cyborg.errors import CyborgError
 from cyborg.limits import MAX_TEXT_LENGTH
@@ -99,6 +100,8 @@ class RobotAPI:
         say whether its change was saved (the in-process robot's store writes on its own thread)."""
         self.records: deque[Record] = deque(maxlen=RECORD_BUFFER)
         self._events_of: dict[str, tuple[str, ...]] = {}  # state -> valid events, sorted
+        parallel = machine is not None and any(state.parallel for state in machine.states.values())
+        self._lanes = Lanes(Regions(machine)) if machine is not None and parallel else None  # region -> state
         self.sequence = 0
         self.status: dict[str, Any] = {
             "state": None,
@@ -136,6 +139,8 @@ class RobotAPI:
         kind = record["type"]
         if kind == "state":
             self.status.update(state=record["to"], previous_state=record["from"], event=record["event"])
+            if self._lanes is not None and record["to"] in self._lanes.regions.machine.states:
+                self._lanes.on_change(record["to"], 0.0)
         elif kind == "emotion":
             self.status.update(
                 emotion=record["emotion"],
@@ -162,6 +167,10 @@ class RobotAPI:
         status = dict(self.status)
         state = status.get("state")
         status["valid_events"] = list(self._valid_events(state)) if self.machine and state else []
+        if self._lanes is not None and self._lanes.states:  # in a parallel state: any region's
+            status["valid_events"] = sorted(
+                {e for leaf in self._lanes.states.values() for e in self._valid_events(leaf)}
+            )
         status["time"] = self.node.clock.now()
         if self.extra_status is not None:
             status.update(self.extra_status())

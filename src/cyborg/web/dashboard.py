@@ -27,6 +27,7 @@ from aiohttp import web
 from numpy.typing import NDArray
 
 from cyborg.app.view import BaseStatus, RobotView
+from cyborg.controller.regions import Lanes, Regions
 from cyborg.errors import InvalidValueError
 from cyborg.maps import Cell, OccupancyMap
 from cyborg.transport.messages import SystemState
@@ -141,6 +142,7 @@ class Dashboard:
         self._module_states = self._states_of_modules()
         self._feedback_keys: dict[str, dict[str, int]] = {}  # module -> key the controller may use -> rank
         self._states_text: dict[str, str] = {}  # module -> its states as JSON
+        self._lanes = Lanes(Regions(robot.config.machine))  # one lane per region of a parallel state
         robot.controller.add_state_listener(self._on_state_change)
 
     def routes(self) -> list[web.AbstractRouteDef]:
@@ -187,6 +189,7 @@ class Dashboard:
         if left is not None:
             self.left_at[left] = now
         self.state_since = now
+        self._lanes.on_change(change.to_system_state, now)
 
     def _map(self) -> OccupancyMap | None:
         base = self.robot.base()
@@ -239,10 +242,12 @@ class Dashboard:
         controller = self.robot.controller
         now = self.clock.monotonic()
         active_module = self._module_of_state(controller.active_state)
+        lanes = self._lanes.report(now)
+        in_control = {self._module_of_state(str(lane["state"])) for lane in lanes} | {active_module}
         goal = controller.goal_status
         modules = []
         for name, (servers, states) in self._module_states.items():
-            active = name == active_module
+            active = name in in_control
             left = self.left_at.get(name)
             module: dict[str, Any] = {
                 "name": name,
@@ -270,6 +275,7 @@ class Dashboard:
                 "active_module": active_module,
                 "seconds_in_state": round(now - self.state_since, 2),
                 "stats": dataclasses.asdict(controller.stats),
+                "regions": lanes,
                 "emotion_enabled": self.robot.emotion_enabled(),
                 "storage": self._storage(),
                 "motivator": self._motivator_settings(),

@@ -29,9 +29,10 @@ def _answers(uri: str | None) -> bool:
     return bool(reply[0] == 1)
 
 
-def ros1_graph(uri: str | None = None) -> GraphView:
+def ros1_graph(uri: str | None = None, *, ask_nodes: bool = True) -> GraphView:
     """The graph of the master at ``uri`` (default ROS_MASTER_URI); raises OSError and
-    xmlrpc errors when the master does not answer."""
+    xmlrpc errors when the master does not answer. ``ask_nodes=False``: take every listed node
+    as alive (one call to the master, not one to each node)."""
     master = master_proxy(uri)
     reply: Any = master.getSystemState(CALLER)
     code, message, state = reply
@@ -54,8 +55,11 @@ def ros1_graph(uri: str | None = None) -> GraphView:
             return False
         return code == 1 and _answers(node_uri)
 
-    with ThreadPoolExecutor(max_workers=8) as pool:
-        alive = dict(zip(names, pool.map(lookup, names), strict=True))
+    if ask_nodes:
+        with ThreadPoolExecutor(max_workers=8) as pool:
+            alive = dict(zip(names, pool.map(lookup, names), strict=True))
+    else:
+        alive = dict.fromkeys(names, True)
     return GraphView(
         {
             name: GraphNode(

@@ -111,11 +111,12 @@ class RosTransport(Transport):
 
         return [f"{missing} on {missing.topic}" for missing in wait_for_connections(timeout)]
 
-    def graph(self) -> GraphView:
-        """The master's graph, each node asked whether it answers (see :mod:`.graph`)."""
+    def graph(self, *, ask_nodes: bool = True) -> GraphView:
+        """The master's graph, each node asked whether it answers unless ``ask_nodes`` is False
+        (see :mod:`.graph`)."""
         from cyborg.transport.ros.graph import ros1_graph
 
-        return ros1_graph()
+        return ros1_graph(ask_nodes=ask_nodes)
 
     def subscribers_of(self, topic: str) -> list[str]:
         """The nodes the master lists as subscribers of ``topic`` (empty if it does not answer)."""

@@ -306,9 +306,10 @@ class Ros2Transport(Transport):
         """Wake the executor, so that it takes up what another thread made or finished."""
         self.executor.wake()
 
-    def graph(self) -> GraphView:
+    def graph(self, *, ask_nodes: bool = True) -> GraphView:
         """Every node discovery shows now (this process's hidden probe left out), with what it
-        publishes, subscribes and serves; actions show as their hidden ``_action`` topics and services."""
+        publishes, subscribes and serves; actions show as their hidden ``_action`` topics and
+        services. (``ask_nodes``: as ROS 1's; discovery knows only the nodes that are there.)"""
         probe = self._graph_probe()
         nodes: dict[str, GraphNode] = {}
         for name, namespace in probe.get_node_names_and_namespaces():

@@ -489,6 +489,10 @@
     if (!s.state) return;
     const node = document.getElementById(`state:${s.state}`);
     if (node) node.classList.add("active");
+    // In a parallel state every region's state is in control (the lanes come with /api/health).
+    for (const lane of dash.health?.regions || []) {
+      if (lane.state) document.getElementById(`state:${lane.state}`)?.classList.add("active");
+    }
     for (let parent = dash.parents[s.state]; parent; parent = dash.parents[parent]) {
       const cluster = document.getElementById(`super:${parent}`);
       if (cluster) cluster.classList.add("active-parent");
@@ -551,6 +555,23 @@
 
   // --- health ------------------------------------------------------------------------------
 
+  // In a parallel state: one lane per region, highest priority first, with what it holds and what is muted.
+  function renderRegions(regions) {
+    const box = $("health-regions");
+    box.hidden = regions.length === 0;
+    box.replaceChildren();
+    for (const lane of regions) {
+      const row = el("div", `lane${lane.muted.length ? " muted-lane" : ""}`);
+      row.dataset.region = lane.region;
+      row.append(el("span", "lane-name", `${lane.region} (priority ${lane.priority})`));
+      row.append(el("b", "lane-state", lane.state || "–"));
+      if (lane.seconds_in_state != null) row.append(el("span", "muted", ` ${lane.seconds_in_state.toFixed(0)} s`));
+      if (lane.holds.length) row.append(el("span", "lane-holds", ` holds ${lane.holds.join(", ")}`));
+      if (lane.muted.length) row.append(el("span", "lane-muted bad", ` muted: ${lane.muted.join(", ")}`));
+      box.append(row);
+    }
+  }
+
   async function refreshHealth() {
     let health;
     try {
@@ -574,7 +595,7 @@
       events_received: "events", events_invalid: "invalid", events_overflow: "overflow", events_stale: "stale", events_superseded: "superseded",
       handovers: "handovers", preempt_timeouts: "preempt timeouts",
       connect_failures: "connect failures", succeeded_fallbacks: "fallbacks",
-      retries_delayed: "retries paused",
+      retries_delayed: "retries paused", resource_grants: "grants", resource_mutes: "mutes",
     };
     const bad = new Set(["events_overflow", "events_stale", "preempt_timeouts", "connect_failures", "retries_delayed"]);
     for (const [key, value] of Object.entries(health.stats)) {
@@ -582,6 +603,11 @@
       chip.append(el("b", "", String(value)));
       stats.append(chip);
     }
+
+    const lanesBefore = JSON.stringify(dash.lanes || []);
+    renderRegions(health.regions || []);
+    dash.lanes = (health.regions || []).map((lane) => lane.state);
+    if (JSON.stringify(dash.lanes) !== lanesBefore && dash.status) highlightGraph();
 
     // A module that reports when its last feedback came shows its age; the others show when they were active.
     const withFeedback = health.modules.some((m) => m.seconds_since_feedback != null);
