@@ -411,7 +411,7 @@ states:
 """
 
 
-def test_event_queue_overflow_during_handover_is_counted_logged_and_the_rest_handled_in_order(
+def test_event_queue_overflow_during_handover_is_counted_summed_up_and_the_rest_handled_in_order(
     clock: VirtualClock, caplog: pytest.LogCaptureFixture
 ) -> None:
     transport = EmbeddedTransport(clock)
@@ -434,7 +434,7 @@ def test_event_queue_overflow_during_handover_is_counted_logged_and_the_rest_han
             await clock.sleep(0.01)
             assert controller.active_state == "idle"
             recorder.send(event)
-        await clock.sleep(1.0)
+        await clock.sleep(11.0)  # past the summary of the drops
 
     with caplog.at_level(logging.WARNING, logger="cyborg.controller.runtime"):
         clock.run(main())
@@ -448,7 +448,9 @@ def test_event_queue_overflow_during_handover_is_counted_logged_and_the_rest_han
     assert controller.stats.events_overflow == 2
     assert controller.stats.preempt_timeouts == 1
     dropped = [r.getMessage() for r in caplog.records if "dropped" in r.getMessage()]
-    assert dropped == ["event 'reset' from recorder dropped: 3 events already queued"] * 2
+    assert len(dropped) == 2, dropped  # the first drop, then one summary: not a line per drop
+    assert dropped[0].startswith("event 'reset' from recorder dropped: 3 events already queued, the limit;")
+    assert dropped[1] == "dropped 1 more event(s) in the last 10 s (1 overflow); sent by recorder 1"
 
 
 def test_module_rejecting_every_goal_is_retried_once_per_connect_timeout_not_flooded(

@@ -184,6 +184,7 @@ def active_state(page: Page) -> str | None:
 
 def test_page_loads_live_without_errors(page: Page, sim: str) -> None:
     expect(page.locator("#top-state")).not_to_have_text(NOTHING)
+    expect(page.locator("#top-graph")).to_have_text("in this process (no ROS graph)")  # which graph
     state = page.locator("#top-state").inner_text()
     assert active_state(page) == f"state:{state}", "the graph highlights the active state"
     expect(page.locator("#health-table tbody tr").first).to_be_visible()

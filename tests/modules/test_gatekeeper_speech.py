@@ -114,3 +114,23 @@ def test_tts_speaks_one_sentence_at_a_time_and_bounds_its_queue(clock: VirtualCl
     assert tts.dropped == 1
     gaps = [b[0] - a[0] for a, b in itertools.pairwise(spoken)]
     assert gaps[0] == pytest.approx(estimated_duration("one two three"), abs=1e-9)  # on the ns grid
+
+
+def test_tts_speaks_only_what_its_gatekeeper_passed_and_no_text_over_the_limit(clock: VirtualClock) -> None:
+    transport = EmbeddedTransport(clock)
+    tts = TextToSpeech(
+        transport.node("cyborg_tts"), play_audio=False, speak_from=("cyborg_speech_gatekeeper",)
+    )
+    gate = transport.node("cyborg_speech_gatekeeper").publisher(SPEECH_INPUT_TOPIC, String)
+    stranger = transport.node("stranger").publisher(SPEECH_INPUT_TOPIC, String)
+
+    async def main() -> None:
+        stranger.publish(String("the stranger speaks through the robot"))
+        gate.publish(String("x" * 2_001))
+        gate.publish(String("hello"))
+        await clock.sleep(5)
+
+    clock.run(main())
+    assert list(tts.spoken) == ["hello"]
+    assert tts.senders is not None and tts.senders.ignored["stranger"] == 1
+    assert tts.too_long.refused["cyborg_speech_gatekeeper"] == 1

@@ -23,7 +23,16 @@ if TYPE_CHECKING:
     from cyborg.app.registry import KindRegistry
     from cyborg.maps import OccupancyMap
 
-__all__ = ["BuildContext", "ModuleContext", "calendar_of", "heard_by"]
+__all__ = ["BuildContext", "ModuleContext", "calendar_of", "heard_by", "relays_of"]
+
+
+def relays_of(config: LoadedConfig) -> dict[str, tuple[str, ...]]:
+    """Each gatekeeper's output topic -> the gatekeepers (node names) that publish on it."""
+    relays: dict[str, tuple[str, ...]] = {}
+    for gate in config.model.gatekeepers:
+        topic = "/" + gate.output.strip().lstrip("/")
+        relays[topic] = (*relays.get(topic, ()), gate.name)
+    return relays
 
 
 @dataclass
@@ -40,6 +49,8 @@ class BuildContext:
     """The controller takes over an emotion stored recently (``cyborg node`` without ``--fresh``)."""
     base_api: BaseApi = BaseApi.ROSARNL
     """The robot base's interface, unless a module's settings name one (nav2's on ROS 2)."""
+    relays: dict[str, tuple[str, ...]] | None = None
+    """Output topic -> the configured gatekeepers that publish on it (None: no configuration)."""
     _map: OccupancyMap | None = field(default=None, repr=False)
     _listening: Listening | None = field(default=None, repr=False)
     _rng: random.Random | None = field(default=None, repr=False)
@@ -65,6 +76,12 @@ class BuildContext:
 
             self._map = load_map(self.map_path or default_world())
         return self._map
+
+    def relays_to(self, topic: str) -> tuple[str, ...] | None:
+        """The configured gatekeepers whose output is ``topic`` (None: built without a configuration)."""
+        if self.relays is None:
+            return None
+        return self.relays.get("/" + topic.strip().lstrip("/"), ())
 
     def listening(self) -> Listening:
         """What the configured modules listen for in speech (nothing when built without a configuration)."""
@@ -93,6 +110,9 @@ class ModuleContext:
 
     def listening(self) -> Listening:
         return self.robot.listening()
+
+    def relays_to(self, topic: str) -> tuple[str, ...] | None:
+        return self.robot.relays_to(topic)
 
 
 def heard_by(config: LoadedConfig, kinds: KindRegistry) -> Callable[[], Listening]:

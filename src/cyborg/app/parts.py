@@ -16,11 +16,12 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from cyborg.app.config import LoadedConfig
-from cyborg.app.context import BuildContext, calendar_of, heard_by
+from cyborg.app.context import BuildContext, calendar_of, heard_by, relays_of
 from cyborg.app.registry import KindRegistry, build_module, module_kinds
 from cyborg.errors import ConfigError
 from cyborg.modules.kind import Component
 from cyborg.navigation.calendar import CalendarEntry
+from cyborg.transport import topics
 from cyborg.transport.base import Transport
 
 if TYPE_CHECKING:
@@ -28,7 +29,7 @@ if TYPE_CHECKING:
 
 __all__ = ["API", "CONTROLLER", "RECORDER", "Part", "build_part", "part_names"]
 
-CONTROLLER = "cyborg_controller"
+CONTROLLER = topics.CONTROLLER_NODE
 API = "cyborg_api"
 RECORDER = "cyborg_recorder"
 
@@ -81,6 +82,8 @@ def build_part(
     if name in model.modules:
         registry = kinds or module_kinds()
         kind, settings = registry.parse(name, model.modules[name], source=config.source)
+        if context.relays is None:
+            context.relays = relays_of(config)
         if context.heard is None:  # only a module that asks (speech input) imports the other kinds
             context.heard = heard_by(config, registry)
         module = build_module(

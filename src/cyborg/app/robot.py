@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from cyborg.app.config import LoadedConfig
-from cyborg.app.context import BuildContext, calendar_of, heard_by
+from cyborg.app.context import BuildContext, calendar_of, heard_by, relays_of
 from cyborg.app.registry import KindRegistry, build_module, module_kinds
 from cyborg.app.tuning import freeze_built, thaw
 from cyborg.app.view import BaseView
@@ -193,7 +193,13 @@ def build_robot(
     """
     registry = kinds or module_kinds()
     store, controller, emotion, motivator = build_controller(config, transport, data_dir)
-    place = BuildContext(data_dir=data_dir, seed=seed, map_path=map_path, heard=heard_by(config, registry))
+    place = BuildContext(
+        data_dir=data_dir,
+        seed=seed,
+        map_path=map_path,
+        heard=heard_by(config, registry),
+        relays=relays_of(config),
+    )
     robot = Robot(transport, config, controller, emotion, motivator, store, place)
     try:
         for name, raw in config.model.modules.items():

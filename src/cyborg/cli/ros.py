@@ -121,6 +121,7 @@ def node(
     except CyborgError as exc:
         fail(exc)
     from cyborg.app.parts import RECORDER
+    from cyborg.run.census import NAME_TAKEN_EXIT, NameTaken
     from cyborg.run.local import default_data_dir
     from cyborg.run.node import ApiOptions, NodeOptions, run_node
     from cyborg.run.scenario import ScenarioFiles
@@ -149,6 +150,9 @@ def node(
             record=record,
         )
         code = run_node(name, options, middleware)
+    except NameTaken as exc:
+        click.secho(f"node {name} refused to start: {exc}", fg="red", err=True)
+        sys.exit(NAME_TAKEN_EXIT)  # a launch stops the robot instead of starting the node again
     except CyborgError as exc:
         fail(exc)
         return

@@ -5,6 +5,7 @@ pure), :mod:`~cyborg.controller.regions` how parallel states' regions step and s
 (pure), :mod:`~cyborg.controller.clashes` the static check that two regions never hold an
 exclusive resource at once (pure), :mod:`~cyborg.controller.config` its YAML schema, and
 :mod:`~cyborg.controller.runtime` the controller that hands control from module to module over
-actions. Drawing it is
+actions, its events waiting in :mod:`~cyborg.controller.intake` (bounded by size and age,
+fair to senders). Drawing it is
 :mod:`cyborg.drawing`'s.
 """

@@ -68,6 +68,11 @@ class TimeoutsModel(BaseModel):
 
     connect: float = Field(2.0, gt=0, description="seconds to wait for a module's action server")
     preempt: float = Field(2.0, gt=0, description="seconds to wait for a module to acknowledge a cancel")
+    event_age: float = Field(
+        10.0,
+        gt=0,
+        description="seconds an event may wait for the controller; an older one is dropped as stale",
+    )
 
 
 class MachineModel(BaseModel):
@@ -229,7 +234,11 @@ def build_machine(
     machine = MachineSpec(
         states=states,
         initial=model.initial,
-        timeouts=Timeouts(connect=model.timeouts.connect, preempt=model.timeouts.preempt),
+        timeouts=Timeouts(
+            connect=model.timeouts.connect,
+            preempt=model.timeouts.preempt,
+            event_age=model.timeouts.event_age,
+        ),
         resource_policy=dict(model.resource_policy),
     )
     for leaf in machine.leaves():

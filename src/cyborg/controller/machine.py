@@ -53,6 +53,7 @@ class ResourcePolicy(enum.StrEnum):
 class Timeouts:
     connect: float = 2.0
     preempt: float = 2.0
+    event_age: float = 10.0  # seconds an event may wait in the controller's queue
 
 
 @dataclass(frozen=True)

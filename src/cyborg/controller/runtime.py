@@ -20,6 +20,12 @@ arbitrated resources are written to ``/state_resources`` (so gatekeepers pass th
 highest-priority holder) and the muted holders are published on ``/cyborg_controller/muted``.
 Events are still handled one at a time: a module's result and an event that arrive together
 are taken in the order they were queued, so the outcome never depends on thread timing.
+
+Events from the topic wait in an :class:`~cyborg.controller.intake.EventIntake`: bounded by
+size and by age (``timeouts.event_age``), each sender in its own line, the lines taking turns,
+so a flood from one sender neither makes the robot replay a minute of stale events nor drops a
+person's event. Drops are counted (``events_overflow``, ``events_stale``,
+``events_superseded``) and logged once per burst and then as one summary every DROP_REPORT_PERIOD seconds.
 """
 
 from __future__ import annotations
@@ -34,6 +40,7 @@ from collections import deque
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
+from cyborg.controller.intake import DropCounter, DropReason, EventIntake, QueuedEvent
 from cyborg.controller.machine import ABORTED, SUCCEEDED, MachineSpec
 from cyborg.controller.regions import Mute, Regions
 from cyborg.transport import topics
@@ -50,6 +57,7 @@ from cyborg.transport.messages import (
 log = logging.getLogger(__name__)
 
 START_EVENT = "start"
+DROP_REPORT_PERIOD = 10.0  # seconds between two summaries of dropped events while they are dropped
 
 _Handle = ClientGoalHandle[StateMachineGoal, StateMachineResult, StateMachineFeedback]
 
@@ -75,6 +83,8 @@ class ControllerStats:
     events_received: int = 0
     events_invalid: int = 0
     events_overflow: int = 0
+    events_stale: int = 0
+    events_superseded: int = 0
     handovers: int = 0
     preempt_timeouts: int = 0
     connect_failures: int = 0
@@ -115,10 +125,12 @@ class Controller:
         self.active_state: str | None = None
         self.previous_state = ""
         self.last_event = ""
-        self._event_queue_size = event_queue_size
-        self._queue: deque[_Event] = deque()
+        self._intake = EventIntake(event_queue_size, machine.timeouts.event_age)
+        self._results: deque[tuple[int, _Event]] = deque()  # module outcomes, by arrival order
+        self._arrivals = 0  # arrival order of what is queued: results and topic events alike
+        self._drops = DropCounter(DROP_REPORT_PERIOD)
+        self._drop_report: asyncio.TimerHandle | None = None
         self._wakeup: asyncio.Event | None = None
-        self._pending_topic_events = 0
         self._clients: dict[
             str, ActionClient[StateMachineGoal, StateMachineResult, StateMachineFeedback]
         ] = {}
@@ -149,6 +161,7 @@ class Controller:
 
     def close(self) -> None:
         """Stop handling events; the module in control keeps its goal (the robot is being stopped)."""
+        self._stop_drop_reports()
         if self._task is not None and not self._task.done():
             self._task.cancel()
 
@@ -164,6 +177,7 @@ class Controller:
 
     async def stop(self) -> None:
         self.phase = Phase.STOPPED
+        self._stop_drop_reports()
         if self._task is not None:
             self._task.cancel()
             with contextlib.suppress(asyncio.CancelledError):
@@ -211,26 +225,62 @@ class Controller:
     def _on_event_message(self, message: String, info: MessageInfo) -> None:
         self.stats.events_received += 1
         name = message.data.strip()
-        if self.phase is Phase.ACTIVE and not self._queue:
-            # Fast path: decide at once whether the event matters.
-            if self.active_state is None or (
+        idle_queue = self.phase is Phase.ACTIVE and not self._intake and not self._results
+        if idle_queue and (
+            self.active_state is None
+            or (
                 self.machine.lookup(self.active_state, name) is None
                 if self._slots is None
                 else not self.regions.takes(self.active_states, name)
-            ):
-                self._drop_invalid(name, info.sender)
-                return
-        elif self._pending_topic_events >= self._event_queue_size:
-            self.stats.events_overflow += 1
-            log.warning(
-                "event %r from %s dropped: %d events already queued",
-                name,
-                info.sender,
-                self._pending_topic_events,
             )
+        ):
+            # Fast path: nothing waits, so whether the event matters is decided at once.
+            self._drop_invalid(name, info.sender)
             return
-        self._pending_topic_events += 1
-        self._push(_Event(name, EventSource.TOPIC))
+        self._arrivals += 1
+        event = QueuedEvent(name, info.sender, self.node.clock.monotonic(), self._arrivals)
+        dropped = self._intake.offer(event)
+        if dropped is not None:
+            self._dropped(dropped, DropReason.OVERFLOW)
+        if dropped is not event and self._wakeup is not None:
+            self._wakeup.set()
+
+    def _dropped(self, event: QueuedEvent, reason: DropReason) -> None:
+        if reason is DropReason.OVERFLOW:
+            self.stats.events_overflow += 1
+        elif reason is DropReason.STALE:
+            self.stats.events_stale += 1
+        else:
+            self.stats.events_superseded += 1
+        if not self._drops.note(reason, event.sender):
+            return
+        why = {
+            DropReason.OVERFLOW: f"{self._intake.size} events already queued, the limit",
+            DropReason.STALE: f"it waited {self.node.clock.monotonic() - event.received_at:.1f} s, "
+            f"over the limit of {self._intake.max_age:g} s (timeouts.event_age)",
+            DropReason.SUPERSEDED: "a newer event of another sender was taken before it",
+        }[reason]
+        log.warning(
+            "event %r from %s dropped: %s; events come faster than the robot takes them: further "
+            "drops are counted (events_overflow, events_stale, events_superseded) and summed up every %g s",
+            event.name,
+            event.sender,
+            why,
+            DROP_REPORT_PERIOD,
+        )
+        self._drop_report = self.node.clock.call_later(DROP_REPORT_PERIOD, self._report_drops)
+
+    def _report_drops(self) -> None:
+        self._drop_report = None
+        summary = self._drops.summary()
+        if summary is not None:
+            log.warning(summary)
+            self._drop_report = self.node.clock.call_later(DROP_REPORT_PERIOD, self._report_drops)
+
+    def _stop_drop_reports(self) -> None:
+        if self._drop_report is not None:
+            self._drop_report.cancel()
+            self._drop_report = None
 
     def _share_transitions(self) -> None:
         """Each state's events in a parameter, for tools that send events from outside."""
@@ -245,9 +295,21 @@ class Controller:
         log.debug("event %r from %s is no transition of %s; dropped", name, sender, self.active_state)
 
     def _push(self, event: _Event) -> None:
-        self._queue.append(event)
+        self._arrivals += 1
+        self._results.append((self._arrivals, event))
         if self._wakeup is not None:
             self._wakeup.set()
+
+    def _next_event(self) -> _Event | None:
+        """A module's outcome or the topic's next event by turn (stale ones dropped), whichever
+        was queued first: so a result and an event that arrive together are taken in arrival order."""
+        topic_first = self._intake.next_order()
+        if self._results and (topic_first is None or self._results[0][0] < topic_first):
+            return self._results.popleft()[1]
+        queued, dropped = self._intake.take(self.node.clock.monotonic())
+        for event, reason in dropped:
+            self._dropped(event, reason)
+        return None if queued is None else _Event(queued.name, EventSource.TOPIC)
 
     def _on_goal_done(self, handle: _Handle, seq: int) -> None:
         if self._slots is not None:
@@ -281,12 +343,11 @@ class Controller:
         self._share_transitions()
         await self._enter(self.machine.enter(self.machine.initial), START_EVENT)
         while True:
-            while not self._queue:
+            event = self._next_event()
+            while event is None:
                 self._wakeup.clear()
                 await self._wakeup.wait()
-            event = self._queue.popleft()
-            if event.source is EventSource.TOPIC:
-                self._pending_topic_events -= 1
+                event = self._next_event()
             await self._handle(event)
 
     async def _handle(self, event: _Event) -> None:
@@ -333,10 +394,8 @@ class Controller:
             deadline - clock.monotonic(),
         )
         self.phase = Phase.ENTERING
-        while not any(
-            e.source is EventSource.TOPIC and self.machine.lookup(state, e.name) is not None
-            for e in self._queue
-        ):
+        wanted = set(self.machine.transitions_of(state))
+        while not self._intake.has(wanted):
             remaining = deadline - clock.monotonic()
             if remaining <= 0:
                 return False

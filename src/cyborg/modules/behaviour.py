@@ -33,6 +33,7 @@ from typing import Any
 
 from cyborg.transport import topics
 from cyborg.transport.base import GoalStatus, MessageInfo, Node, ServerGoalHandle, normalize_node_name
+from cyborg.transport.guards import TextLimit
 from cyborg.transport.messages import (
     EmotionalFeedback,
     EmotionalState,
@@ -221,6 +222,7 @@ class BehaviourModule:
             topics.TEXT_TO_SPEECH, String
         )  # early, so over ROS the first line is heard
         self._crashes = node.publisher(topics.MODULE_CRASHED, String)
+        self._heard_limit = TextLimit(topics.TEXT_FROM_SPEECH)
         node.subscribe(topics.EMOTIONAL_STATE, EmotionalState, self._on_emotion)
 
     def _report_crash(self, action: str, error: BaseException) -> None:
@@ -267,8 +269,16 @@ class BehaviourModule:
 
     def on_speech_text(self, callback: Callable[[str, MessageInfo], None]) -> None:
         """Call ``callback(text, info)`` with every sentence heard (``/text_from_speech``), in any state.
-        Declare what you listen for in your settings' ``listens_for()``."""
-        self.node.subscribe(topics.TEXT_FROM_SPEECH, String, lambda m, i: callback(m.data, i))
+        Declare what you listen for in your settings' ``listens_for()``. A text over the API's
+        limit (:data:`cyborg.limits.MAX_TEXT_LENGTH` characters) is no sentence: it is not passed
+        on (logged once per sender)."""
+        limit = self._heard_limit
+
+        def on_text(message: String, info: MessageInfo) -> None:
+            if limit.accepts(message.data, info.sender):
+                callback(message.data, info)
+
+        self.node.subscribe(topics.TEXT_FROM_SPEECH, String, on_text)
 
     def on_muted(self, callback: Callable[[frozenset[str]], None]) -> None:
         """Call ``callback(resources)`` whenever the resources this node is muted on change.

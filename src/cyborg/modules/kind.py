@@ -144,6 +144,12 @@ class BuildContext(Protocol):
         """What every module of the robot's configuration listens for in speech (its ears' grammar)."""
         ...
 
+    def relays_to(self, topic: str) -> tuple[str, ...] | None:
+        """The gatekeepers (node names) the configuration puts in front of ``topic``: the only
+        nodes an output module on ``topic`` should take messages from (empty: none; None: built
+        without a configuration)."""
+        ...
+
     @property
     def base_api(self) -> BaseApi:
         """The robot base's interface on this graph (ROSARNL's, or nav2's on ROS 2), unless a

@@ -2,7 +2,10 @@
 
 Speaks one sentence at a time from a bounded queue. Every sentence is logged
 and published on ``/cyborg_tts/spoken`` (what the robot actually said, after
-the gatekeeper). With an audio device it speaks through espeak-ng; it can also
+the gatekeeper). It speaks only what a gatekeeper passed: with ``speak_from`` (the
+configured gatekeepers in front of it) a sentence another node publishes on its input
+topic is ignored, and one over the API's text limit too (each logged once per sender).
+With an audio device it speaks through espeak-ng; it can also
 write each sentence to a WAV file. A sentence occupies the speaker for its
 estimated duration on the injected clock, so virtual time behaves like real.
 Registered as the module kind ``tts``.
@@ -23,6 +26,7 @@ from pydantic import Field
 from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
 from cyborg.modules.problems import ProblemReporter
 from cyborg.transport.base import MessageInfo, Node
+from cyborg.transport.guards import OnlyFrom, TextLimit
 from cyborg.transport.messages import String
 from cyborg.transport.topics import SPEECH_INPUT_TOPIC, SPOKEN_TOPIC
 
@@ -90,8 +94,12 @@ class TextToSpeech:
         play_audio: bool | None = None,
         wav_dir: Path | None = None,
         voice: str = "en",
+        speak_from: tuple[str, ...] = (),
     ) -> None:
+        """``speak_from``: the only nodes whose sentences it speaks (empty: any node's)."""
         self.node = node
+        self.senders = OnlyFrom(speak_from, input_topic, "sentences") if speak_from else None
+        self.too_long = TextLimit(input_topic)
         self.queue: deque[str] = deque()
         self.queue_size = queue_size
         self.dropped = 0
@@ -125,8 +133,10 @@ class TextToSpeech:
         self._task.cancel()
 
     def _on_text(self, message: String, info: MessageInfo) -> None:
+        if self.senders is not None and not self.senders.accepts(info.sender):
+            return
         text = message.data.strip()
-        if not text:
+        if not text or not self.too_long.accepts(text, info.sender):
             return
         if len(self.queue) >= self.queue_size:
             self.queue.popleft()
@@ -210,6 +220,7 @@ def _build(node: Node, settings: TtsSettings, context: BuildContext) -> TextToSp
         play_audio=settings.play_audio,
         wav_dir=Path(settings.wav_dir) if settings.wav_dir else None,
         voice=settings.voice,
+        speak_from=context.relays_to(SPEECH_INPUT_TOPIC) or (),
     )
 
 

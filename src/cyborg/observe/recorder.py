@@ -414,7 +414,9 @@ class Recorder:
             elif kind == "problems":
                 for problem in fields["open"]:
                     fix = f"; fix: {problem['fix']}" if problem["fix"] else ""
-                    self._log_entry(f"{problem['problem']}{fix}", str(fields["module"]), LogLevel.Warning, t_ns)
+                    self._log_entry(
+                        f"{problem['problem']}{fix}", str(fields["module"]), LogLevel.Warning, t_ns
+                    )
         except (OSError, RuntimeError) as exc:
             self._fail(exc)
 

@@ -19,6 +19,7 @@ from typing import Any
 
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Node
+from cyborg.transport.guards import OnlyFrom, TextLimit
 from cyborg.transport.messages import EmotionalState, PoseWithCovarianceStamped, String, SystemState
 from cyborg.transport.topics import SPOKEN_TOPIC
 
@@ -55,6 +56,8 @@ class RecordStream:
         self._last_pose: tuple[float, float, float] | None = None
         self._pending_pose: tuple[float, float, float] | None = None
         self._pose_flush: asyncio.TimerHandle | None = None
+        self._long_heard = TextLimit(topics.TEXT_FROM_SPEECH)
+        self._foreign_states = OnlyFrom(topics.CONTROLLER_NODE, topics.STATE_CHANGE, "state changes")
         node.subscribe(topics.STATE_CHANGE, SystemState, self._on_state, queue_size=1000)
         node.subscribe(topics.EMOTIONAL_STATE, EmotionalState, self._on_emotion, queue_size=1000)
         node.subscribe(SPOKEN_TOPIC, String, self._on_spoken, queue_size=1000)
@@ -93,6 +96,8 @@ class RecordStream:
         self.emit("problems", module=module, open=problems)
 
     def _on_state(self, m: SystemState, info: MessageInfo) -> None:
+        if not self._foreign_states.accepts(info.sender):
+            return
         self.emit("state", event=m.event, **{"from": m.from_system_state}, to=m.to_system_state)
 
     def _on_emotion(self, m: EmotionalState, info: MessageInfo) -> None:
@@ -108,7 +113,8 @@ class RecordStream:
         self.emit("say", text=m.data)
 
     def _on_heard(self, m: String, info: MessageInfo) -> None:
-        self.emit("heard", text=m.data)
+        if self._long_heard.accepts(m.data, info.sender):
+            self.emit("heard", text=m.data)
 
     def _on_recognised(self, m: String, info: MessageInfo) -> None:
         try:

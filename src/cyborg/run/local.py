@@ -14,6 +14,7 @@ from cyborg.app.config import LoadedConfig
 from cyborg.app.robot import Robot, build_robot
 from cyborg.observe.recorder import Recorder, RecorderSettings, RunFacts
 from cyborg.observe.records import RecordStream, to_ns
+from cyborg.run.tasks import watch_tasks
 from cyborg.storage import lock_data_dir
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Transport
@@ -124,6 +125,7 @@ def _run(
     async def main() -> None:
         stop_server = await serve(transport, robot) if serve is not None else None
         robot.start()
+        tasks = watch_tasks(clock)  # a module leaking tasks is named (cyborg.run.tasks)
         signalled = _stop_on_signals(clock.loop)
         if duration is None:
             await signalled
@@ -134,6 +136,7 @@ def _run(
             timer.cancel()
         if signalled.done():
             echo(f"{stamp()} {signal.Signals(signalled.result()).name}: stopping")
+        tasks.cancel()
         await robot.controller.stop()
         if stop_server is not None:
             await stop_server()

@@ -28,6 +28,14 @@ from pathlib import Path
 from typing import Any, ClassVar
 
 from cyborg.errors import CyborgError
+from cyborg.run.census import (
+    NameTaken,
+    graph_name,
+    ros1_live_nodes,
+    ros2_domain_problem,
+    taken_message,
+    wait_for_graph,
+)
 from cyborg.run.logs import log_to_file, show_problems_on_stderr
 from cyborg.run.master import Master, master_running, master_uri, start_master
 from cyborg.run.ros2_env import ros2_environment, ros2_python, run_in_ros2_venv
@@ -42,7 +50,7 @@ from cyborg.run.simtime import (
 )
 from cyborg.transport.base import Transport
 from cyborg.transport.clock import Clock
-from cyborg.transport.topics import BaseApi
+from cyborg.transport.topics import CONTROLLER_NODE, BaseApi
 
 __all__ = [
     "ROS1",
@@ -128,7 +136,15 @@ class Middleware(ABC):
 
     @abstractmethod
     def transport(self, clock: Clock, node_name: str, *, use_sim_time: bool = False) -> Transport:
-        """Join the graph as the process of node ``node_name`` (its log set up as the middleware's)."""
+        """Join the graph as the process of node ``node_name`` (its log set up as the middleware's).
+
+        Raises :class:`~cyborg.run.census.NameTaken` when a live node of that name is on the graph
+        (for the controller's node also: a parameter home there), see :mod:`cyborg.run.census`.
+        """
+
+    def graph_name(self) -> str:
+        """Which graph this process joins, for people (the launch's first lines, the dashboard)."""
+        return graph_name(self.name)
 
     @abstractmethod
     def tool_transport(self, clock: Clock) -> Transport:
@@ -185,6 +201,9 @@ class Ros1(Middleware):
 
     def transport(self, clock: Clock, node_name: str, *, use_sim_time: bool = False) -> Transport:
         self._check_master("start roscore, or use `cyborg launch`")
+        live = ros1_live_nodes([node_name], master_uri())
+        if node_name in live:
+            raise NameTaken(taken_message(node_name, self.graph_name(), live[node_name]))
         from cyborg.transport.ros import RosTransport
 
         return RosTransport(clock, process_name=node_name)
@@ -227,10 +246,21 @@ class Ros2(Middleware):
 
     def transport(self, clock: Clock, node_name: str, *, use_sim_time: bool = False) -> Transport:
         self.require()
+        problem = ros2_domain_problem()
+        if problem is not None:
+            raise CyborgError(problem)
         from cyborg.transport.ros2 import Ros2Transport
+        from cyborg.transport.ros2.transport import PARAM_HOME
 
         log_to_file(self.log_file(node_name), node_name)
-        return Ros2Transport(clock, use_sim_time=use_sim_time)
+        transport = Ros2Transport(clock, use_sim_time=use_sim_time)
+        wanted = {node_name, PARAM_HOME} if node_name == CONTROLLER_NODE else {node_name}
+        taken = wait_for_graph(transport.graph_node_names, wanted)
+        if taken:
+            transport.close()
+            name = node_name if node_name in taken else PARAM_HOME
+            raise NameTaken(taken_message(name, self.graph_name(), home=name == PARAM_HOME))
+        return transport
 
     def tool_transport(self, clock: Clock) -> Transport:
         self.require()
@@ -362,6 +392,9 @@ class _Ros2Graph(LaunchGraph):
 
     def open(self, speed: float | None, *, lockstep: bool = False) -> tuple[Rendezvous | None, str | None]:
         ros2_python()  # says how to install ROS 2 when it is not
+        problem = ros2_domain_problem()
+        if problem is not None:
+            raise CyborgError(problem)
         if speed is None:
             return None, None
         self.run_dir = Path(tempfile.mkdtemp(prefix="cyborg-launch-"))

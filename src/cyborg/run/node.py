@@ -30,6 +30,7 @@ from cyborg.errors import CyborgError
 from cyborg.run.middleware import Middleware
 from cyborg.run.scenario import SCENARIO, ScenarioFiles, ScenarioNode
 from cyborg.run.simtime import CLOCK_TOPIC, SimTime, is_simulated_base, publish_clock, wait_for_epoch
+from cyborg.run.tasks import watch_tasks
 from cyborg.transport import topics
 from cyborg.transport.base import Publisher, Transport
 from cyborg.transport.clock import Clock, VirtualClock
@@ -209,14 +210,19 @@ async def serve_node(node: BuiltNode, options: NodeOptions) -> int:
     recorder = _start_recorder(node, options) if node.name == RECORDER else None
     freeze_built()  # what the part built lives as long as the node: out of GC's way (app.tuning)
     controller_task = controller.start() if controller is not None else None
+    tasks = watch_tasks(node.clock)  # a module leaking tasks is named (cyborg.run.tasks)
     click.echo(f"node {node.name} running", err=True)
     if node.scenario is not None:
-        return await _play(node.scenario, stop, node.name)
+        try:
+            return await _play(node.scenario, stop, node.name)
+        finally:
+            tasks.cancel()
     waiter = asyncio.ensure_future(stop.wait())
     await asyncio.wait(
         {waiter, *([controller_task] if controller_task else [])}, return_when=asyncio.FIRST_COMPLETED
     )
     waiter.cancel()
+    tasks.cancel()
     code = 0
     if controller_task is not None and controller_task.done():
         # It logged why (critical). Leave, so that `cyborg launch` (or roslaunch's respawn) starts it again.
@@ -274,12 +280,13 @@ async def _serve_api(node: BuiltNode, options: NodeOptions) -> RobotAPI:
         isinstance(m, dict) and m.get("kind") == "simulated_base" for m in config.model.modules.values()
     )
     mirror = remote_robot(api_node, config, node.context.occupancy_map() if has_base else None)
+    graph = node.middleware.graph_name()  # which graph the dashboard shows: another robot's is not this one
     api = build_api(
         api_node,
         config,
         mirror,
         access=options.api.access,
-        extra_status=lambda: {"emotion_enabled": mirror.emotion_enabled()},
+        extra_status=lambda: {"emotion_enabled": mirror.emotion_enabled(), "graph": graph},
     )
     await start_api(
         api,

@@ -8,6 +8,9 @@ speed the launch fixes the shared origin of virtual time once every node is read
 (:mod:`cyborg.run.simtime`). ``cyborg sim --ros --script FILE`` adds the ``cyborg_scenario``
 node (:mod:`cyborg.run.scenario`).
 
+A node that refuses to start because its name is taken on the graph (another robot there, or a
+node of its name: :mod:`cyborg.run.census`) stops the whole launch with that reason instead.
+
 ``cyborg launch`` keeps the robot running when a node stops: it says so and starts that node again
 (as roslaunch's ``respawn``), after RESPAWN_DELAY seconds, doubled for each stop within
 RESPAWN_STEADY seconds of its start, up to RESPAWN_MAX_DELAY. The controller comes back without
@@ -31,6 +34,7 @@ import click
 from cyborg.app.config import LoadedConfig
 from cyborg.app.parts import API, CONTROLLER
 from cyborg.errors import CyborgError
+from cyborg.run.census import NAME_TAKEN_EXIT
 from cyborg.run.lockstep import TimeServer
 from cyborg.run.middleware import ROS1, LaunchGraph, Middleware, exit_description
 from cyborg.run.simtime import EPOCH_MARGIN, READY_TIMEOUT, Rendezvous, check_virtual_time, clock_owner_of
@@ -41,6 +45,7 @@ __all__ = ["Launch", "launch"]
 RESPAWN_DELAY = 1.0  # seconds before a stopped node is started again
 RESPAWN_STEADY = 10.0  # a node that ran this long before it stopped is started again after RESPAWN_DELAY
 RESPAWN_MAX_DELAY = 30.0  # a node stopping again and again waits at most this long
+REFUSAL_GRACE = 5.0  # seconds a refused node's launch waits for the controller's own reason
 
 
 @dataclass
@@ -132,6 +137,7 @@ class Launch:
             raise CyborgError("lockstep time runs as fast as the graph allows: give no speed with it")
         self._graph = self.middleware.launch_graph(self.data_dir, self.say)
         self._rendezvous, self._epoch_argument = self._graph.open(self.speed, lockstep=self.lockstep)
+        self.say(f"graph: {self.middleware.graph_name()}")
         if self.speed is not None or self.lockstep:
             self._clock_owner = clock_owner_of(self.config, self.parts)
             self.parts.sort(
@@ -193,6 +199,7 @@ class Launch:
         for name, process in list(self.processes.items()):
             if name in ignore or process.poll() is None:
                 continue
+            self._check_refused(name, process)
             due = self._respawn_at.get(name)
             if due is None:
                 ran = now - self._started_at.get(name, now)
@@ -214,8 +221,29 @@ class Launch:
     def check_alive(self, ignore: Sequence[str] = ()) -> None:
         """Raise a :class:`CyborgError` naming the nodes that stopped (not ``ignore``)."""
         failed = [n for n, p in self.processes.items() if n not in ignore and p.poll() is not None]
+        for name in failed:
+            self._check_refused(name, self.processes[name])
         if failed:
             raise CyborgError(f"node(s) stopped: {', '.join(failed)}; the whole robot is stopped too")
+
+    def _check_refused(self, name: str, process: subprocess.Popen[bytes]) -> None:
+        """Raise a :class:`CyborgError` when node ``name`` refused to start: its name is taken."""
+        if process.returncode != NAME_TAKEN_EXIT:
+            return
+        graph = self.middleware.graph_name()
+        controller = self.processes.get(CONTROLLER)
+        if controller is not None and name != CONTROLLER:
+            # Its reason says more (another robot's controller, a leftover parameter home): wait
+            # for it, as long as a node takes to look at the graph.
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                controller.wait(timeout=REFUSAL_GRACE)
+        raise CyborgError(
+            f"node {name} refused to start: {graph} is taken (the reasons are above: another robot "
+            "runs there, a part of this robot was started by hand, or a node was left over); the whole "
+            "robot is stopped; fix: stop that robot or node, or give this robot a graph of its own "
+            "(ROS 2: ROS_DOMAIN_ID=N, one per robot; ROS 1: ROS_MASTER_URI=http://localhost:PORT; "
+            "docs/security.md)"
+        )
 
     def wait(
         self, *, until: str | None = None, timeout: float | None = None, virtual: float | None = None

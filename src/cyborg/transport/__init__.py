@@ -9,6 +9,8 @@
   :mod:`~cyborg.transport.graph`: what a ROS graph holds at one moment (``cyborg doctor``);
 - :mod:`~cyborg.transport.embedded`: the in-process graph (the default, also the test fake);
   :mod:`~cyborg.transport.ros` (ROS 1) and :mod:`~cyborg.transport.ros2` (ROS 2);
+- :mod:`~cyborg.transport.guards`: what a subscriber believes of the graph (one sender only,
+  texts within the API's limit);
 - what they share: :mod:`~cyborg.transport._queue` (subscription queues),
   :mod:`~cyborg.transport._goals` (a client's goal handle), :mod:`~cyborg.transport._callbacks`
   (running a component's callback), :mod:`~cyborg.transport._host` and

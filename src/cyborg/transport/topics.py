@@ -6,6 +6,8 @@ exactly the names existing Cyborg modules use.
 
 import enum
 
+CONTROLLER_NODE = "cyborg_controller"
+"""The controller's node: the only publisher of state changes that observers believe."""
 REGISTER_EVENT = "/cyborg_controller/register_event"
 STATE_CHANGE = "/cyborg_controller/state_change"
 STATE_RESOURCES_PARAM = "/state_resources"

@@ -24,7 +24,10 @@ from cyborg.web.api import RobotAPI
 from cyborg.web.dashboard import register as register_dashboard
 from cyborg.web.lookback import register as register_lookback
 
-__all__ = ["EXTENSIONS", "build_api", "serve_api", "start_api"]
+__all__ = ["EXTENSIONS", "IN_PROCESS_GRAPH", "build_api", "serve_api", "start_api"]
+
+IN_PROCESS_GRAPH = "in this process (no ROS graph)"
+"""The status's ``graph`` of the in-process robot (a ROS node's names its domain or master)."""
 
 Stop = Callable[[], Awaitable[None]]
 
@@ -103,6 +106,7 @@ def serve_api(
                 "emotion_enabled": robot.emotion.enabled,
                 "storage": robot.store.save_status.as_json(),
                 "blocked": robot.loop_blocked(),
+                "graph": IN_PROCESS_GRAPH,
             },
             settle=robot.store.flush,
         )

@@ -40,6 +40,11 @@ STATUS_SCHEMA: dict[str, Any] = {
         "dominance": {"type": "number"},
         "valid_events": {"type": "array", "items": {"type": "string"}},
         "time": {"type": "number", "description": "robot clock, seconds since the epoch"},
+        "graph": {
+            "type": "string",
+            "description": "the graph the robot's parts meet on: 'in this process (no ROS graph)', "
+            "'ROS 1 master URI' or 'ROS 2 domain N (discovery: ...)'",
+        },
         "storage": {
             "type": "object",
             "nullable": True,

@@ -28,6 +28,7 @@ from cyborg.maps import OccupancyMap
 from cyborg.storage import SaveStatus
 from cyborg.transport import topics
 from cyborg.transport.base import GoalStatus, MessageInfo, Node, Publisher
+from cyborg.transport.guards import OnlyFrom
 from cyborg.transport.messages import PoseWithCovarianceStamped, String, SystemState
 
 log = logging.getLogger(__name__)
@@ -49,7 +50,9 @@ async def publish_controller_stats(publisher: Publisher[String], controller: Con
 
 class ControllerMirror:
     """Follows ``state_change`` (active and previous state, last event) and the controller's
-    counters on ``/cyborg_controller/stats``; until those arrive it counts handovers itself."""
+    counters on ``/cyborg_controller/stats``; until those arrive it counts handovers itself.
+    Only the controller's node is believed: a state change another node publishes (a stranger,
+    another robot on the graph) is counted in ``foreign`` and logged once per sender."""
 
     def __init__(self, node: Node) -> None:
         self.node = node
@@ -60,6 +63,7 @@ class ControllerMirror:
         self.stats = ControllerStats()
         self.last_feedback_at: dict[str, float] = {}  # not published under ROS
         self._listeners: list[Callable[[SystemState], None]] = []
+        self.foreign = OnlyFrom(topics.CONTROLLER_NODE, topics.STATE_CHANGE, "state changes")
         node.subscribe(topics.STATE_CHANGE, SystemState, self._on_change, queue_size=1000)
         node.subscribe(topics.CONTROLLER_STATS, String, self._on_stats, queue_size=10)
 
@@ -71,6 +75,8 @@ class ControllerMirror:
         self._listeners.append(listener)
 
     def _on_change(self, message: SystemState, info: MessageInfo) -> None:
+        if not self.foreign.accepts(info.sender):
+            return
         self.previous_state, self.active_state = message.from_system_state, message.to_system_state
         self.last_event = message.event
         self.stats.handovers += 1

@@ -275,6 +275,12 @@ class Ros2Transport(Transport):
             raise TransportError("the ROS 2 transport is closed; fix: make a new Ros2Transport")
         return self._probe
 
+    def graph_node_names(self) -> set[str]:
+        """The names of the nodes the graph shows now in the root namespace (discovery fills it
+        over time), this process's included."""
+        probe = self._graph_probe()
+        return {name for name, namespace in probe.get_node_names_and_namespaces() if namespace == "/"}
+
     @staticmethod
     def _count_nodes(probe: RclNode, name: str, namespace: str) -> int:
         return sum(1 for n, ns in probe.get_node_names_and_namespaces() if (n, ns) == (name, namespace))
@@ -409,7 +415,9 @@ class Ros2Transport(Transport):
             client.remove_pending_request(future)
             raise TransportError(
                 f"could not {what}: the parameter home /{PARAM_HOME} did not answer within {PARAM_TIMEOUT} s; "
-                "fix: start the controller's node (it hosts the parameters)"
+                "fix: start the controller's node (it hosts the parameters); if it runs, the node of "
+                "that name on this graph is another robot's or a leftover: stop it, or give this robot "
+                "a ROS_DOMAIN_ID of its own"
             )
         return future.result()
 

@@ -237,6 +237,7 @@
   async function refreshStatus() {
     try {
       const status = await getJSON("/api/status");
+      $("top-graph").textContent = status.graph || "–";
       applyStatus({ valid_events: status.valid_events, state: status.state,
         previous_state: status.previous_state, event: status.event });
       if (status.problems) {
@@ -596,12 +597,12 @@
     const stats = $("health-stats");
     stats.replaceChildren();
     const labels = {
-      events_received: "events", events_invalid: "invalid", events_overflow: "overflow",
+      events_received: "events", events_invalid: "invalid", events_overflow: "overflow", events_stale: "stale", events_superseded: "superseded",
       handovers: "handovers", preempt_timeouts: "preempt timeouts",
       connect_failures: "connect failures", succeeded_fallbacks: "fallbacks",
       retries_delayed: "retries paused", resource_grants: "grants", resource_mutes: "mutes",
     };
-    const bad = new Set(["events_overflow", "preempt_timeouts", "connect_failures", "retries_delayed"]);
+    const bad = new Set(["events_overflow", "events_stale", "preempt_timeouts", "connect_failures", "retries_delayed"]);
     for (const [key, value] of Object.entries(health.stats)) {
       const chip = el("span", `stat${bad.has(key) && value ? " bad" : ""}`, `${labels[key] || key} `);
       chip.append(el("b", "", String(value)));
