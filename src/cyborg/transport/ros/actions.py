@@ -49,6 +49,10 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 SERVER_SILENCE_LIMIT = 1.0  # seconds without a status message before an action server counts as gone
+LOCKSTEP_SILENCE_LIMIT = 5.0
+"""Real seconds of silence in lockstep time: the server's status timer thread runs only when the
+machine gives it the CPU, and the granted time may race ahead meanwhile (3 CPU hogs beside a
+lockstep run starved it for over a second and a live server's goal ended LOST)."""
 WATCHDOG_PERIOD = 0.2
 LOCKSTEP_WATCHDOG_PERIOD = 2.0  # lockstep time: a look every 0.2 s would be most of a run's time steps
 
@@ -263,9 +267,10 @@ class _WatchedActionClient(actionlib.ActionClient):  # type: ignore[misc]
     def silent(self) -> bool:
         """No status for SERVER_SILENCE_LIMIT real seconds (with lockstep time: and virtual ones,
         as the server's status timer runs on the granted time, which may stand still a while)."""
-        if time.monotonic() - self.last_status_time <= SERVER_SILENCE_LIMIT:
-            return False
         clock = self.lockstep_clock
+        limit = SERVER_SILENCE_LIMIT if clock is None else LOCKSTEP_SILENCE_LIMIT
+        if time.monotonic() - self.last_status_time <= limit:
+            return False
         return clock is None or clock.monotonic() - self.last_status_virtual > SERVER_SILENCE_LIMIT
 
 

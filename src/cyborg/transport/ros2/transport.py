@@ -79,6 +79,7 @@ log = logging.getLogger(__name__)
 
 PARAM_HOME = "cyborg_parameters"
 PARAM_TIMEOUT = 2.0  # seconds a parameter read or write waits for the home's answer
+LOCKSTEP_PARAM_TIMEOUT = 10.0  # the same in lockstep time, which stands still meanwhile
 EXECUTOR_THREADS = 32  # an action goal being executed holds one thread while it runs
 NODE_GONE_WAIT = 1.0  # seconds a node's shutdown waits until the graph has lost it
 CONNECT_POLL_PERIOD = 0.05  # seconds between two looks at the graph in wait_for_connections
@@ -403,18 +404,20 @@ class Ros2Transport(Transport):
                 srv, f"/{PARAM_HOME}/{service}", callback_group=ReentrantCallbackGroup()
             )
         started = time.monotonic()
+        # In lockstep the time stands still while this waits: a loaded machine may take longer.
+        limit = LOCKSTEP_PARAM_TIMEOUT if self.clock.is_lockstep else PARAM_TIMEOUT
         # A client made a moment ago may not have discovered the home's service yet: a request
         # sent before that goes nowhere.
         if not client.service_is_ready():
-            client.wait_for_service(timeout_sec=PARAM_TIMEOUT)
+            client.wait_for_service(timeout_sec=limit)
         done = threading.Event()
         future = client.call_async(request)
         future.add_done_callback(lambda _: done.set())
         self.executor.wake()
-        if not done.wait(max(0.0, PARAM_TIMEOUT - (time.monotonic() - started))) or future.result() is None:
+        if not done.wait(max(0.0, limit - (time.monotonic() - started))) or future.result() is None:
             client.remove_pending_request(future)
             raise TransportError(
-                f"could not {what}: the parameter home /{PARAM_HOME} did not answer within {PARAM_TIMEOUT} s; "
+                f"could not {what}: the parameter home /{PARAM_HOME} did not answer within {limit:g} s; "
                 "fix: start the controller's node (it hosts the parameters); if it runs, the node of "
                 "that name on this graph is another robot's or a leftover: stop it, or give this robot "
                 "a ROS_DOMAIN_ID of its own"
