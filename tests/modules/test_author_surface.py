@@ -19,6 +19,7 @@ MODULE_NAMES = [
     "ModuleSettings",
     "Node",
     "Outcome",
+    "ProblemReporter",
 ]
 
 
