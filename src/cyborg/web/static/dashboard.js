@@ -603,11 +603,21 @@
       retries_delayed: "retries paused", resource_grants: "grants", resource_mutes: "mutes",
     };
     const bad = new Set(["events_overflow", "events_stale", "preempt_timeouts", "connect_failures", "retries_delayed"]);
+    // The counters that say something: events and handovers always, the others once not zero
+    // (the tooltip lists every one), so the event log keeps its room.
+    const always = new Set(["events_received", "handovers"]);
+    if ((health.regions || []).length) ["resource_grants", "resource_mutes"].forEach((key) => always.add(key));
+    const zero = [];
     for (const [key, value] of Object.entries(health.stats)) {
+      if (!value && !always.has(key)) {
+        zero.push(labels[key] || key);
+        continue;
+      }
       const chip = el("span", `stat${bad.has(key) && value ? " bad" : ""}`, `${labels[key] || key} `);
       chip.append(el("b", "", String(value)));
       stats.append(chip);
     }
+    stats.title = zero.length ? `0: ${zero.join(", ")}` : "";
 
     const lanesBefore = JSON.stringify(dash.lanes || []);
     renderRegions(health.regions || []);
