@@ -118,12 +118,13 @@ def test_work_that_waits_for_the_instant_to_settle_runs_after_every_message_of_i
     assert order == ["taken by b", "b settled at 0.1", "a at 0.2"]
 
 
-def test_a_node_outside_the_lockstep_is_named_and_the_time_waits_for_quiet(
+def test_a_node_outside_the_lockstep_is_named_and_the_time_waits_while_they_talk(
     server: TimeServer, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """A reports the graph: a student's node that is not in the lockstep is named to every node,
-    and no new time comes while it is on the graph and the graph is not quiet (a window of an hour
-    here); once it has left, the time moves on."""
+    """A reports the graph: a student's node outside the lockstep is named to every node. While it
+    only sits there the time runs as fast as ever; once A sends a goal to a server outside the
+    lockstep, no new time comes until the graph is quiet (a window of an hour here); once the
+    node has left, the time moves on."""
     import cyborg.run.lockstep as server_module
     import cyborg.transport.lockstep as node_module
 
@@ -133,26 +134,38 @@ def test_a_node_outside_the_lockstep_is_named_and_the_time_waits_for_quiet(
     a, b = LockstepClock(server.address), LockstepClock(server.address)
     named: list[tuple[str, ...]] = []
     b.on_foreign.append(named.append)
-    reached: list[float] = []
+    reached: list[tuple[str, float]] = []
+    looks: list[int] = []
+
+    def names() -> list[str]:
+        looks.append(1)
+        return list(graph)
+
+    a.watch_graph(names)
+    deadline = time.monotonic() + 10
+    while len(looks) < 2 and time.monotonic() < deadline:  # its first look is in before the time starts
+        time.sleep(0.01)
 
     async def main_a() -> None:
-        a.watch_graph(lambda: list(graph))
         await asyncio.sleep(0.1)
-        reached.append(a.monotonic())
+        reached.append(("a", a.monotonic()))
+        a.ledger.sent("/student_module/act#goal")  # no server in the lockstep: one outside
+        await asyncio.sleep(0.1)
+        reached.append(("a", a.monotonic()))
 
     async def main_b() -> None:
-        await asyncio.sleep(0.2)
-        reached.append(b.monotonic())
+        await asyncio.sleep(0.3)
+        reached.append(("b", b.monotonic()))
 
     threads = [run_node(a, "a", main_a), run_node(b, "b", main_b)]
     deadline = time.monotonic() + 10
-    while not named and time.monotonic() < deadline:
+    while not (named and reached) and time.monotonic() < deadline:
         time.sleep(0.02)
     time.sleep(0.3)
     assert named == [("student_module",)] and server.foreign == ("student_module",)
-    assert reached == [] and server.time_ns == 0, "the time waited for the quiet window"
+    assert reached == [("a", 0.1)] and server.time_ns == 100_000_000, "the time waited for quiet"
     graph.remove("student_module")
     for thread in threads:
         thread.join(timeout=30)
     assert named == [("student_module",), ()]
-    assert reached == [0.1, 0.2] and server.foreign_seen == {"student_module"}
+    assert reached == [("a", 0.1), ("a", 0.2), ("b", 0.3)] and server.foreign_seen == {"student_module"}

@@ -46,8 +46,14 @@ log = logging.getLogger(__name__)
 PATIENCE = 2.0  # real seconds a short channel may stay short while every node is idle
 FOREIGN_QUIET = 0.1
 """Real seconds without a report before a new time, while nodes outside the lockstep are on the
-graph: they follow /clock, and may still be answering what they received."""
+graph and talking with it: they follow /clock, and may still be answering what they received."""
+FOREIGN_TALK = 5.0
+"""Real seconds a conversation with the outside counts as going on: since a message came from
+outside the lockstep, or a goal, cancel or request went to a server outside it."""
 SURPLUS_SETTLE = 0.05  # real seconds without a report before a surplus counts as from outside
+
+
+_TO_A_SERVER = ("#goal", "#cancel", "#request", "#get_result")
 
 
 def _infrastructure(name: str, ours: set[str]) -> bool:
@@ -109,6 +115,7 @@ class TimeServer:
         self.foreign: tuple[str, ...] = ()
         """Nodes on the graph that do not take part in the lockstep (a plain rospy/rclpy node)."""
         self.foreign_seen: set[str] = set()
+        self._outside_until = 0.0  # a conversation with the outside goes on until then (monotonic)
         self.written_off: Counter[str] = Counter()
         """Messages written off per channel (short channels; surpluses are not counted here)."""
         self._offset: Counter[str] = Counter()
@@ -205,6 +212,8 @@ class TimeServer:
             participant.sent[channel] += count
             self._sent[channel] += count
             touched.add(channel)
+            if count > 0 and channel.endswith(_TO_A_SERVER) and not self._listeners.get(channel, (0,))[0]:
+                self._outside_until = time.monotonic() + FOREIGN_TALK  # to a server outside the lockstep
         for channel, count in message.get("recv", {}).items():
             participant.received[channel] += count
             self._received[channel] += count
@@ -228,9 +237,9 @@ class TimeServer:
         self.foreign_seen.update(foreign)
         if foreign:
             log.warning(
-                "lockstep: not lockstepped: %s (on the graph, not taking part): the time waits %.1f s "
-                "of quiet real time before each new time while they are there; a module built on "
-                "cyborg.modules takes part when `cyborg launch` runs it (docs/lockstep.md)",
+                "lockstep: not lockstepped: %s (on the graph, not taking part): while they talk with the "
+                "robot, the time waits %.1f s of quiet real time before each new time; a module built "
+                "on cyborg.modules takes part when `cyborg launch` runs it (docs/lockstep.md)",
                 ", ".join(foreign),
                 FOREIGN_QUIET,
             )
@@ -320,6 +329,7 @@ class TimeServer:
             if time.monotonic() - self._last_report < SURPLUS_SETTLE:
                 self._short_since = None
                 return
+            self._outside_until = time.monotonic() + FOREIGN_TALK
             for channel, difference in surplus.items():
                 self._write_off(channel, difference)
                 log.debug("lockstep: %d message(s) on %s from outside the lockstep", difference, channel)
@@ -342,8 +352,9 @@ class TimeServer:
             )
         self._short_since = None
         holding = any(p.pending for p in participants if p.name)
-        quiet = time.monotonic() - self._last_report >= FOREIGN_QUIET
-        if self.foreign and not holding and not quiet:
+        now = time.monotonic()
+        talking = self.foreign and now < self._outside_until
+        if talking and not holding and now - self._last_report < FOREIGN_QUIET:
             return  # a node outside the lockstep may still be answering at this time
         settling = not holding and any(p.settle for p in participants if p.name)
         if holding or settling:
