@@ -17,6 +17,8 @@ from pathlib import Path
 
 import pytest
 
+from cyborg.app.config import load_config, packaged_config
+from cyborg.app.parts import part_names
 from tests.support.paths import ROOT
 from tests.support.sound import alsa_home
 
@@ -49,5 +51,6 @@ def test_the_bring_up_guide_commands_that_can_run_here_do(tmp_path: Path) -> Non
     out = done.stdout
     assert "robot.yaml: valid" in out and "all checks passed" in out
     assert "cafeteria" in out  # the imported places, and the lunch at the cafeteria
-    assert (tmp_path / "robot.launch").read_text().count("<node ") == 14
+    parts = part_names(load_config(packaged_config("robot.yaml")))  # the recorder and the API too
+    assert (tmp_path / "robot.launch").read_text().count("<node ") == len(parts)
     assert "ExecStart=" in (tmp_path / "cyborg.service").read_text()
