@@ -76,7 +76,7 @@ def test_a_scripted_run_over_ros_in_simulated_time_ends_without_a_traceback(
     often, and a tick that came after its node's publishers were gone printed "the motivator's
     decision failed" with a traceback at every stop. A node now closes its part first."""
     command = [sys.executable, "-m", "cyborg.cli", "sim", "--ros", "--script", str(SCENARIO_D)]
-    command += ["--speed", "25", "--db", str(tmp_path / "data")]
+    command += ["--speed", "max", "--db", str(tmp_path / "data")]  # lockstep: no load changes the script
     done = subprocess.run(command, capture_output=True, text=True, timeout=300)
     output = done.stdout + done.stderr
     assert done.returncode == 0, output[-3000:]

@@ -50,6 +50,8 @@ __all__ = ["Check", "CheckStatus", "DoctorReport", "run_doctor"]
 
 WAIT = 2.0
 """Seconds the doctor waits for a server, a pose or discovery before a check fails."""
+ROS2_WAIT = 5.0
+"""The same on ROS 2, where discovery of a new client's server took over 2 s on a loaded machine."""
 POSE_WINDOW = 1.0
 """Seconds of pose messages the rate is measured over."""
 MIN_FREE_MB = 200.0
@@ -262,6 +264,7 @@ class GraphDoctor:
         self.node = node
         self.graph = graph
         self.ros2 = middleware.discovers_late
+        self.wait = ROS2_WAIT if self.ros2 else WAIT
         self.launch = " ".join(["cyborg launch", *middleware.node_arguments])
         self.joined = 0.0
         """Seconds it took to join the graph (counted to the graph's check)."""
@@ -297,7 +300,7 @@ class GraphDoctor:
             where = "ROS_DOMAIN_ID (and ROS_AUTOMATIC_DISCOVERY_RANGE)" if self.ros2 else "ROS_MASTER_URI"
             reach = _failed(
                 "graph",
-                f"no node seen within {WAIT:g} s",
+                f"no node seen within {self.wait:g} s",
                 f"start the robot (`{self.launch} --config {self.needs.config.source}`), or set {where} "
                 "as the robot's nodes have it",
             )
@@ -325,7 +328,7 @@ class GraphDoctor:
         return serving, [n for n in serving if view.alive(n)]
 
     async def _action(self, action: str, state: str) -> Judge:
-        up = await self.node.action_client(action, StateMachineAction).wait_for_server(WAIT)
+        up = await self.node.action_client(action, StateMachineAction).wait_for_server(self.wait)
 
         def judge(view: GraphView) -> Check:
             name = f"state {state}: action server {action}"
@@ -363,7 +366,7 @@ class GraphDoctor:
         return waits
 
     async def _base_action(self, action: str, kind: Any, fix: str) -> Judge:
-        up = await self.node.action_client(action, kind).wait_for_server(WAIT)
+        up = await self.node.action_client(action, kind).wait_for_server(self.wait)
 
         def judge(view: GraphView) -> Check:
             name = f"robot base: action {action}"
@@ -375,7 +378,7 @@ class GraphDoctor:
         return judge
 
     async def _base_service(self, service: str, fix: str) -> Judge:
-        up = await self.node.service_proxy(service, EmptyService).wait_for_service(WAIT)
+        up = await self.node.service_proxy(service, EmptyService).wait_for_service(self.wait)
 
         def judge(view: GraphView) -> Check:
             name = f"robot base: service {service}"
@@ -392,7 +395,7 @@ class GraphDoctor:
             topics.AMCL_POSE, PoseWithCovarianceStamped, lambda m, i: stamps.append(time.monotonic())
         )
         try:
-            deadline = time.monotonic() + WAIT
+            deadline = time.monotonic() + self.wait
             while not stamps and time.monotonic() < deadline:
                 await asyncio.sleep(0.05)
             first = len(stamps)
@@ -406,7 +409,9 @@ class GraphDoctor:
             name = f"robot base: pose {topics.AMCL_POSE}"
             publishers = [n for n in view.publishers_of(topics.AMCL_POSE) if view.alive(n)]
             if not stamps or not publishers:
-                return _failed(name, f"no pose within {WAIT:g} s: the robot does not know where it is", fix)
+                return _failed(
+                    name, f"no pose within {self.wait:g} s: the robot does not know where it is", fix
+                )
             still = " (a pose only when it moves: standing still?)" if rate < 1 else ""
             return _passed(name, f"from {', '.join(publishers)}, {rate:.1f} Hz{still}")
 
