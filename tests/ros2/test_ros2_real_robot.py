@@ -201,9 +201,23 @@ def test_ros2_real_robot_guides_a_person_with_an_rclpy_base(
         mark = len(states)
         speech.publish(String("hello"))
         wait("the conversation", lambda: any(to == "conversation" for _, _, to in states[mark:]), 20)
-        heard = len(said)
-        speech.publish(String("where is the cafeteria"))
-        wait("the offer", lambda: any("show you" in s for s in said[heard:]), 20)
+        # As a person would: asked while the robot asks its own question (the conversation module
+        # may start one at once, sooner on a loaded machine), the question is asked again once
+        # the robot is back in the conversation.
+        for attempt in range(3):
+            wait("the conversation", lambda: bool(states) and states[-1][2] == "conversation", 40)
+            heard = len(said)
+            speech.publish(String("where is the cafeteria"))
+
+            def offered(since: int = heard) -> bool:
+                return any("show you" in s for s in said[since:])
+
+            try:
+                wait("the offer", offered, 20)
+                break
+            except AssertionError:
+                if attempt == 2:
+                    raise
         speech.publish(String("yes"))
         wait(
             "the trip", lambda: ("navigation_moving", "succeeded", "navigation_talking") in states[mark:], 40
