@@ -38,6 +38,19 @@ def run_node(clock: LockstepClock, name: str, main: Callable[[], object]) -> thr
     return thread
 
 
+def send_late(a: LockstepClock, b: LockstepClock, order: list[str], *, say_delivered: bool = False) -> None:
+    """A counts a message out on /chat; it reaches B 0.3 real seconds later."""
+
+    def deliver_late() -> None:
+        time.sleep(0.3)
+        if say_delivered:
+            order.append("delivered")
+        b.deliver("/chat", "a", order.append, "taken by b", counted=("/chat",))
+
+    a.ledger.sent("/chat")
+    threading.Thread(target=deliver_late, daemon=True).start()
+
+
 def test_every_node_reads_the_times_its_timers_are_due(server: TimeServer) -> None:
     fired: dict[str, list[float]] = {"a": [], "b": []}
     clocks = {name: LockstepClock(server.address) for name in fired}
@@ -65,15 +78,9 @@ def test_the_time_waits_for_a_message_on_its_way(server: TimeServer) -> None:
     b.ledger.listen("/chat", Channel.BROADCAST)
     order: list[str] = []
 
-    def deliver_late() -> None:
-        time.sleep(0.3)
-        order.append("delivered")
-        b.deliver("/chat", "a", order.append, "taken by b", counted=("/chat",))
-
     async def main_a() -> None:
         await asyncio.sleep(0.1)
-        a.ledger.sent("/chat")
-        threading.Thread(target=deliver_late, daemon=True).start()
+        send_late(a, b, order, say_delivered=True)
         await asyncio.sleep(0.1)
         order.append(f"a at {a.monotonic():.1f}")
 
@@ -95,14 +102,9 @@ def test_work_that_waits_for_the_instant_to_settle_runs_after_every_message_of_i
     b.ledger.listen("/chat", Channel.BROADCAST)
     order: list[str] = []
 
-    def deliver_late() -> None:
-        time.sleep(0.3)
-        b.deliver("/chat", "a", order.append, "taken by b", counted=("/chat",))
-
     async def main_a() -> None:
         await asyncio.sleep(0.1)
-        a.ledger.sent("/chat")
-        threading.Thread(target=deliver_late, daemon=True).start()
+        send_late(a, b, order)
         await asyncio.sleep(0.1)
         order.append(f"a at {a.monotonic():.1f}")
 

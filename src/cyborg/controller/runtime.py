@@ -441,13 +441,7 @@ class Controller:
                     topics.STATE_RESOURCES_PARAM,
                     state,
                 )
-            change = SystemState(event=event, from_system_state=previous, to_system_state=state)
-            self._state_pub.publish(change)
-            for listener in self._listeners:
-                try:
-                    listener(change)
-                except Exception:
-                    log.exception("state listener failed")
+            self._announce(SystemState(event=event, from_system_state=previous, to_system_state=state))
             if (handle := await self._send_goal(state, event, previous, self._goal_seq)) is not None:
                 self._goal = handle
                 self._goal_sent_at = self.node.clock.monotonic()
@@ -463,6 +457,15 @@ class Controller:
 
     def _on_feedback(self, action: str) -> None:
         self.last_feedback_at[action.lstrip("/")] = self.node.clock.now()
+
+    def _announce(self, change: SystemState) -> None:
+        """Publish a state change and tell this process's listeners (one that raises is logged)."""
+        self._state_pub.publish(change)
+        for listener in self._listeners:
+            try:
+                listener(change)
+            except Exception:
+                log.exception("state listener failed")
 
     async def _send_goal(self, state: str, event: str, previous: str, seq: int) -> _Handle | None:
         action = self.machine.states[state].action
@@ -560,13 +563,9 @@ class Controller:
         for i in indices:
             self._goal_seq += 1
             slots[i].seq, slots[i].goal = self._goal_seq, None
-            change = SystemState(event=event, from_system_state=previous[i], to_system_state=slots[i].leaf)
-            self._state_pub.publish(change)
-            for listener in self._listeners:
-                try:
-                    listener(change)
-                except Exception:
-                    log.exception("state listener failed")
+            self._announce(
+                SystemState(event=event, from_system_state=previous[i], to_system_state=slots[i].leaf)
+            )
         sends = [self._send_goal(slots[i].leaf, event, previous[i], slots[i].seq) for i in indices]
         sent = [await sends[0]] if len(sends) == 1 else await asyncio.gather(*sends)
         now = self.node.clock.monotonic()
