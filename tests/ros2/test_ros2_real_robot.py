@@ -25,6 +25,8 @@ from pathlib import Path
 
 import pytest
 
+from cyborg.app.config import load_config, packaged_config
+from cyborg.app.parts import CONTROLLER
 from cyborg.maps import default_map_path, load_map
 from cyborg.transport import topics
 from cyborg.transport.messages import PoseWithCovarianceStamped, String, SystemState
@@ -185,6 +187,11 @@ def test_ros2_real_robot_guides_a_person_with_an_rclpy_base(
             session.clock.run(until(what, condition, timeout))
 
         wait("idle", lambda: any(to == "idle" for _, _, to in states), 90)
+        # The robot is idle once the controller and the idle module are up; the heavier nodes
+        # (navigation loads its places and its understanding) may still be starting.
+        robot = load_config(packaged_config("robot.yaml")).model
+        parts = {CONTROLLER, *robot.modules, *(g.name for g in robot.gatekeepers)}
+        wait("every node", lambda: parts <= session.transport.graph_node_names(), 90)
 
         # The doctor passes on the launched graph.
         doctor = [sys.executable, "-m", "cyborg.cli", "doctor", "--ros2", *where[:4], "--json"]
