@@ -13,6 +13,7 @@ from cyborg.transport.embedded import EmbeddedTransport
 TESTS = Path(__file__).resolve().parent
 FOLDER_MARKERS = {"ros": pytest.mark.ros, "ros2": pytest.mark.ros2}
 """Every test in these folders needs that middleware (pyproject.toml lists the markers)."""
+NESTED_ROS2_TEST = "test_in_ros2_venv.py::test_ros2_tests_pass_in_their_venv"
 
 
 @pytest.hookimpl(tryfirst=True)  # before -m deselects by marker
@@ -22,6 +23,22 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
             marker = FOLDER_MARKERS.get(item.path.relative_to(TESTS).parts[0])
             if marker is not None:
                 item.add_marker(marker)
+
+
+def pytest_collection_finish(session: pytest.Session) -> None:
+    """Start the nested ROS 2 run at once when it is selected: it runs beside the rest."""
+    if any(item.nodeid.endswith(NESTED_ROS2_TEST) for item in session.items):
+        from tests.ros2.test_in_ros2_venv import start_nested_lane
+
+        start_nested_lane(session.config)
+
+
+def pytest_unconfigure(config: pytest.Config) -> None:
+    from tests.ros2.test_in_ros2_venv import LANE
+
+    lane = config.stash.get(LANE, None)
+    if lane is not None:
+        lane.stop()
 
 
 @pytest.fixture

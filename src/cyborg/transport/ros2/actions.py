@@ -30,6 +30,7 @@ from rclpy.action import ActionClient as RclActionClient
 from rclpy.action import ActionServer as RclActionServer
 from rclpy.action import CancelResponse, GoalResponse
 from rclpy.action.client import ClientGoalHandle as RclClientGoalHandle
+from rclpy.action.server import RCLError
 from rclpy.node import Node as RclNode
 from std_msgs.msg import String as RosString
 from unique_identifier_msgs.msg import UUID
@@ -69,6 +70,9 @@ CANCEL_SETTLE = 1.0  # seconds the execute thread waits for rcl to mark a goal c
 # message with 150 goals kept, at the handover benchmark's pace); our clients ask for the result
 # as soon as a goal is accepted, so none comes late.
 RESULT_KEPT = 5
+
+RESULT_SEND_TRIES = 40  # a result the middleware cannot send is tried again this often,
+RESULT_SEND_PAUSE = 0.1  # this many seconds apart (Fast DDS waits 100 ms itself each try)
 
 _ACCEPT, _REJECT, _RECALL = "accept", "reject", "recall"
 
@@ -204,8 +208,9 @@ class _Ros2ServerGoalHandle(ServerGoalHandle[G, R, F]):
 
 
 class _RclServer(RclActionServer):  # type: ignore[misc]
-    """rclpy's action server, telling our goal callback which goal it decides on, and letting
-    a cancel reach goals that wait for that decision (rcl knows only accepted goals)."""
+    """rclpy's action server, telling our goal callback which goal it decides on, letting a
+    cancel reach goals that wait for that decision (rcl knows only accepted goals), and sending a
+    result again when the middleware could not send it (see :meth:`_send_result_response`)."""
 
     owner: Ros2ActionServer[Any, Any, Any] | None = None
     _deciding = threading.local()
@@ -218,6 +223,35 @@ class _RclServer(RclActionServer):  # type: ignore[misc]
         if self.owner is not None:
             self.owner.result_requested(bytes(request_header_and_message[1].goal_id.uuid))
         await super()._execute_get_result_request(request_header_and_message)
+
+    def _send_result_response(self, request_header: Any, future: Any) -> None:
+        """Send a finished goal's result to a client that asked for it; try again a little later
+        when the middleware cannot. Fast DDS refuses a response ("client will not receive
+        response") when it has not matched the client's reader within 100 ms, which a loaded
+        machine can miss; rclpy then drops the result, and the client waited for it forever."""
+        result = future.result() if future.exception() is None else None
+        if result:
+            self._send_result(request_header, result, RESULT_SEND_TRIES)
+
+    def _send_result(self, request_header: Any, result: Any, tries: int) -> None:
+        try:
+            self._send_result_now(request_header, result)
+        except RCLError:
+            owner = self.owner
+            if owner is None or owner.is_closed:
+                return
+            if tries <= 1:
+                log.warning("action %s: could not send a result to its client; it is lost", owner.name)
+                return
+            retry = threading.Timer(RESULT_SEND_PAUSE, self._send_result, (request_header, result, tries - 1))
+            retry.daemon = True
+            retry.start()
+        except Exception:  # destroyed meanwhile (the node left): nobody waits for it here
+            log.debug("action result not sent: the server is gone", exc_info=True)
+
+    def _send_result_now(self, request_header: Any, result: Any) -> None:
+        with self._lock:
+            self._handle.send_result_response(request_header, result)
 
     async def _execute_cancel_request(self, request_header_and_message: Any) -> None:
         if self.owner is not None:
@@ -279,6 +313,11 @@ class Ros2ActionServer(ActionServer[G, R, F]):
         """Lockstep time: count one message of ``leg`` (accept, result, text) sent."""
         if self._ledger is not None:
             self._ledger.sent(f"{self.name}#{leg}")
+
+    @property
+    def is_closed(self) -> bool:
+        """The server was withdrawn."""
+        return self._closed
 
     def result_ready(self, goal_id: bytes) -> None:
         """The module ended the goal (on the loop): in lockstep, the result is on its way if its

@@ -16,7 +16,9 @@ its standard parameter services (``get_parameters``, ``set_parameters``), waitin
 answer, as a rospy parameter call waits for the master. So the controller's ``set_param``
 of the active state's resources returns only once the home holds them, before the state
 change is published; a gatekeeper reads them when the state change arrives; a read that
-fails raises TransportError, and the gatekeeper passes nothing (fails closed).
+fails raises TransportError, and the gatekeeper passes nothing (fails closed). A read where no
+home is on the graph waits for one as long as a call waits for its answer, then gives the
+default.
 """
 
 from __future__ import annotations
@@ -384,7 +386,7 @@ class Ros2Transport(Transport):
         if self._home is not None:
             with self._params_lock:
                 return self._params.get(key, default)
-        if not self._home_elsewhere(probe):
+        if not self._home_elsewhere(probe) and not self._home_answers("get_parameters", GetParameters):
             return default
         request = GetParameters.Request()
         request.names = [parameter_name(key)]
@@ -394,8 +396,7 @@ class Ros2Transport(Transport):
             return default
         return json.loads(values[0].string_value)
 
-    def _call_home(self, probe: RclNode, service: str, srv: Any, request: Any, what: str) -> Any:
-        """Call a parameter service of the home and wait for its answer (the loop waits too)."""
+    def _param_client(self, service: str, srv: Any) -> Any:
         if self._param_node is None:
             self._param_node = self.make_rcl_node(f"cyborg_parameter_client_{id(self):x}")
         client = self._param_clients.get(service)
@@ -403,9 +404,24 @@ class Ros2Transport(Transport):
             client = self._param_clients[service] = self._param_node.create_client(
                 srv, f"/{PARAM_HOME}/{service}", callback_group=ReentrantCallbackGroup()
             )
+        return client
+
+    def _param_limit(self) -> float:
+        # In lockstep the time stands still while a call waits: a loaded machine may take longer.
+        return LOCKSTEP_PARAM_TIMEOUT if self.clock.is_lockstep else PARAM_TIMEOUT
+
+    def _home_answers(self, service: str, srv: Any) -> bool:
+        """Whether the home's ``service`` is (or becomes, within the limit) ready. The graph's
+        list of node names can lag behind its services on a loaded machine: a gatekeeper that
+        heard the controller's state change once read no resources here, and passed nothing."""
+        client = self._param_client(service, srv)
+        return bool(client.service_is_ready() or client.wait_for_service(timeout_sec=self._param_limit()))
+
+    def _call_home(self, probe: RclNode, service: str, srv: Any, request: Any, what: str) -> Any:
+        """Call a parameter service of the home and wait for its answer (the loop waits too)."""
+        client = self._param_client(service, srv)
         started = time.monotonic()
-        # In lockstep the time stands still while this waits: a loaded machine may take longer.
-        limit = LOCKSTEP_PARAM_TIMEOUT if self.clock.is_lockstep else PARAM_TIMEOUT
+        limit = self._param_limit()
         # A client made a moment ago may not have discovered the home's service yet: a request
         # sent before that goes nowhere.
         if not client.service_is_ready():
