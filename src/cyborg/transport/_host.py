@@ -17,9 +17,14 @@ from typing import Any, Protocol
 from cyborg.transport.base import TransportStats
 from cyborg.transport.clock import Clock
 
-__all__ = ["POLL_PERIOD", "Host", "poll_real", "poll_until"]
+__all__ = ["LOCKSTEP_FIND_LIMIT", "POLL_PERIOD", "Host", "poll_real", "poll_until"]
 
 POLL_PERIOD = 0.01  # clock seconds between two looks for a server
+# Lockstep: the fewest real seconds a wait for a server lasts (the time is held meanwhile). What
+# a wait finds must not depend on how loaded the machine is: a module of the launch found after
+# 2 real s at load 39 ended its state as aborted, and the run differed from the one in process.
+# A server that is really missing costs this much real time, and no more virtual time than before.
+LOCKSTEP_FIND_LIMIT = 20.0
 
 
 class Host(Protocol):
@@ -52,11 +57,11 @@ async def poll_until(found: Callable[[], bool], clock: Clock, timeout: float) ->
     """Call ``found()`` every POLL_PERIOD until it is true (True) or ``timeout`` clock seconds pass (False).
 
     With lockstep time, what is looked for (a server found by the middleware) comes in real
-    time: the time is held meanwhile and ``timeout`` counts real seconds, so that the wait costs
-    no virtual time and a run repeats exactly.
+    time: the time is held meanwhile and the wait lasts ``timeout`` real seconds, at least
+    LOCKSTEP_FIND_LIMIT, so that it costs no virtual time and a run repeats exactly.
     """
     if clock.is_lockstep:
-        return await poll_real(found, clock, timeout)
+        return await poll_real(found, clock, max(timeout, LOCKSTEP_FIND_LIMIT))
     deadline = clock.monotonic() + timeout
     while not found():
         if clock.monotonic() >= deadline:

@@ -20,7 +20,7 @@ from typing import Any
 import actionlib  # type: ignore[import-not-found]
 
 from cyborg.transport._goals import ClientGoal
-from cyborg.transport._host import Host, poll_real
+from cyborg.transport._host import LOCKSTEP_FIND_LIMIT, Host, poll_real
 from cyborg.transport.base import (
     ActionClient,
     ActionServer,
@@ -371,7 +371,9 @@ class RosActionClient(ActionClient[G, R, F]):
         clock runs at: a deadline on a virtual clock at speed 25 would give them 1/25 of it, and a
         module's server found a moment late would end its state as aborted.
         """
-        return await poll_real(self.server_available, self.transport.clock, timeout)
+        clock = self.transport.clock
+        limit = max(timeout, LOCKSTEP_FIND_LIMIT) if clock.is_lockstep else timeout
+        return await poll_real(self.server_available, clock, limit)
 
     def send_goal(
         self,
