@@ -40,6 +40,12 @@ __all__ = ["SENDER_LOOKUP", "Ros2Publisher", "Ros2Subscription", "Senders", "lat
 UNKNOWN_NODE = "_NODE_NAME_UNKNOWN_"  # what the graph names an endpoint whose node it does not know yet
 SEEN_KEPT = 4096  # messages remembered to drop the second copy of (both halves deliver each)
 SENDER_LOOKUP = 0.5  # seconds a publisher unknown to the graph is waited for, from its first message
+# Lockstep time stands still meanwhile, and a message of an unnamed sender is dropped by a
+# gatekeeper: on a loaded machine the graph may name a publisher seconds after its first message.
+LOCKSTEP_SENDER_LOOKUP = 10.0
+# Lockstep: a latched message waits this long for every reader to acknowledge the one before it
+# (see Ros2Publisher.publish).
+LOCKSTEP_ACK_WAIT = 10.0
 
 log = logging.getLogger(__name__)
 
@@ -70,9 +76,10 @@ class Senders:
     waiting 0.5 s per message held the subscription's delivery up for many seconds).
     """
 
-    def __init__(self, node: RclNode, topic: str) -> None:
+    def __init__(self, node: RclNode, topic: str, *, lookup: float = SENDER_LOOKUP) -> None:
         self._node = node
         self._topic = topic
+        self._lookup = lookup
         self._names: dict[bytes, str] = {}
         self._deadlines: dict[bytes, float] = {}  # GID -> until when a miss is looked up again
         self._lock = threading.Lock()
@@ -82,7 +89,7 @@ class Senders:
             name = self._names.get(gid)
             if name is not None:
                 return name
-            deadline = self._deadlines.setdefault(gid, time.monotonic() + SENDER_LOOKUP)
+            deadline = self._deadlines.setdefault(gid, time.monotonic() + self._lookup)
         while True:
             names = {
                 bytes(info.endpoint_gid): normalize_node_name(info.node_name)
@@ -106,6 +113,11 @@ class Ros2Publisher(Publisher[M]):
         self._cls = ros2_class(msg_type.ros_type)
         qos = latched_qos() if latch else volatile_qos(queue_size)
         self._node = node
+        # A latched topic keeps one message: the next replaces it in the writer's history even
+        # where a slow reader has not acknowledged it yet, and that reader never gets it. In
+        # lockstep (a burst of one instant, a loaded machine) that lost a state change or an
+        # emotion now and then; there the next waits for the acknowledgements first.
+        self._wait_acked = latch and transport.clock.is_lockstep
         # Every subscription of ours has a transient-local half that a volatile publisher does
         # not serve, by design (module docstring): no warning about it.
         self._pub: Any = node.create_publisher(
@@ -119,6 +131,8 @@ class Ros2Publisher(Publisher[M]):
         """Send ``message`` (latched: transient-local); nothing once unregistered."""
         if self._pub is None:
             return  # unregistered (its node shut down): a late publish while a process stops goes nowhere
+        if self._wait_acked:
+            self._pub.wait_for_all_acked(Duration(nanoseconds=int(LOCKSTEP_ACK_WAIT * 1e9)))
         self._pub.publish(to_ros2(message, self._cls))
         self._stats.published += 1
         if self._ledger is not None:
@@ -161,7 +175,8 @@ class Ros2Subscription(Subscription[M]):
         self._queue = SubscriptionQueue(
             transport.clock, callback, queue_size, transport.run_callback, transport.stats
         )
-        self._senders = Senders(node, topic)
+        lookup = LOCKSTEP_SENDER_LOOKUP if transport.clock.is_lockstep else SENDER_LOOKUP
+        self._senders = Senders(node, topic, lookup=lookup)
         self._ledger = transport.clock.ledger
         if self._ledger is not None:
             self._ledger.listen(topic)
