@@ -34,7 +34,10 @@ from cyborg.errors import CyborgError
 from cyborg.web.access import Access
 
 if TYPE_CHECKING:
+    from cyborg.app.config import LoadedConfig
+    from cyborg.app.sketch import ConfigSketch
     from cyborg.run.middleware import Middleware
+    from cyborg.run.scenario import ScenarioFiles
 
 _speed_help = "virtual time at this factor of real time (all nodes share one clock); default real time"
 
@@ -90,6 +93,14 @@ _speed_help = "virtual time at this factor of real time (all nodes share one clo
     "without it a controller restarted after a crash resumes an emotion stored within "
     "resume_within_seconds",
 )
+@click.option(
+    "--checked",
+    default=None,
+    metavar="DIGEST",
+    hidden=True,
+    help="set by `cyborg launch`: the digest of the configuration text it validated; a module's or "
+    "gatekeeper's node then reads only its own part of the file (validated whole when it changed)",
+)
 @ros2_option("a ROS 2 node (rclpy, .venv-ros2; no master), with use_sim_time under --speed")
 @access_options
 @record_options
@@ -109,6 +120,7 @@ def node(
     script_path: Path | None,
     transcript_path: Path | None,
     fresh: bool,
+    checked: str | None,
     middleware: Middleware,
     access: Access,
     record_path: Path | None,
@@ -122,20 +134,22 @@ def node(
         fail(exc)
     from cyborg.app.parts import RECORDER
     from cyborg.run.census import NAME_TAKEN_EXIT, NameTaken
-    from cyborg.run.local import default_data_dir
+    from cyborg.run.datadir import default_data_dir
     from cyborg.run.node import ApiOptions, NodeOptions, run_node
-    from cyborg.run.scenario import ScenarioFiles
     from cyborg.run.simtime import SimTime
 
     if speed is not None and speed <= 0:
         raise click.BadParameter(f"{speed!r} must be positive", param_hint="--speed")
     sim_time = SimTime(speed=speed, epoch=parse_epoch(epoch), start=parse_start(start_at), lockstep=lockstep)
     try:
-        config = load_or_default(config_path)
         record = None
         if name == RECORDER:
+            whole = load_or_default(config_path)
             # the recorder node records even when the configuration's recording is off: it was asked for
-            record = recorder_settings(config, record_path, no_record, data_dir, enabled=True)
+            record = recorder_settings(whole, record_path, no_record, data_dir, enabled=True)
+            config: LoadedConfig | ConfigSketch = whole
+        else:
+            config = _node_config(name, config_path, checked)
         options = NodeOptions(
             # the part checks its own module's settings, loading only its kind
             config=config,
@@ -146,7 +160,7 @@ def node(
             time=sim_time,
             publish_clock=publish_clock,
             api=ApiOptions(host=host, port=port, access=access),
-            scenario=ScenarioFiles(script_path, transcript_path) if script_path is not None else None,
+            scenario=_scenario_files(script_path, transcript_path),
             record=record,
         )
         code = run_node(name, options, middleware)
@@ -158,6 +172,27 @@ def node(
         return
     if code:
         sys.exit(code)
+
+
+def _node_config(name: str, path: Path | None, checked: str | None) -> LoadedConfig | ConfigSketch:
+    """The configuration node ``name`` builds from: a sketch of it when the launch validated this
+    very text and ``name`` is a module or gatekeeper (no configuration models loaded), else the
+    whole file, validated."""
+    if checked is not None and path is not None:
+        from cyborg.app.sketch import read_sketch
+
+        sketch = read_sketch(path, checked)
+        if sketch is not None and sketch.has_part(name):
+            return sketch
+    return load_or_default(path)
+
+
+def _scenario_files(script: Path | None, transcript: Path | None) -> ScenarioFiles | None:
+    if script is None:
+        return None
+    from cyborg.run.scenario import ScenarioFiles
+
+    return ScenarioFiles(script, transcript)
 
 
 @click.command("launch")
@@ -209,7 +244,7 @@ def launch_command(
     records the run to MCAP (--record FILE.mcap names the file; --no-record: no recorder node).
     """
     from cyborg.app.parts import RECORDER
-    from cyborg.run.local import default_data_dir
+    from cyborg.run.datadir import default_data_dir
     from cyborg.run.middleware import ROS1
     from cyborg.run.roslaunch import all_parts, roslaunch_xml, with_recorder
     from cyborg.run.supervisor import Launch, launch

@@ -1,7 +1,7 @@
 """How a built robot runs: in this process, or one process per part on ROS 1 or ROS 2.
 
 - :mod:`~cyborg.run.local`: the whole robot in this process on a real or virtual clock
-  (``cyborg sim``), and where the robot keeps its data.
+  (``cyborg sim``); :mod:`~cyborg.run.datadir`: where the robot keeps its data.
 - :mod:`~cyborg.run.middleware`: ROS 1 or ROS 2 as one strategy object (:data:`ROS1`,
   :data:`ROS2`): install checks, joining the graph, log files, node processes, the launch's
   graph; :mod:`~cyborg.run.master`: the ROS 1 master over XML-RPC; :mod:`~cyborg.run.ros2_env`:

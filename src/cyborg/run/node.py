@@ -22,13 +22,11 @@ from typing import TYPE_CHECKING
 
 import click
 
-from cyborg.app.config import LoadedConfig
 from cyborg.app.context import BuildContext
-from cyborg.app.parts import API, RECORDER, Part, build_part
+from cyborg.app.parts import API, RECORDER, SCENARIO, Part, build_part
 from cyborg.app.tuning import freeze_built
 from cyborg.errors import CyborgError
 from cyborg.run.middleware import Middleware
-from cyborg.run.scenario import SCENARIO, ScenarioFiles, ScenarioNode
 from cyborg.run.simtime import CLOCK_TOPIC, SimTime, is_simulated_base, publish_clock, wait_for_epoch
 from cyborg.run.tasks import watch_tasks
 from cyborg.transport import topics
@@ -41,7 +39,10 @@ from cyborg.transport.messages import String
 from cyborg.web.access import DEFAULT_PORT, Access
 
 if TYPE_CHECKING:
+    from cyborg.app.config import LoadedConfig
+    from cyborg.app.sketch import ConfigSketch
     from cyborg.observe.recorder import Recorder, RecorderSettings
+    from cyborg.run.scenario import ScenarioFiles, ScenarioNode
     from cyborg.web.api import RobotAPI
 
 __all__ = ["ApiOptions", "BuiltNode", "NodeOptions", "await_start", "build_node", "run_node", "serve_node"]
@@ -64,7 +65,9 @@ class ApiOptions:
 class NodeOptions:
     """Everything ``cyborg node`` (or a launch, through it) tells one node: built once, passed whole."""
 
-    config: LoadedConfig
+    config: LoadedConfig | ConfigSketch
+    """The whole validated configuration; a module's or gatekeeper's node started by a launch gets
+    a sketch of it (:mod:`cyborg.app.sketch`): the launch validated it."""
     data_dir: Path
     map_path: Path | None = None
     seed: int = 0
@@ -130,6 +133,8 @@ def build_node(name: str, options: NodeOptions, middleware: Middleware) -> Built
     )
     node = BuiltNode(name, middleware, clock, transport, context, Part(name))
     if name == SCENARIO:
+        from cyborg.run.scenario import ScenarioNode
+
         if options.scenario is None:
             raise CyborgError(f"{SCENARIO} plays a script; fix: give it --script FILE")
         node.scenario = ScenarioNode(transport.node(SCENARIO), options.scenario)
@@ -247,7 +252,7 @@ def _start_recorder(node: BuiltNode, options: NodeOptions) -> Recorder | None:
     if options.record is None:
         click.echo(f"node {node.name}: recording is off (--no-record); it records nothing", err=True)
         return None
-    config = options.config
+    config = _validated(options)
     recorder_node = node.transport.node(RECORDER)
     facts = RunFacts(
         start_ns=to_ns(node.clock.now()),
@@ -274,7 +279,7 @@ async def _serve_api(node: BuiltNode, options: NodeOptions) -> RobotAPI:
     from cyborg.web.build import build_api, start_api
     from cyborg.web.ros_view import remote_robot
 
-    config = options.config
+    config = _validated(options)
     api_node = node.transport.node(API)
     has_base = any(
         isinstance(m, dict) and m.get("kind") == "simulated_base" for m in config.model.modules.values()
@@ -296,6 +301,14 @@ async def _serve_api(node: BuiltNode, options: NodeOptions) -> RobotAPI:
         token_given=options.api.access is not None and options.api.access.token is not None,
     )
     return api
+
+
+def _validated(options: NodeOptions) -> LoadedConfig:
+    from cyborg.app.config import LoadedConfig
+
+    if not isinstance(options.config, LoadedConfig):
+        raise CyborgError("this part reads the whole validated configuration, not a sketch of it")
+    return options.config
 
 
 async def _play(scenario: ScenarioNode, stop: asyncio.Event, name: str) -> int:

@@ -33,6 +33,7 @@ import click
 
 from cyborg.app.config import LoadedConfig
 from cyborg.app.parts import API, CONTROLLER
+from cyborg.app.sketch import text_digest
 from cyborg.errors import CyborgError
 from cyborg.run.census import NAME_TAKEN_EXIT
 from cyborg.run.lockstep import TimeServer
@@ -103,6 +104,8 @@ class Launch:
             "--seed",
             str(self.seed),
         ]
+        if self.config.text:  # validated here: a module's node reads only its own part (cyborg.app.sketch)
+            command += ["--checked", text_digest(self.config.text)]
         if self.map_path is not None:
             command += ["--map", str(self.map_path)]
         if name == API:
