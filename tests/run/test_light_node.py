@@ -18,7 +18,7 @@ import pytest
 from cyborg.app.config import packaged_config
 from cyborg.app.sketch import ConfigSketch, text_digest
 from cyborg.cli.ros import _node_config
-from cyborg.errors import ConfigError
+from cyborg.errors import ConfigError, CyborgError
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -51,7 +51,7 @@ from cyborg.run.node import NodeOptions, build_node
 from cyborg.transport.embedded import EmbeddedTransport
 
 class InProcess(Ros1):
-    def transport(self, clock, node_name, *, use_sim_time=False):
+    def transport(self, clock, node_name, *, use_sim_time=False, also=()):
         return EmbeddedTransport(clock)
 
     def part_built(self, node_name):
@@ -59,10 +59,11 @@ class InProcess(Ros1):
 
 path, digest, data = Path(sys.argv[1]), sys.argv[2], Path(sys.argv[3])
 built = {}
-for name in sys.argv[4:]:
-    config = _node_config(name, path, digest)
-    node = build_node(name, NodeOptions(config=config, data_dir=data), InProcess())
-    built[name] = [type(c).__name__ for c in node.part.components]
+for group in sys.argv[4:]:  # NAME, or NAME+HOSTED+...: one process hosting several parts
+    name, *also = group.split("+")
+    config = _node_config([name, *also], path, digest)
+    node = build_node(name, NodeOptions(config=config, data_dir=data, also=tuple(also)), InProcess())
+    built[group] = [[type(c).__name__, c.node.name] for c in node.part.components]
     node.close()
 print(json.dumps({"built": built, "modules": sorted(sys.modules)}))
 """
@@ -86,16 +87,27 @@ def _build_in_fresh_python(config: Path, names: list[str], data: Path) -> dict[s
 def test_a_launched_module_node_and_gatekeeper_load_neither_the_controller_nor_the_config_models(
     tmp_path: Path,
 ) -> None:
-    names = ["cyborg_joke", "cyborg_music", "cyborg_speech_gatekeeper"]
+    shared = "cyborg_idle+cyborg_joke+cyborg_tts+cyborg_speech_gatekeeper"  # ROS 2's shared process
+    names = ["cyborg_music", "cyborg_speech_gatekeeper", shared]
     answer = _build_in_fresh_python(packaged_config("cyborg.yaml"), names, tmp_path)
     built = answer["built"]
     assert isinstance(built, dict)
-    assert built["cyborg_speech_gatekeeper"] == ["Gatekeeper"]
-    assert all(built[name] for name in names), built  # each part has its module
+    assert built["cyborg_speech_gatekeeper"] == [["Gatekeeper", "cyborg_speech_gatekeeper"]]
+    assert [node for _, node in built["cyborg_music"]] == ["cyborg_music"]
+    # one process, each part on a node of its own name: a gatekeeper still tells them apart
+    assert [node for _, node in built[shared]] == shared.split("+"), built[shared]
     loaded = answer["modules"]
     assert isinstance(loaded, list)
     found = sorted(m for m in loaded if any(m == bad or m.startswith(bad + ".") for bad in NOT_LOADED))
     assert found == [], f"a thin node loads what it does not run: {found}"
+
+
+def test_ros1_refuses_to_host_several_parts_in_one_process() -> None:
+    from cyborg.run.middleware import ROS1
+    from cyborg.transport.clock import RealClock
+
+    with pytest.raises(CyborgError, match="one node per process"):
+        ROS1.transport(RealClock(), "cyborg_idle", also=("cyborg_joke",))
 
 
 def test_a_node_validates_the_whole_file_when_it_changed_since_the_launch_checked_it(
@@ -105,10 +117,10 @@ def test_a_node_validates_the_whole_file_when_it_changed_since_the_launch_checke
     text = packaged_config("demo.yaml").read_text(encoding="utf-8")
     config.write_text(text, encoding="utf-8")
     digest = text_digest(text)
-    assert isinstance(_node_config("cyborg_joke", config, digest), ConfigSketch)
-    assert not isinstance(_node_config("cyborg_controller", config, digest), ConfigSketch)
-    assert not isinstance(_node_config("cyborg_joke", config, None), ConfigSketch)  # by hand: whole
+    assert isinstance(_node_config(["cyborg_joke"], config, digest), ConfigSketch)
+    assert not isinstance(_node_config(["cyborg_joke", "cyborg_controller"], config, digest), ConfigSketch)
+    assert not isinstance(_node_config(["cyborg_joke"], config, None), ConfigSketch)  # by hand: whole
 
     config.write_text(text.replace("initial:", "initial_state:"), encoding="utf-8")
     with pytest.raises(ConfigError, match="initial_state"):
-        _node_config("cyborg_joke", config, digest)  # edited after the launch: checked again, whole
+        _node_config(["cyborg_joke"], config, digest)  # edited after the launch: checked again, whole

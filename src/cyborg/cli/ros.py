@@ -94,6 +94,14 @@ _speed_help = "virtual time at this factor of real time (all nodes share one clo
     "resume_within_seconds",
 )
 @click.option(
+    "--with",
+    "also",
+    multiple=True,
+    metavar="NAME",
+    help="ROS 2: host this module or gatekeeper in the same process, as its own node (repeatable; "
+    "`cyborg launch --ros2` shares a process among the thin modules)",
+)
+@click.option(
     "--checked",
     default=None,
     metavar="DIGEST",
@@ -120,6 +128,7 @@ def node(
     script_path: Path | None,
     transcript_path: Path | None,
     fresh: bool,
+    also: tuple[str, ...],
     checked: str | None,
     middleware: Middleware,
     access: Access,
@@ -149,7 +158,7 @@ def node(
             record = recorder_settings(whole, record_path, no_record, data_dir, enabled=True)
             config: LoadedConfig | ConfigSketch = whole
         else:
-            config = _node_config(name, config_path, checked)
+            config = _node_config([name, *also], config_path, checked)
         options = NodeOptions(
             # the part checks its own module's settings, loading only its kind
             config=config,
@@ -162,6 +171,7 @@ def node(
             api=ApiOptions(host=host, port=port, access=access),
             scenario=_scenario_files(script_path, transcript_path),
             record=record,
+            also=also,
         )
         code = run_node(name, options, middleware)
     except NameTaken as exc:
@@ -174,15 +184,15 @@ def node(
         sys.exit(code)
 
 
-def _node_config(name: str, path: Path | None, checked: str | None) -> LoadedConfig | ConfigSketch:
-    """The configuration node ``name`` builds from: a sketch of it when the launch validated this
-    very text and ``name`` is a module or gatekeeper (no configuration models loaded), else the
-    whole file, validated."""
+def _node_config(names: list[str], path: Path | None, checked: str | None) -> LoadedConfig | ConfigSketch:
+    """The configuration a process of parts ``names`` builds from: a sketch of it when the launch
+    validated this very text and each is a module or gatekeeper (no configuration models
+    loaded), else the whole file, validated."""
     if checked is not None and path is not None:
         from cyborg.app.sketch import read_sketch
 
         sketch = read_sketch(path, checked)
-        if sketch is not None and sketch.has_part(name):
+        if sketch is not None and all(sketch.has_part(name) for name in names):
             return sketch
     return load_or_default(path)
 
@@ -218,6 +228,14 @@ def _scenario_files(script: Path | None, transcript: Path | None) -> ScenarioFil
 @ros2_option(
     "ROS 2 nodes (rclpy, .venv-ros2): no master is started; with --speed each node sets use_sim_time"
 )
+@click.option(
+    "--processes",
+    type=click.Choice(["shared", "per-part"]),
+    default=None,
+    help="shared: the thin modules and the gatekeepers share one process, each its own node "
+    "(ROS 2 only; its default); per-part: a process per part (ROS 1's only way: rospy runs one "
+    "node per process)",
+)
 @duration_option
 @record_options
 def launch_command(
@@ -233,6 +251,7 @@ def launch_command(
     duration: float | None,
     record_path: Path | None,
     no_record: bool,
+    processes: str | None,
 ) -> None:
     """Start the whole robot over ROS 1 (a master if none runs) or ROS 2 (--ros2), a process a part.
 
@@ -290,10 +309,30 @@ def launch_command(
             start=start,
             middleware=middleware,
             extra_args=extra,
+            hosts=_shared_processes(processes, middleware, config, parts),
         )
         launch(robot, duration=duration)
     except CyborgError as exc:
         fail(exc)
+
+
+def _shared_processes(
+    choice: str | None,
+    middleware: Middleware,
+    config: LoadedConfig,
+    parts: list[str],
+) -> dict[str, list[str]]:
+    """``--processes``: shared by default where a process may hold many nodes (ROS 2)."""
+    from cyborg.run.supervisor import shared_process
+
+    if choice == "shared" and not middleware.hosts_many:
+        raise click.UsageError(
+            f"--processes shared: {middleware.name} runs one node per process (rospy), and a gatekeeper "
+            "tells modules apart by their process's node name; fix: drop it, or add --ros2"
+        )
+    if choice == "per-part" or not middleware.hosts_many:
+        return {}
+    return shared_process(config, parts)
 
 
 def parse_epoch(value: str | None) -> float | str | None:

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 import click
 
 from cyborg.app.context import BuildContext
-from cyborg.app.parts import API, RECORDER, SCENARIO, Part, build_part
+from cyborg.app.parts import API, CONTROLLER, RECORDER, SCENARIO, Part, build_part
 from cyborg.app.tuning import freeze_built
 from cyborg.errors import CyborgError
 from cyborg.run.middleware import Middleware
@@ -81,6 +81,9 @@ class NodeOptions:
     """What ``cyborg_scenario`` plays; only that part reads it."""
     record: RecorderSettings | None = None
     """Where ``cyborg_recorder`` records; only that part reads it."""
+    also: tuple[str, ...] = ()
+    """Modules and gatekeepers this process hosts beside NAME, each its own node on the graph
+    (ROS 2 only: :attr:`Middleware.hosts_many`; ``cyborg launch``'s shared processes)."""
 
 
 @dataclass
@@ -122,8 +125,13 @@ def run_node(name: str, options: NodeOptions, middleware: Middleware) -> int:
 
 def build_node(name: str, options: NodeOptions, middleware: Middleware) -> BuiltNode:
     """Join ``middleware``'s graph as node ``name`` and build its part, not started yet."""
+    for other in options.also:
+        if other in (CONTROLLER, API, RECORDER, SCENARIO) or is_simulated_base(options.config, other):
+            raise CyborgError(
+                f"{other} runs in a process of its own; fix: host only modules and gatekeepers beside {name}"
+            )
     clock = options.time.make_clock()
-    transport = middleware.transport(clock, name, use_sim_time=options.time.virtual)
+    transport = middleware.transport(clock, name, use_sim_time=options.time.virtual, also=options.also)
     context = BuildContext(
         data_dir=options.data_dir,
         seed=options.seed,
@@ -142,6 +150,8 @@ def build_node(name: str, options: NodeOptions, middleware: Middleware) -> Built
     else:
         try:
             node.part = build_part(name, options.config, transport, context)
+            for other in options.also:  # one process, one loop; each part its own node(s)
+                node.part.components += build_part(other, options.config, transport, context).components
         except BaseException:
             node.close()  # leave the graph: the error is the node's whole output
             raise

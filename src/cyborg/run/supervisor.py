@@ -8,6 +8,11 @@ speed the launch fixes the shared origin of virtual time once every node is read
 (:mod:`cyborg.run.simtime`). ``cyborg sim --ros --script FILE`` adds the ``cyborg_scenario``
 node (:mod:`cyborg.run.scenario`).
 
+On ROS 2 the launch shares one process among the thin parts (:func:`shared_process`: the
+built-in light module kinds and the gatekeepers), each still its own node on the graph, so a
+gatekeeper tells them apart as before; ROS 1 runs one node per process (rospy's rule, and a
+gatekeeper knows a sender by its process's node name). ``cyborg launch --processes`` chooses.
+
 A node that refuses to start because its name is taken on the graph (another robot there, or a
 node of its name: :mod:`cyborg.run.census`) stops the whole launch with that reason instead.
 
@@ -41,12 +46,29 @@ from cyborg.run.middleware import ROS1, LaunchGraph, Middleware, exit_descriptio
 from cyborg.run.simtime import EPOCH_MARGIN, READY_TIMEOUT, Rendezvous, check_virtual_time, clock_owner_of
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, NS
 
-__all__ = ["Launch", "launch"]
+__all__ = ["THIN_KINDS", "Launch", "launch", "shared_process"]
 
 RESPAWN_DELAY = 1.0  # seconds before a stopped node is started again
 RESPAWN_STEADY = 10.0  # a node that ran this long before it stopped is started again after RESPAWN_DELAY
 RESPAWN_MAX_DELAY = 30.0  # a node stopping again and again waits at most this long
 REFUSAL_GRACE = 5.0  # seconds a refused node's launch waits for the controller's own reason
+THIN_KINDS = frozenset({"conversation", "event_script", "idle", "music", "placeholder", "question", "tts"})
+"""Built-in module kinds that only wait, talk and publish: they may share one process. Other kinds
+(the navigation, the simulated base, speech input, every plug-in's) keep a process of their own."""
+
+
+def shared_process(config: LoadedConfig, parts: Sequence[str]) -> dict[str, list[str]]:
+    """The thin parts among ``parts`` as one process: {the first: the others it hosts} (empty
+    when fewer than two are thin)."""
+    modules = config.model.modules
+    gates = {gate.name for gate in config.model.gatekeepers}
+
+    def thin(name: str) -> bool:
+        raw = modules.get(name)
+        return name in gates or (isinstance(raw, dict) and raw.get("kind") in THIN_KINDS)
+
+    names = [name for name in parts if thin(name)]
+    return {names[0]: names[1:]} if len(names) > 1 else {}
 
 
 @dataclass
@@ -76,6 +98,8 @@ class Launch:
     processes: dict[str, subprocess.Popen[bytes]] = field(default_factory=dict)
     respawn: bool = False
     middleware: Middleware = ROS1
+    hosts: dict[str, list[str]] = field(default_factory=dict)
+    """A process's node name -> the parts it hosts beside its own (each its own node; ROS 2 only)."""
     _graph: LaunchGraph | None = None
     _rendezvous: Rendezvous | None = None
     _epoch_argument: str | None = None
@@ -88,6 +112,13 @@ class Launch:
     def __post_init__(self) -> None:
         if self.speed is not None or self.lockstep:
             check_virtual_time(self.config)
+        if self.hosts and not self.middleware.hosts_many:
+            raise CyborgError(
+                f"{self.middleware.name} runs one node per process: no part can host another; "
+                "fix: launch with --processes per-part, or on ROS 2 (--ros2)"
+            )
+        hosted = {name for names in self.hosts.values() for name in names}
+        self.parts = [name for name in self.parts if name not in hosted]  # a process each
 
     def command(self, name: str, clock_owner: str | None, *, fresh: bool = True) -> list[str]:
         """The command line of part ``name``'s process."""
@@ -113,6 +144,8 @@ class Launch:
         if name == CONTROLLER and fresh:
             command += ["--fresh"]  # a launch is a fresh start: neutral, emotion system on
         command += self.middleware.node_arguments
+        for hosted in self.hosts.get(name, []):
+            command += ["--with", hosted]
         if self._time_server is not None:
             command += [
                 "--lockstep",
@@ -150,7 +183,15 @@ class Launch:
             self._time_server = TimeServer(set(self.parts), always={self._clock_owner or ""}).start()
         for name in self.parts:
             self._spawn(name, fresh=True)
-        self.say(f"launched {len(self.processes)} nodes: {', '.join(self.parts)}")
+        nodes = len(self.processes) + sum(len(self.hosts.get(name, [])) for name in self.processes)
+        shared = f" in {len(self.processes)} processes" if nodes > len(self.processes) else ""
+        self.say(
+            f"launched {nodes} nodes{shared}: "
+            + ", ".join(
+                name + (f" (with {', '.join(self.hosts[name])})" if self.hosts.get(name) else "")
+                for name in self.parts
+            )
+        )
         self.say(
             f"their warnings and errors show here, prefixed [node]; every log line is in "
             f"{self.middleware.log_file('NODE').parent}/NODE.log"
