@@ -219,7 +219,12 @@ def node_name(pid: int) -> str:
     except OSError:
         return "?"
     words = [a.decode() for a in args]
-    return words[words.index("node") + 1] if "node" in words else " ".join(words[:3])
+    if "node" in words:
+        return words[words.index("node") + 1]
+    with contextlib.suppress(OSError):  # forked by the launch's zygote: named by its command's name
+        if "cyborg.run.zygote" in words:
+            return Path(f"/proc/{pid}/comm").read_text().strip()
+    return " ".join(words[:3])
 
 
 def stop_group(process: subprocess.Popen[Any] | None, grace: float = 10.0) -> None:
@@ -434,7 +439,13 @@ def measure_node(
 
 
 def measure_launch(
-    env: dict[str, str], log_dir: Path, *, ros2: bool, master_pids: Sequence[int], idle_seconds: float
+    env: dict[str, str],
+    log_dir: Path,
+    *,
+    ros2: bool,
+    master_pids: Sequence[int],
+    idle_seconds: float,
+    launch_env: dict[str, str] | None = None,
 ) -> dict[str, Any]:
     """Seconds to the first state; CPU until then; memory 5 s later; CPU over ``idle_seconds``."""
     data = Path(tempfile.mkdtemp(prefix="cyborg-bench-db-", dir=log_dir))
@@ -445,7 +456,7 @@ def measure_launch(
         watcher.wait_line("watching")
         began = time.time()
         args = ["launch", "--db", str(data), "--port", str(free_port())] + (["--ros2"] if ros2 else [])
-        launch = Child(cyborg(*args), env, log_dir, "launch")
+        launch = Child(cyborg(*args), launch_env or env, log_dir, "launch")
         deadline = time.monotonic() + 120
         while "state " not in watcher.log():
             if launch.process.poll() is not None or time.monotonic() > deadline:
@@ -595,9 +606,18 @@ def bench(
             ros2 = ros2_env(env, log_dir)
             if "node2" in parts:
                 out["node2"] = bench_nodes(ros2, log_dir, runs, ros2=True)
-            if "launch2" in parts:
+            if "launch2" in parts:  # the launcher in this venv; it starts its nodes in the ROS 2 one
+                graph = ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_LOG_DIR")
+                launcher = {**env, **{key: ros2[key] for key in graph}}
                 out["launch2"] = [
-                    measure_launch(ros2, log_dir, ros2=True, master_pids=[], idle_seconds=idle_seconds)
+                    measure_launch(
+                        ros2,
+                        log_dir,
+                        ros2=True,
+                        master_pids=[],
+                        idle_seconds=idle_seconds,
+                        launch_env=launcher,
+                    )
                     for _ in range(runs)
                 ]
     finally:

@@ -129,6 +129,9 @@ class Middleware(ABC):
     """True when a new node sees the others only after discovery (no master to ask at once)."""
     node_arguments: ClassVar[list[str]]
     """What ``cyborg node`` is given to run a node on it."""
+    preload: ClassVar[str]
+    """What every node of it imports, the launch's zygote imports once: a key of
+    :data:`cyborg.run.zygote.PRELOAD`."""
     hosts_many: ClassVar[bool]
     """True when one process may hold several real nodes (rclpy), each its own sender on the
     graph; rospy allows one node per process, whose name every message it sends carries."""
@@ -196,6 +199,7 @@ class Ros1(Middleware):
     base_api = BaseApi.ROSARNL
     discovers_late = False
     node_arguments: ClassVar[list[str]] = []
+    preload = "ros1"
     hosts_many = False
 
     def require(self) -> None:
@@ -255,6 +259,7 @@ class Ros2(Middleware):
     base_api = BaseApi.NAV2
     discovers_late = True
     node_arguments: ClassVar[list[str]] = ["--ros2"]
+    preload = "ros2"
     hosts_many = True
 
     def require(self) -> None:

@@ -44,6 +44,7 @@ from cyborg.run.census import NAME_TAKEN_EXIT
 from cyborg.run.lockstep import TimeServer
 from cyborg.run.middleware import ROS1, LaunchGraph, Middleware, exit_description
 from cyborg.run.simtime import EPOCH_MARGIN, READY_TIMEOUT, Rendezvous, check_virtual_time, clock_owner_of
+from cyborg.run.zygote import ForkedNode, Zygote
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, NS
 
 __all__ = ["THIN_KINDS", "Launch", "launch", "shared_process"]
@@ -95,11 +96,14 @@ class Launch:
     seed: int = 0
     extra_args: dict[str, list[str]] = field(default_factory=dict)
     say: Callable[[str], None] = click.echo
-    processes: dict[str, subprocess.Popen[bytes]] = field(default_factory=dict)
+    processes: dict[str, subprocess.Popen[bytes] | ForkedNode] = field(default_factory=dict)
     respawn: bool = False
     middleware: Middleware = ROS1
     hosts: dict[str, list[str]] = field(default_factory=dict)
     """A process's node name -> the parts it hosts beside its own (each its own node; ROS 2 only)."""
+    fork: bool = True
+    """Fork the node processes from a zygote that imported what they all import (:mod:`cyborg.run.zygote`)."""
+    _zygote: Zygote | None = None
     _graph: LaunchGraph | None = None
     _rendezvous: Rendezvous | None = None
     _epoch_argument: str | None = None
@@ -181,6 +185,13 @@ class Launch:
             )  # /clock first: the others wait for it
         if self.lockstep:
             self._time_server = TimeServer(set(self.parts), always={self._clock_owner or ""}).start()
+        if self.fork:
+            self._zygote = Zygote(
+                self.middleware.python(),
+                self.middleware.environment(),
+                self.middleware.preload,
+                echo=self.echo,
+            )
         for name in self.parts:
             self._spawn(name, fresh=True)
         nodes = len(self.processes) + sum(len(self.hosts.get(name, [])) for name in self.processes)
@@ -224,12 +235,15 @@ class Launch:
             f"starting at {datetime.fromtimestamp(epoch, UTC):%H:%M:%S.%f} UTC"
         )
 
-    def _spawn(self, name: str, *, fresh: bool) -> subprocess.Popen[bytes]:
-        process = subprocess.Popen(
-            self.command(name, self._clock_owner, fresh=fresh),
-            stdout=None if self.echo else subprocess.DEVNULL,
-            env=self.middleware.environment(),
-        )
+    def _spawn(self, name: str, *, fresh: bool) -> subprocess.Popen[bytes] | ForkedNode:
+        command = self.command(name, self._clock_owner, fresh=fresh)
+        process: subprocess.Popen[bytes] | ForkedNode
+        if self._zygote is not None and self._zygote.alive:
+            process = self._zygote.spawn(command[3:])  # what follows `python -m cyborg.cli`
+        else:
+            process = subprocess.Popen(
+                command, stdout=None if self.echo else subprocess.DEVNULL, env=self.middleware.environment()
+            )
         self.processes[name] = process
         self._started_at[name] = time.monotonic()
         return process
@@ -270,7 +284,7 @@ class Launch:
         if failed:
             raise CyborgError(f"node(s) stopped: {', '.join(failed)}; the whole robot is stopped too")
 
-    def _check_refused(self, name: str, process: subprocess.Popen[bytes]) -> None:
+    def _check_refused(self, name: str, process: subprocess.Popen[bytes] | ForkedNode) -> None:
         """Raise a :class:`CyborgError` when node ``name`` refused to start: its name is taken."""
         if process.returncode != NAME_TAKEN_EXIT:
             return
@@ -322,6 +336,9 @@ class Launch:
                     process.kill()
                     process.wait(timeout=5)
         finally:
+            if self._zygote is not None:
+                self._zygote.close()
+                self._zygote = None
             if self._time_server is not None:
                 server = self._time_server
                 server.close()
