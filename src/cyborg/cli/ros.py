@@ -236,6 +236,13 @@ def _scenario_files(script: Path | None, transcript: Path | None) -> ScenarioFil
     "(ROS 2 only; its default); per-part: a process per part (ROS 1's only way: rospy runs one "
     "node per process)",
 )
+@click.option(
+    "--fork/--no-fork",
+    default=True,
+    show_default=True,
+    help="fork the node processes from one that imported what they all import (shared memory, a faster "
+    "start); --no-fork starts each afresh",
+)
 @duration_option
 @record_options
 def launch_command(
@@ -252,6 +259,7 @@ def launch_command(
     record_path: Path | None,
     no_record: bool,
     processes: str | None,
+    fork: bool,
 ) -> None:
     """Start the whole robot over ROS 1 (a master if none runs) or ROS 2 (--ros2), a process a part.
 
@@ -310,6 +318,7 @@ def launch_command(
             middleware=middleware,
             extra_args=extra,
             hosts=_shared_processes(processes, middleware, config, parts),
+            fork=fork,
         )
         launch(robot, duration=duration)
     except CyborgError as exc:

@@ -28,6 +28,7 @@ import importlib
 import json
 import logging
 import os
+import runpy
 import select
 import signal
 import subprocess
@@ -262,9 +263,7 @@ def _child(argv: list[str], control: IO[str]) -> None:
     os.dup2(devnull, 0)
     os.close(devnull)
     sys.argv = ["cyborg", *argv]
-    from cyborg.cli import main
-
-    main()
+    runpy.run_module("cyborg.cli", run_name="__main__", alter_sys=True)  # as `python -m cyborg.cli` does
     raise SystemExit(0)
 
 
