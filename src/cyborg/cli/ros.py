@@ -7,8 +7,10 @@ how the nodes run is :mod:`cyborg.run`'s.
 
 from __future__ import annotations
 
+import os
 import sys
 import time
+import traceback
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -283,7 +285,7 @@ def launch_command(
 
     try:
         config = load_or_default(config_path)
-        check_modules(config)
+        _check_modules_apart(config)
         path = Path(config.source).resolve()
         parts = list(only) or all_parts(config)
         unknown = sorted(set(parts) - set(all_parts(config)))
@@ -323,6 +325,34 @@ def launch_command(
         launch(robot, duration=duration)
     except CyborgError as exc:
         fail(exc)
+
+
+def _check_modules_apart(config: LoadedConfig) -> None:
+    """:func:`check_modules` in a forked child: the module kinds it imports to check their settings
+    (the simulated base's scipy, the navigation's database, ~35 MB) stay out of the launcher,
+    which runs as long as the robot."""
+    if not hasattr(os, "fork"):
+        check_modules(config)
+        return
+    sys.stdout.flush()
+    sys.stderr.flush()
+    pid = os.fork()
+    if pid == 0:  # (the launcher is single-threaded here: nothing started yet)
+        code = 1
+        try:
+            check_modules(config)
+            code = 0
+        except CyborgError as exc:
+            click.secho(str(exc), fg="red", err=True)
+        except BaseException:
+            traceback.print_exc()
+        finally:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(code)
+    _, status = os.waitpid(pid, 0)
+    if os.waitstatus_to_exitcode(status) != 0:
+        sys.exit(1)
 
 
 def _shared_processes(
