@@ -456,6 +456,7 @@ def measure_launch(
         watcher.wait_line("watching")
         began = time.time()
         args = ["launch", "--db", str(data), "--port", str(free_port())] + (["--ros2"] if ros2 else [])
+        args += ["--config", str(LAUNCH_CONFIG[0])] if LAUNCH_CONFIG else []
         launch = Child(cyborg(*args), launch_env or env, log_dir, "launch")
         deadline = time.monotonic() + 120
         while "state " not in watcher.log():
@@ -628,6 +629,9 @@ def bench(
 def report(out: dict[str, Any], runs: int, sim_seconds: float, idle_seconds: float, src: Path | None) -> None:
     print(f"machine: {machine_line()}")
     print(f"code: {src if src is not None else 'this working tree'}; medians of {runs} runs (min-max)")
+    print(
+        f"launch configuration: {LAUNCH_CONFIG[0] if LAUNCH_CONFIG else 'the packaged robot (cyborg.yaml)'}"
+    )
     print(ISSUE_BEFORE)
     print("| what | figure | target | | load (1 min) |")
     print("|---|---:|---|---|---|")
@@ -739,6 +743,7 @@ def report(out: dict[str, Any], runs: int, sim_seconds: float, idle_seconds: flo
 
 
 ROS_CORE: list[subprocess.Popen[Any]] = []
+LAUNCH_CONFIG: list[Path] = []  # --config: what the launches run (default: the packaged robot)
 
 
 def main() -> None:
@@ -750,6 +755,12 @@ def main() -> None:
     )
     parser.add_argument("--src", type=Path, help="measure this checkout's src folder (PYTHONPATH)")
     parser.add_argument(
+        "--config",
+        type=Path,
+        help="the configuration the launches run (default: the packaged robot, which starts wandering; "
+        "src/cyborg/data/demo.yaml's placeholders wait in their idle state)",
+    )
+    parser.add_argument(
         "--only",
         default="help,say,sim,node,node2,launch,launch2",
         help="comma-separated: help,say,sim,node,node2,launch,launch2 (node: ROS 1, node2: ROS 2)",
@@ -760,6 +771,8 @@ def main() -> None:
     if args.role is not None:
         roles[args.role]()
         return
+    if args.config is not None:
+        LAUNCH_CONFIG.append(args.config.resolve())
     parts = {p.strip() for p in args.only.split(",") if p.strip()}
     if parts & {"node", "launch"} and shutil.which("roscore") is None:
         raise SystemExit("no roscore; fix: scripts/install-ros")
