@@ -49,7 +49,7 @@ import tempfile
 import threading
 import time
 import urllib.request
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -553,6 +553,17 @@ def bench_nodes(env: dict[str, str], log_dir: Path, runs: int, *, ros2: bool) ->
     return out
 
 
+def attempts(measure: Callable[[], dict[str, Any]], runs: int, what: str) -> list[dict[str, Any]]:
+    """``runs`` measurements; one that fails is told on stderr and left out (the others stand)."""
+    done = []
+    for run in range(runs):
+        try:
+            done.append(measure())
+        except SystemExit as exc:
+            print(f"{what}, run {run + 1}: {exc}"[:3000], file=sys.stderr, flush=True)
+    return done
+
+
 def bench(
     parts: set[str], runs: int, sim_seconds: float, idle_seconds: float, src: Path | None
 ) -> dict[str, Any]:
@@ -687,7 +698,7 @@ def report(out: dict[str, Any], runs: int, sim_seconds: float, idle_seconds: flo
                 at,
             )
     for key, middleware in (("launch", "ROS 1"), ("launch2", "ROS 2")):
-        if key not in out:
+        if not out.get(key):
             continue
         launches = out[key]
         at = loads([x["load"] for x in launches])
@@ -697,7 +708,7 @@ def report(out: dict[str, Any], runs: int, sim_seconds: float, idle_seconds: flo
 
         first = median([x["first"] for x in launches])
         row(
-            f"{middleware} cyborg launch: first state, s",
+            f"{middleware} cyborg launch: first state, s ({len(launches)} of {runs} runs)",
             figure("first", ".2f"),
             f"<= {TARGETS['launch_s']:g}",
             first <= TARGETS["launch_s"],
