@@ -11,7 +11,8 @@
   on the graph (a name in use, another robot, the domain a robot must pick);
   :mod:`~cyborg.run.tasks`: pending tasks counted per module, a leak named.
 - :mod:`~cyborg.run.supervisor`: every part as its own process, restarted when it stops
-  (``cyborg launch``); :mod:`~cyborg.run.roslaunch`: the same as a roslaunch file.
+  (``cyborg launch``), forked from a :mod:`~cyborg.run.zygote` that imported what the nodes
+  import; :mod:`~cyborg.run.roslaunch`: the same as a roslaunch file.
 - :mod:`~cyborg.run.simtime`: virtual time shared by processes (the origin, ``/clock``);
   :mod:`~cyborg.run.lockstep`: the time server of lockstep time (``--speed max`` over ROS).
 - :mod:`~cyborg.run.scenario`: a scenario script over ROS (the ``cyborg_scenario`` node).
