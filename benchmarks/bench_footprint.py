@@ -1,26 +1,36 @@
-"""Footprint of the robot's processes, beside a bare rospy node measured in the same run.
+"""Footprint of the robot's processes, beside bare rospy and rclpy nodes measured in the same run.
 
-* floor: a plain python script (this venv's python) that does ``rospy.init_node`` and serves one
-  ``actionlib.SimpleActionServer`` on ``cyborg_controller/StateMachine``; its RSS once serving.
-* node: ``cyborg node NAME`` of a placeholder module (demo.yaml's ``cyborg_joke``, kind
-  ``placeholder``) and of a question module of the default config (cyborg.yaml's ``cyborg_joke``,
-  the thesis's joke state); RSS once it logs ``node NAME running`` (its action server is up).
-* launch: ``cyborg launch`` of the default config against a running master (started by the
-  benchmark): wall time from its start until the controller's first message on
-  ``/cyborg_controller/state_change``, and the RSS of each node process at that moment and 5 s later.
-* say: ``cyborg say hello`` against a running embedded ``cyborg sim`` (its API on a free port),
-  and ``cyborg --help``: wall time of the whole command, medians.
-* sim: embedded ``cyborg sim`` (default config, real time), a fresh one each run: peak RSS (VmHWM)
-  over ``--sim-seconds`` and RSS at the end (the robot starts wandering ~12 s in: one route planned).
+Memory is read from /proc/PID/smaps_rollup: RSS, PSS (shared pages split among the processes that
+map them) and USS (private pages: what one more such process costs). Every figure is the median of
+``--runs`` runs (min-max); each node's is also given as a ratio to its floor's median, same run.
 
-RSS is VmRSS (VmHWM for peaks) from /proc, read 1 s after the process said it is ready; every
-figure is the median of ``--runs`` runs, and each node's RSS is also given as a ratio to the floor's
-median from the same run. The processes run with ``PYTHONPATH=--src`` first when given (a checkout's
-``src`` folder, to measure an older commit beside the working tree). The benchmark starts its own
-roscore on a free port with a temporary ROS_HOME and stops everything it started (process groups).
+* help, say: ``cyborg --help``, and ``cyborg say hello`` against a running embedded ``cyborg sim``:
+  wall time of the whole command. Measured first, while this process is quiet (it never joins a
+  ROS graph itself: a rospy process whose master is gone spins its XML-RPC thread).
+* sim: embedded ``cyborg sim`` (default config, real time), a fresh one each run: peak RSS
+  (VmHWM) over ``--sim-seconds`` and RSS at the end.
+* floor / node (ROS 1): a bare rospy node serving one ``actionlib.SimpleActionServer``, and
+  ``cyborg node cyborg_joke`` of demo.yaml (a placeholder module) started as ``cyborg launch``
+  starts it (``--checked``: the launch validated the file) and by hand (it validates the file
+  itself), alternating; memory 1 s after each says it is ready.
+* floor2 / node2 (ROS 2): the same with a bare rclpy node serving one ``ActionServer``, and
+  ``cyborg node --ros2`` in the ROS 2 venv's Python.
+* launch / launch2: ``cyborg launch`` (ROS 1 against a roscore this benchmark starts; ROS 2 with
+  ``--ros2`` on a domain of its own) of the default configuration: wall time from its start until
+  the controller's first message on ``/cyborg_controller/state_change`` (heard by a watcher
+  process), CPU of the launch's processes until then, PSS / USS / RSS of all of them (launcher and
+  nodes; ROS 1's rosmaster and rosout apart) 5 s later, then their CPU over ``--idle-seconds``
+  (ROS 1: and the master's) as a percentage of one core. The robot of the default configuration
+  starts wandering about 12 s in: the "idle" figure is a robot that is up and moving slowly.
 
-Run: .venv/bin/python benchmarks/bench_footprint.py [--runs 3] [--sim-seconds 30] [--src DIR]
-     [--only floor,node,launch,say,help,sim]
+The load average (1 min) is printed with each figure. The processes run with ``PYTHONPATH=--src``
+first when given (a checkout's ``src`` folder, to measure an older commit beside the working
+tree; ROS 2 processes run the code the ROS 2 venv imports, or ``$CYBORG_ROS2_PYTHON``'s). The
+benchmark starts its own roscore on a free port with a temporary ROS_HOME, uses a random
+ROS_DOMAIN_ID, and stops everything it started (process groups).
+
+Run: .venv/bin/python benchmarks/bench_footprint.py [--runs 3] [--sim-seconds 30] [--idle-seconds 20]
+     [--src DIR] [--only help,say,sim,node,node2,launch,launch2]
 """
 
 from __future__ import annotations
@@ -28,6 +38,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
+import random
 import shutil
 import signal
 import socket
@@ -38,7 +49,7 @@ import tempfile
 import threading
 import time
 import urllib.request
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -47,22 +58,28 @@ from _machine import machine_line
 ROOT = Path(__file__).resolve().parent.parent
 DATA = ROOT / "src" / "cyborg" / "data"
 STATE_CHANGE = "/cyborg_controller/state_change"
-SETTLE = 1.0  # seconds between "ready" and reading the RSS
+SETTLE = 1.0  # seconds between "ready" and reading the memory
+AFTER_FIRST_STATE = 5.0  # seconds between the launch's first state and reading its memory
 MB = 1024 * 1024
-TARGETS = {  # issue 13
-    "node_ratio": 1.3,
-    "launch_s": 10.0,
+TARGETS = {  # issue 33 (node, launch) and issue 13 (say, sim)
+    "node_uss_ratio": 1.15,
+    "launch_s": 3.0,
+    "launch_pss_mib": 300.0,
+    "idle_pct": 2.0,
     "say_s": 0.3,
     "sim_peak_mb": 150.0,
 }
-ISSUE_BEFORE = "node ~77 MB (floor 46 MB), launch ~27 s, --help 0.7 s, say ~0.7 s"
+ISSUE_BEFORE = (
+    "issue 33 (before, load 2-3): node 1.39x the rospy floor by USS; launch: first state 6.7 s, "
+    "PSS 645 MiB, idle 5.9 % + rosmaster 1.65 % of a core"
+)
 
 
-# --- the floor's own process ----------------------------------------------------------------------
+# --- the floors' and watchers' own processes -------------------------------------------------------
 
 
 def role_floor() -> None:
-    """A bare rospy node serving one action: what any Python ROS node must hold."""
+    """A bare rospy node serving one action: what any Python ROS 1 node must hold."""
     import actionlib  # type: ignore[import-not-found]
     import rospy  # type: ignore[import-not-found]
     from cyborg_controller.msg import StateMachineAction  # type: ignore[import-not-found]
@@ -80,6 +97,76 @@ def role_floor() -> None:
         signal.signal(sig, lambda *_: stop.set())
     stop.wait()
     rospy.signal_shutdown("benchmark done")
+
+
+def role_floor2() -> None:
+    """A bare rclpy node serving one action: what any Python ROS 2 node must hold."""
+    import rclpy  # type: ignore[import-not-found]
+    from cyborg_controller.action import StateMachine  # type: ignore[import-not-found]
+    from rclpy.action import ActionServer  # type: ignore[import-not-found]
+    from rclpy.executors import SingleThreadedExecutor  # type: ignore[import-not-found]
+    from rclpy.node import Node  # type: ignore[import-not-found]
+
+    rclpy.init()
+    node = Node("bench_floor")
+
+    def execute(handle: Any) -> Any:
+        handle.succeed()
+        return StateMachine.Result()
+
+    server = ActionServer(node, StateMachine, "/bench_floor/serve", execute)  # noqa: F841 (kept)
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    threading.Thread(target=executor.spin, daemon=True).start()
+    print("floor serving", file=sys.stderr, flush=True)
+    stop.wait()
+    executor.shutdown(timeout_sec=1)
+
+
+def role_watch() -> None:
+    """Print the Unix time of the first message on STATE_CHANGE (ROS 1), then wait."""
+    import rospy
+    from cyborg_controller.msg import SystemState  # type: ignore[import-not-found]
+
+    rospy.init_node("bench_watch", anonymous=True, disable_signals=True)
+    heard = threading.Event()
+
+    def on_change(message: Any) -> None:
+        if not heard.is_set():
+            heard.set()
+            print(f"state {time.time()!r}", flush=True)
+
+    rospy.Subscriber(STATE_CHANGE, SystemState, on_change, queue_size=10)
+    print("watching", flush=True)
+    heard.wait()
+    time.sleep(3600)
+
+
+def role_watch2() -> None:
+    """Print the Unix time of the first message on STATE_CHANGE (ROS 2, latched), then wait."""
+    import rclpy
+    from cyborg_controller.msg import SystemState
+    from rclpy.node import Node
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # type: ignore[import-not-found]
+
+    rclpy.init()
+    node = Node(f"bench_watch_{os.getpid()}")
+    heard = threading.Event()
+
+    def on_change(message: Any) -> None:
+        if not heard.is_set():
+            heard.set()
+            print(f"state {time.time()!r}", flush=True)
+
+    latched = QoSProfile(
+        depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+    )
+    node.create_subscription(SystemState, STATE_CHANGE, on_change, latched)
+    print("watching", flush=True)
+    rclpy.spin(node)
 
 
 # --- processes ------------------------------------------------------------------------------------
@@ -132,7 +219,12 @@ def node_name(pid: int) -> str:
     except OSError:
         return "?"
     words = [a.decode() for a in args]
-    return words[words.index("node") + 1] if "node" in words else " ".join(words[:3])
+    if "node" in words:
+        return words[words.index("node") + 1]
+    with contextlib.suppress(OSError):  # forked by the launch's zygote: named by its command's name
+        if "cyborg.run.zygote" in words:
+            return Path(f"/proc/{pid}/comm").read_text().strip()
+    return " ".join(words[:3])
 
 
 def stop_group(process: subprocess.Popen[Any] | None, grace: float = 10.0) -> None:
@@ -212,6 +304,7 @@ def ros_graph(env: dict[str, str]) -> Iterator[dict[str, str]]:
             stderr=subprocess.DEVNULL,
             start_new_session=True,
         )
+        ROS_CORE.append(core)
         import xmlrpc.client
 
         master = xmlrpc.client.ServerProxy(env["ROS_MASTER_URI"])
@@ -235,60 +328,175 @@ def ros_graph(env: dict[str, str]) -> Iterator[dict[str, str]]:
 # --- the measurements -----------------------------------------------------------------------------
 
 
-def cyborg(*args: str) -> list[str]:
+def load() -> float:
+    return os.getloadavg()[0]
+
+
+def memory(pid: int) -> dict[str, float]:
+    """RSS, PSS and USS of ``pid`` in MiB (from smaps_rollup)."""
+    fields: dict[str, int] = {}
+    try:
+        with open(f"/proc/{pid}/smaps_rollup", encoding="ascii") as rollup:
+            for line in rollup:
+                parts = line.split()
+                if len(parts) >= 2 and parts[1].isdigit():
+                    fields[parts[0].rstrip(":")] = int(parts[1])
+    except OSError:
+        raise SystemExit(f"process {pid} is gone before its memory was read") from None
+    return {
+        "rss": fields["Rss"] / 1024,
+        "pss": fields["Pss"] / 1024,
+        "uss": (fields["Private_Clean"] + fields["Private_Dirty"]) / 1024,
+    }
+
+
+def cpu_seconds(pid: int) -> float:
+    """utime + stime of ``pid`` (0 when it is gone)."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return 0.0
+    fields = stat[stat.rfind(")") + 2 :].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def descendants(pid: int) -> list[int]:
+    found, todo = [], [pid]
+    while todo:
+        children = children_of(todo.pop())
+        found += children
+        todo += children
+    return found
+
+
+def cyborg(*args: str, python: str | None = None) -> list[str]:
     """The ``cyborg`` console script's import path (``from cyborg.cli import main``)."""
     return [
-        sys.executable,
+        python or sys.executable,
         "-c",
         "import sys; from cyborg.cli import main; sys.exit(main())",
         *args,
     ]
 
 
-def measure_floor(env: dict[str, str], log_dir: Path) -> float:
-    child = Child([sys.executable, __file__, "--role", "floor"], env, log_dir, "floor")
+def ros2_python() -> str:
+    from cyborg.run.ros2_env import ros2_python as find
+
+    return find()
+
+
+def ros2_env(env: dict[str, str], log_dir: Path) -> dict[str, str]:
+    """The environment of the ROS 2 processes: the ROS 2 venv's (no ROS 1 PYTHONPATH), a domain of
+    their own, discovery on this host."""
+    from cyborg.run.ros2_env import ros2_environment
+
+    saved = dict(os.environ)
+    os.environ.clear()
+    os.environ.update(env)
+    try:
+        ros2 = ros2_environment()
+    finally:
+        os.environ.clear()
+        os.environ.update(saved)
+    ros2["ROS_DOMAIN_ID"] = str(random.randint(1, 200))
+    ros2["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    ros2["ROS_LOG_DIR"] = str(log_dir / "ros2-log")
+    return ros2
+
+
+def checked(config: Path) -> list[str]:
+    from cyborg.app.sketch import text_digest
+
+    return ["--checked", text_digest(config.read_text(encoding="utf-8"))]
+
+
+def measure_floor(env: dict[str, str], log_dir: Path, *, ros2: bool) -> dict[str, float]:
+    python = ros2_python() if ros2 else sys.executable
+    role = "floor2" if ros2 else "floor"
+    child = Child([python, __file__, "--role", role], env, log_dir, role)
     try:
         child.wait_line("floor serving")
         time.sleep(SETTLE)
-        return rss_mb(child.pid)
+        return memory(child.pid)
     finally:
         child.stop()
 
 
-def measure_node(env: dict[str, str], log_dir: Path, name: str, config: Path) -> float:
+def measure_node(
+    env: dict[str, str], log_dir: Path, name: str, config: Path, *, launched: bool, ros2: bool
+) -> dict[str, float]:
     data = Path(tempfile.mkdtemp(prefix="cyborg-bench-db-", dir=log_dir))
-    child = Child(cyborg("node", name, "--config", str(config), "--db", str(data)), env, log_dir, name)
+    args = ["node", name, "--config", str(config), "--db", str(data)]
+    args += checked(config) if launched else []
+    args += ["--ros2"] if ros2 else []
+    child = Child(cyborg(*args, python=ros2_python() if ros2 else None), env, log_dir, name)
     try:
         child.wait_line(f"node {name} running")
         time.sleep(SETTLE)
-        return rss_mb(child.pid)
+        return memory(child.pid)
     finally:
         child.stop()
 
 
-def measure_launch(env: dict[str, str], log_dir: Path) -> tuple[float, dict[str, float], dict[str, float]]:
-    """Seconds until the first state change; each node's RSS then and 5 s later."""
-    import rospy
-
-    heard = threading.Event()
+def measure_launch(
+    env: dict[str, str],
+    log_dir: Path,
+    *,
+    ros2: bool,
+    master_pids: Sequence[int],
+    idle_seconds: float,
+    launch_env: dict[str, str] | None = None,
+) -> dict[str, Any]:
+    """Seconds to the first state; CPU until then; memory 5 s later; CPU over ``idle_seconds``."""
     data = Path(tempfile.mkdtemp(prefix="cyborg-bench-db-", dir=log_dir))
-    port = free_port()
-    from cyborg_controller.msg import SystemState  # type: ignore[import-not-found]
-
-    subscriber = rospy.Subscriber(STATE_CHANGE, SystemState, lambda _m: heard.set(), queue_size=10)
-    time.sleep(0.2)
-    child = Child(cyborg("launch", "--db", str(data), "--port", str(port)), env, log_dir, "launch")
+    python = ros2_python() if ros2 else sys.executable
+    watcher = Child([python, __file__, "--role", "watch2" if ros2 else "watch"], env, log_dir, "watch")
+    launch = None
     try:
-        if not heard.wait(120):
-            raise SystemExit(f"no state change within 120 s; launch log:\n{child.log()[-3000:]}")
-        first = time.perf_counter() - child.started
-        at_first = {node_name(pid): rss_mb(pid) for pid in children_of(child.pid)}
-        time.sleep(5)
-        later = {node_name(pid): rss_mb(pid) for pid in children_of(child.pid)}
-        return first, at_first, later
+        watcher.wait_line("watching")
+        began = time.time()
+        args = ["launch", "--db", str(data), "--port", str(free_port())] + (["--ros2"] if ros2 else [])
+        args += ["--config", str(LAUNCH_CONFIG[0])] if LAUNCH_CONFIG else []
+        launch = Child(cyborg(*args), launch_env or env, log_dir, "launch")
+        deadline = time.monotonic() + 120
+        while "state " not in watcher.log():
+            if launch.process.poll() is not None or time.monotonic() > deadline:
+                raise SystemExit(f"no state change within 120 s; launch log:\n{launch.log()[-3000:]}")
+            time.sleep(0.02)
+        line = next(x for x in watcher.log().splitlines() if x.startswith("state "))
+        first = float(line.split()[1]) - began
+        pids = [launch.pid, *descendants(launch.pid)]
+        cpu_first = sum(cpu_seconds(pid) for pid in pids)
+        load_first = load()
+        time.sleep(AFTER_FIRST_STATE)
+        pids = [launch.pid, *descendants(launch.pid)]
+        mems = {pid: memory(pid) for pid in pids}
+        names = {pid: node_name(pid) for pid in pids}
+        names[launch.pid] = "(launcher)"
+        master_mem = [memory(pid) for pid in master_pids]
+        watched = pids + list(master_pids)
+        before = {pid: cpu_seconds(pid) for pid in watched}
+        time.sleep(idle_seconds)
+        used = {pid: cpu_seconds(pid) - before[pid] for pid in watched}
+        return {
+            "first": first,
+            "load": load_first,
+            "cpu_first": cpu_first,
+            "processes": len(pids),
+            "pss": sum(m["pss"] for m in mems.values()),
+            "uss": sum(m["uss"] for m in mems.values()),
+            "rss": sum(m["rss"] for m in mems.values()),
+            "launcher_pss": mems[launch.pid]["pss"],
+            "master_pss": sum(m["pss"] for m in master_mem),
+            "per_node_pss": {names[pid]: m["pss"] for pid, m in mems.items()},
+            "idle_pct": 100 * sum(used[pid] for pid in pids) / idle_seconds,
+            "master_idle_pct": 100 * sum(used[pid] for pid in master_pids) / idle_seconds,
+            "per_node_idle": {names[pid]: 100 * used[pid] / idle_seconds for pid in pids},
+        }
     finally:
-        subscriber.unregister()
-        child.stop()
+        if launch is not None:
+            launch.stop()
+        watcher.stop()
 
 
 def wall(command: Sequence[str], env: dict[str, str]) -> float:
@@ -324,44 +532,52 @@ def spread(values: list[float], fmt: str) -> str:
     return f"{format(median(values), fmt)} ({format(min(values), fmt)}-{format(max(values), fmt)})"
 
 
-def bench(parts: set[str], runs: int, sim_seconds: float, src: Path | None) -> dict[str, Any]:
+def loads(values: list[float]) -> str:
+    return f"{min(values):.1f}-{max(values):.1f}"
+
+
+def bench_nodes(env: dict[str, str], log_dir: Path, runs: int, *, ros2: bool) -> dict[str, Any]:
+    """The floor and the placeholder node (as launched, and by hand), alternating."""
+    config = DATA / "demo.yaml"
+    out: dict[str, Any] = {"floor": [], "launched": [], "by_hand": [], "load": []}
+    for run in range(runs):
+        order = ["floor", "launched", "by_hand"]
+        for kind in order if run % 2 == 0 else order[::-1]:  # load changes hit all alike
+            out["load"].append(load())
+            if kind == "floor":
+                out["floor"].append(measure_floor(env, log_dir, ros2=ros2))
+            else:
+                out[kind].append(
+                    measure_node(env, log_dir, "cyborg_joke", config, launched=kind == "launched", ros2=ros2)
+                )
+    return out
+
+
+def attempts(measure: Callable[[], dict[str, Any]], runs: int, what: str) -> list[dict[str, Any]]:
+    """``runs`` measurements; one that fails is told on stderr and left out (the others stand)."""
+    done = []
+    for run in range(runs):
+        try:
+            done.append(measure())
+        except SystemExit as exc:
+            print(f"{what}, run {run + 1}: {exc}"[:3000], file=sys.stderr, flush=True)
+    return done
+
+
+def bench(
+    parts: set[str], runs: int, sim_seconds: float, idle_seconds: float, src: Path | None
+) -> dict[str, Any]:
     env = dict(os.environ)
     if src is not None:
         env["PYTHONPATH"] = str(src.resolve()) + (
             os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else ""
         )
-        os.environ["PYTHONPATH"] = env[
-            "PYTHONPATH"
-        ]  # sys.executable children only; this process imports rospy
     out: dict[str, Any] = {}
     log_dir = Path(tempfile.mkdtemp(prefix="cyborg-bench-footprint-"))
     try:
-        if parts & {"floor", "node", "launch"}:
-            with ros_graph(env) as ros_env:
-                os.environ.update({k: ros_env[k] for k in ("ROS_MASTER_URI", "ROS_HOSTNAME", "ROS_HOME")})
-                floor: list[float] = []
-                placeholder: list[float] = []
-                question: list[float] = []
-                for _ in range(runs):  # alternating, so load changes hit all alike
-                    floor.append(measure_floor(ros_env, log_dir))
-                    if "node" in parts:
-                        placeholder.append(measure_node(ros_env, log_dir, "cyborg_joke", DATA / "demo.yaml"))
-                        question.append(measure_node(ros_env, log_dir, "cyborg_joke", DATA / "cyborg.yaml"))
-                out["floor"] = floor
-                if placeholder:
-                    out["placeholder"] = placeholder
-                    out["question"] = question
-                if "launch" in parts:
-                    import rospy
-
-                    rospy.init_node("bench_footprint", disable_signals=True)
-                    launches = [measure_launch(ros_env, log_dir) for _ in range(runs)]
-                    out["launch"] = [first for first, _, _ in launches]
-                    out["launch_rss"] = [at for _, at, _ in launches]
-                    out["launch_rss_later"] = [later for _, _, later in launches]
-                    rospy.signal_shutdown("benchmark done")
-        if "help" in parts:
+        if "help" in parts:  # first: this process is quiet, and nothing else of ours runs
             wall(cyborg("--help"), env)  # warm the file cache
+            out["help_load"] = load()
             out["help"] = [wall(cyborg("--help"), env) for _ in range(max(5, runs))]
         if parts & {"say", "sim"}:
             peaks: list[float] = []
@@ -372,77 +588,71 @@ def bench(parts: set[str], runs: int, sim_seconds: float, src: Path | None) -> d
                     if "say" in parts and run == 0:
                         say = cyborg("say", "hello", "--url", url)
                         wall(say, env)
+                        out["say_load"] = load()
                         out["say"] = [wall(say, env) for _ in range(max(5, runs))]
                     if "sim" in parts:
                         remaining = sim_seconds - (time.perf_counter() - sim.started)
                         time.sleep(max(0.0, remaining))
                         peaks.append(rss_mb(sim.pid, "VmHWM"))
                         settled.append(rss_mb(sim.pid))
+                        out.setdefault("sim_load", []).append(load())
                 finally:
                     sim.stop()
             if peaks:
                 out["sim_peak"] = peaks
                 out["sim_rss"] = settled
+        if parts & {"node", "launch"}:
+            with ros_graph(env) as ros_env:
+                if "node" in parts:
+                    out["node"] = bench_nodes(ros_env, log_dir, runs, ros2=False)
+                if "launch" in parts:
+                    core = ROS_CORE[-1].pid
+                    master = [core, *descendants(core)]  # roscore, rosmaster, rosout
+                    out["launch"] = [
+                        measure_launch(
+                            ros_env, log_dir, ros2=False, master_pids=master, idle_seconds=idle_seconds
+                        )
+                        for _ in range(runs)
+                    ]
+        if parts & {"node2", "launch2"}:
+            ros2 = ros2_env(env, log_dir)
+            if "node2" in parts:
+                out["node2"] = bench_nodes(ros2, log_dir, runs, ros2=True)
+            if "launch2" in parts:  # the launcher in this venv; it starts its nodes in the ROS 2 one
+                graph = ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_LOG_DIR")
+                launcher = {**env, **{key: ros2[key] for key in graph}}
+                out["launch2"] = [
+                    measure_launch(
+                        ros2,
+                        log_dir,
+                        ros2=True,
+                        master_pids=[],
+                        idle_seconds=idle_seconds,
+                        launch_env=launcher,
+                    )
+                    for _ in range(runs)
+                ]
     finally:
         shutil.rmtree(log_dir, ignore_errors=True)
     return out
 
 
-def report(out: dict[str, Any], runs: int, sim_seconds: float, src: Path | None) -> None:
+def report(out: dict[str, Any], runs: int, sim_seconds: float, idle_seconds: float, src: Path | None) -> None:
     print(f"machine: {machine_line()}")
     print(f"code: {src if src is not None else 'this working tree'}; medians of {runs} runs (min-max)")
-    print(f"issue 13 (before): {ISSUE_BEFORE}")
-    print("| what | figure | target | |")
-    print("|---|---:|---|---|")
+    print(
+        f"launch configuration: {LAUNCH_CONFIG[0] if LAUNCH_CONFIG else 'the packaged robot (cyborg.yaml)'}"
+    )
+    print(ISSUE_BEFORE)
+    print("| what | figure | target | | load (1 min) |")
+    print("|---|---:|---|---|---|")
 
-    def row(what: str, figure: str, target: str = "", ok: bool | None = None) -> None:
+    def row(what: str, figure: str, target: str = "", ok: bool | None = None, at: str = "") -> None:
         verdict = "" if ok is None else ("pass" if ok else "FAIL")
-        print(f"| {what} | {figure} | {target} | {verdict} |")
+        print(f"| {what} | {figure} | {target} | {verdict} | {at} |")
 
-    floor = median(out["floor"]) if "floor" in out else None
-    if floor is not None:
-        row("floor: bare rospy node + SimpleActionServer, RSS MB", spread(out["floor"], ".1f"))
-    if "placeholder" in out and floor is not None:
-        for key, label in (
-            ("placeholder", "cyborg node cyborg_joke (demo.yaml, placeholder)"),
-            ("question", "cyborg node cyborg_joke (cyborg.yaml, question)"),
-        ):
-            ratio = median(out[key]) / floor
-            row(f"{label}, RSS MB", spread(out[key], ".1f"))
-            limit = TARGETS["node_ratio"]
-            row(
-                "  ratio to the floor",
-                f"{ratio:.2f}",
-                f"<= {limit}" if key == "placeholder" else "",
-                ratio <= limit if key == "placeholder" else None,
-            )
-    if "launch" in out:
-        first = median(out["launch"])
-        row(
-            "cyborg launch: first state, s",
-            spread(out["launch"], ".1f"),
-            f"<= {TARGETS['launch_s']:g}",
-            first <= TARGETS["launch_s"],
-        )
-        for label, key in (("at the first state", "launch_rss"), ("5 s later", "launch_rss_later")):
-            per_node: dict[str, list[float]] = {}
-            for sample in out[key]:
-                for name, mb in sample.items():
-                    per_node.setdefault(name, []).append(mb)
-            medians = {name: median(values) for name, values in per_node.items()}
-            total = sum(medians.values())
-            biggest = max(medians.values(), default=0.0)
-            line = ", ".join(
-                f"{name} {mb:.0f}" for name, mb in sorted(medians.items(), key=lambda kv: -kv[1])
-            )
-            row(
-                f"launch nodes' RSS {label}: {len(medians)} nodes, sum MB", f"{total:.0f} (max {biggest:.0f})"
-            )
-            print(f"|   per node, MB | {line} | | |")
-            if floor is not None and medians:
-                row(f"  median node / floor ({label})", f"{median(list(medians.values())) / floor:.2f}")
     if "help" in out:
-        row("cyborg --help, wall s", spread(out["help"], ".3f"))
+        row("cyborg --help, wall s", spread(out["help"], ".3f"), at=f"{out['help_load']:.1f}")
     if "say" in out:
         say = median(out["say"])
         row(
@@ -450,40 +660,135 @@ def report(out: dict[str, Any], runs: int, sim_seconds: float, src: Path | None)
             spread(out["say"], ".3f"),
             f"<= {TARGETS['say_s']}",
             say <= TARGETS["say_s"],
+            f"{out['say_load']:.1f}",
         )
     if "sim_peak" in out:
-        peak = median(out["sim_peak"])
         row(
             f"cyborg sim peak RSS (VmHWM) over {sim_seconds:g} s, MB",
             spread(out["sim_peak"], ".0f"),
             f"<= {TARGETS['sim_peak_mb']:g}",
-            peak <= TARGETS["sim_peak_mb"],
+            median(out["sim_peak"]) <= TARGETS["sim_peak_mb"],
+            loads(out["sim_load"]),
         )
         row(f"cyborg sim RSS after {sim_seconds:g} s, MB", spread(out["sim_rss"], ".0f"))
+    for key, middleware, floor_name in (("node", "ROS 1", "rospy"), ("node2", "ROS 2", "rclpy")):
+        if key not in out:
+            continue
+        nodes = out[key]
+        at = loads(nodes["load"])
+        floor = {m: median([x[m] for x in nodes["floor"]]) for m in ("uss", "pss", "rss")}
+        row(
+            f"{middleware} floor: bare {floor_name} node + action server, USS / PSS / RSS MiB",
+            " / ".join(spread([x[m] for x in nodes["floor"]], ".1f") for m in ("uss", "pss", "rss")),
+            at=at,
+        )
+        for kind, label in (("launched", "as launched (--checked)"), ("by_hand", "by hand (validates)")):
+            figures = {m: median([x[m] for x in nodes[kind]]) for m in ("uss", "pss", "rss")}
+            ratios = {m: figures[m] / floor[m] for m in figures}
+            row(
+                f"{middleware} cyborg node cyborg_joke (demo.yaml placeholder) {label}, USS / PSS / RSS MiB",
+                " / ".join(spread([x[m] for x in nodes[kind]], ".1f") for m in ("uss", "pss", "rss")),
+                at=at,
+            )
+            row(
+                "  ratio to the floor, USS / PSS / RSS",
+                f"**{ratios['uss']:.2f}** / {ratios['pss']:.2f} / {ratios['rss']:.2f}",
+                f"USS <= {TARGETS['node_uss_ratio']}" if kind == "launched" else "",
+                ratios["uss"] <= TARGETS["node_uss_ratio"] if kind == "launched" else None,
+                at,
+            )
+    for key, middleware in (("launch", "ROS 1"), ("launch2", "ROS 2")):
+        if not out.get(key):
+            continue
+        launches = out[key]
+        at = loads([x["load"] for x in launches])
+
+        def figure(name: str, fmt: str, launches: list[dict[str, Any]] = launches) -> str:
+            return spread([x[name] for x in launches], fmt)
+
+        first = median([x["first"] for x in launches])
+        row(
+            f"{middleware} cyborg launch: first state, s ({len(launches)} of {runs} runs)",
+            figure("first", ".2f"),
+            f"<= {TARGETS['launch_s']:g}",
+            first <= TARGETS["launch_s"],
+            at,
+        )
+        row(
+            f"  CPU of its processes until then, s ({launches[0]['processes']} processes)",
+            figure("cpu_first", ".2f"),
+            at=at,
+        )
+        pss = median([x["pss"] for x in launches])
+        row(
+            f"  PSS of the launcher and its nodes {AFTER_FIRST_STATE:g} s later, MiB",
+            figure("pss", ".0f"),
+            f"<= {TARGETS['launch_pss_mib']:g}",
+            pss <= TARGETS["launch_pss_mib"],
+            at,
+        )
+        row("  USS / RSS of the same, MiB", f"{figure('uss', '.0f')} / {figure('rss', '.0f')}", at=at)
+        row("  of it the launcher, PSS MiB", figure("launcher_pss", ".0f"), at=at)
+        per = launches[-1]["per_node_pss"]
+        print(
+            f"|   per process, PSS MiB (last run) | {', '.join(f'{n} {v:.0f}' for n, v in sorted(per.items(), key=lambda kv: -kv[1]))} | | | |"
+        )
+        master = median([x["master_idle_pct"] for x in launches])
+        idle = median([x["idle_pct"] for x in launches]) + master
+        row(
+            f"  CPU over the next {idle_seconds:g} s, all processes{' (with rosmaster, rosout)' if key == 'launch' else ''}, % of a core",
+            f"{idle:.2f} (launch {figure('idle_pct', '.2f')}"
+            + (
+                f"; master {figure('master_idle_pct', '.2f')}, PSS {figure('master_pss', '.0f')} MiB)"
+                if key == "launch"
+                else ")"
+            ),
+            f"<= {TARGETS['idle_pct']:g}",
+            idle <= TARGETS["idle_pct"],
+            at,
+        )
+        per_idle = launches[-1]["per_node_idle"]
+        print(
+            f"|   per process, % of a core (last run) | {', '.join(f'{n} {v:.2f}' for n, v in sorted(per_idle.items(), key=lambda kv: -kv[1]))} | | | |"
+        )
+
+
+ROS_CORE: list[subprocess.Popen[Any]] = []
+LAUNCH_CONFIG: list[Path] = []  # --config: what the launches run (default: the packaged robot)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", type=int, default=3, help="runs of each measurement (medians)")
     parser.add_argument("--sim-seconds", type=float, default=30.0, help="how long cyborg sim runs")
+    parser.add_argument(
+        "--idle-seconds", type=float, default=20.0, help="how long a launch's idle CPU is read"
+    )
     parser.add_argument("--src", type=Path, help="measure this checkout's src folder (PYTHONPATH)")
     parser.add_argument(
-        "--only",
-        default="floor,node,launch,say,help,sim",
-        help="comma-separated: floor,node,launch,say,help,sim (the floor comes with node and launch)",
+        "--config",
+        type=Path,
+        help="the configuration the launches run (default: the packaged robot, which starts wandering; "
+        "src/cyborg/data/demo.yaml's placeholders wait in their idle state)",
     )
-    parser.add_argument("--role", choices=["floor"], help=argparse.SUPPRESS)
+    parser.add_argument(
+        "--only",
+        default="help,say,sim,node,node2,launch,launch2",
+        help="comma-separated: help,say,sim,node,node2,launch,launch2 (node: ROS 1, node2: ROS 2)",
+    )
+    parser.add_argument("--role", choices=["floor", "floor2", "watch", "watch2"], help=argparse.SUPPRESS)
     args = parser.parse_args()
-    if args.role == "floor":
-        role_floor()
+    roles = {"floor": role_floor, "floor2": role_floor2, "watch": role_watch, "watch2": role_watch2}
+    if args.role is not None:
+        roles[args.role]()
         return
+    if args.config is not None:
+        LAUNCH_CONFIG.append(args.config.resolve())
     parts = {p.strip() for p in args.only.split(",") if p.strip()}
-    if parts & {"node", "launch"}:
-        parts.add("floor")
-    if "floor" in parts and shutil.which("roscore") is None:
+    if parts & {"node", "launch"} and shutil.which("roscore") is None:
         raise SystemExit("no roscore; fix: scripts/install-ros")
-    out = bench(parts, args.runs, args.sim_seconds, args.src)
-    report(out, args.runs, args.sim_seconds, args.src)
+    out = bench(parts, args.runs, args.sim_seconds, args.idle_seconds, args.src)
+    report(out, args.runs, args.sim_seconds, args.idle_seconds, args.src)
 
 
 if __name__ == "__main__":

@@ -12,6 +12,7 @@ module kinds found through entry points, the gatekeepers and the base.
 - :mod:`~cyborg.app.context`: what a module's factory builds with (data folder, randomness, map);
   :mod:`~cyborg.app.world`: which map the robot lives on (the Glassgården scan when found).
 - :mod:`~cyborg.app.robot`: the in-process robot; :mod:`~cyborg.app.parts`: the part of one ROS
-  node; :mod:`~cyborg.app.view`: what the dashboard reads of either.
+  node (a module's or gatekeeper's built from a :mod:`~cyborg.app.sketch` of a configuration the
+  launch validated); :mod:`~cyborg.app.view`: what the dashboard reads of either.
 - :mod:`~cyborg.app.tuning`: the garbage collector and allocator set for a long-lived robot.
 """

@@ -19,14 +19,14 @@ from cyborg.navigation.calendar import CalendarEntry, KeepsCalendar
 from cyborg.transport.topics import BaseApi
 
 if TYPE_CHECKING:
-    from cyborg.app.config import LoadedConfig
     from cyborg.app.registry import KindRegistry
+    from cyborg.app.sketch import PartConfig
     from cyborg.maps import OccupancyMap
 
 __all__ = ["BuildContext", "ModuleContext", "calendar_of", "heard_by", "relays_of"]
 
 
-def relays_of(config: LoadedConfig) -> dict[str, tuple[str, ...]]:
+def relays_of(config: PartConfig) -> dict[str, tuple[str, ...]]:
     """Each gatekeeper's output topic -> the gatekeepers (node names) that publish on it."""
     relays: dict[str, tuple[str, ...]] = {}
     for gate in config.model.gatekeepers:
@@ -115,7 +115,7 @@ class ModuleContext:
         return self.robot.relays_to(topic)
 
 
-def heard_by(config: LoadedConfig, kinds: KindRegistry) -> Callable[[], Listening]:
+def heard_by(config: PartConfig, kinds: KindRegistry) -> Callable[[], Listening]:
     """What the modules of ``config`` listen for, gathered when first asked (it imports every module's kind)."""
 
     def gather() -> Listening:

@@ -6,7 +6,9 @@ every gatekeeper by its name, ``cyborg_recorder`` (the flight recorder, unless t
 ``recording`` is off) and ``cyborg_api`` (the HTTP API and dashboard).
 ``cyborg launch`` starts them all, one process each. A part is built from the same
 pieces as the in-process robot (:mod:`cyborg.app.robot`), and a module's part imports
-only its own kind.
+only its own kind: a module's or gatekeeper's part reads the configuration as a
+:class:`~cyborg.app.sketch.PartConfig` (a sketch of it when the launch validated it), and only the
+controller's part imports the controller, the emotion system and the motivator.
 """
 
 from __future__ import annotations
@@ -15,26 +17,30 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from cyborg.app.config import LoadedConfig
 from cyborg.app.context import BuildContext, calendar_of, heard_by, relays_of
 from cyborg.app.registry import KindRegistry, build_module, module_kinds
-from cyborg.errors import ConfigError
+from cyborg.app.sketch import PartConfig
+from cyborg.errors import ConfigError, CyborgError
+from cyborg.modules.gatekeeper import Gatekeeper
 from cyborg.modules.kind import Component
 from cyborg.navigation.calendar import CalendarEntry
 from cyborg.transport import topics
 from cyborg.transport.base import Transport
 
 if TYPE_CHECKING:
+    from cyborg.app.config import LoadedConfig
     from cyborg.controller.runtime import Controller
 
-__all__ = ["API", "CONTROLLER", "RECORDER", "Part", "build_part", "part_names"]
+__all__ = ["API", "CONTROLLER", "RECORDER", "SCENARIO", "Part", "build_part", "part_names"]
 
 CONTROLLER = topics.CONTROLLER_NODE
 API = "cyborg_api"
 RECORDER = "cyborg_recorder"
+SCENARIO = "cyborg_scenario"
+"""The node that plays a scenario script over ROS (:mod:`cyborg.run.scenario`); not a part of the robot."""
 
 
-def part_names(config: LoadedConfig) -> list[str]:
+def part_names(config: PartConfig) -> list[str]:
     """Every part ``cyborg node`` can run, in a sensible start order (the recorder before the
     robot's modules, so that it hears them from the start)."""
     recorder = [RECORDER] if config.model.recording.enabled else []
@@ -64,7 +70,7 @@ class Part:
 
 def build_part(
     name: str,
-    config: LoadedConfig,
+    config: LoadedConfig | PartConfig,
     transport: Transport,
     context: BuildContext,
     *,
@@ -73,8 +79,11 @@ def build_part(
     """Build the components of part ``name`` on ``transport`` (not started)."""
     model = config.model
     if name == CONTROLLER:
+        from cyborg.app.config import LoadedConfig
         from cyborg.app.robot import build_controller
 
+        if not isinstance(config, LoadedConfig):
+            raise CyborgError(f"{CONTROLLER} builds from the validated configuration, not a sketch of it")
         _, controller, emotion, motivator = build_controller(
             config, transport, context.data_dir, resume=context.resume
         )
@@ -96,12 +105,12 @@ def build_part(
             where=config.where("modules", name),
         )
         return Part(name, [module])
-    if any(gate.name == name for gate in model.gatekeepers):
-        from cyborg.app.robot import build_gatekeeper
-
-        keeper = build_gatekeeper(config, transport, name)
-        assert keeper is not None
-        return Part(name, [keeper])
+    for gate in model.gatekeepers:
+        if gate.name == name:  # as cyborg.app.robot's, without importing the whole robot
+            keeper = Gatekeeper(
+                transport.node(name), input_topic=gate.input, output_topic=gate.output, resource=gate.resource
+            )
+            return Part(name, [keeper])
     if name == API:
         return Part(name, [])  # built by the interface layer, which owns the HTTP server
     if name == RECORDER:

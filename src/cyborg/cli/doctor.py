@@ -31,8 +31,8 @@ def doctor(config_path: Path | None, data_dir: Path | None, graph: str | None, a
             middleware.enter()  # ROS 2 from the main venv: runs again in .venv-ros2's Python
         except CyborgError as exc:
             fail(exc)
+    from cyborg.run.datadir import default_data_dir
     from cyborg.run.doctor import run_doctor
-    from cyborg.run.local import default_data_dir
 
     try:
         config = load_or_default(config_path)

@@ -78,7 +78,7 @@ def listen(
     from cyborg.hearing.module import HEARD_TOPIC, SpeechInput, SpeechInputSettings, cutter, recogniser_of
     from cyborg.hearing.synth import as_heard
     from cyborg.navigation.database import NavigationDatabase
-    from cyborg.run.local import default_data_dir
+    from cyborg.run.datadir import default_data_dir
     from cyborg.transport.clock import RealClock
     from cyborg.transport.embedded import EmbeddedTransport
     from cyborg.transport.messages import String

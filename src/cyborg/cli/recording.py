@@ -61,7 +61,7 @@ def recorder_settings(
 
 def recordings_folder(config: LoadedConfig, data_dir: Path | None) -> Path:
     """The configuration's folder, else $CYBORG_RECORDINGS_DIR, else the data folder's recordings/."""
-    from cyborg.run.local import default_data_dir
+    from cyborg.run.datadir import default_data_dir
 
     named = config.model.recording.folder
     if named:

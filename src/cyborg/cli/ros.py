@@ -7,8 +7,10 @@ how the nodes run is :mod:`cyborg.run`'s.
 
 from __future__ import annotations
 
+import os
 import sys
 import time
+import traceback
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -34,7 +36,10 @@ from cyborg.errors import CyborgError
 from cyborg.web.access import Access
 
 if TYPE_CHECKING:
+    from cyborg.app.config import LoadedConfig
+    from cyborg.app.sketch import ConfigSketch
     from cyborg.run.middleware import Middleware
+    from cyborg.run.scenario import ScenarioFiles
 
 _speed_help = "virtual time at this factor of real time (all nodes share one clock); default real time"
 
@@ -90,6 +95,22 @@ _speed_help = "virtual time at this factor of real time (all nodes share one clo
     "without it a controller restarted after a crash resumes an emotion stored within "
     "resume_within_seconds",
 )
+@click.option(
+    "--with",
+    "also",
+    multiple=True,
+    metavar="NAME",
+    help="ROS 2: host this module or gatekeeper in the same process, as its own node (repeatable; "
+    "`cyborg launch --ros2` shares a process among the thin modules)",
+)
+@click.option(
+    "--checked",
+    default=None,
+    metavar="DIGEST",
+    hidden=True,
+    help="set by `cyborg launch`: the digest of the configuration text it validated; a module's or "
+    "gatekeeper's node then reads only its own part of the file (validated whole when it changed)",
+)
 @ros2_option("a ROS 2 node (rclpy, .venv-ros2; no master), with use_sim_time under --speed")
 @access_options
 @record_options
@@ -109,6 +130,8 @@ def node(
     script_path: Path | None,
     transcript_path: Path | None,
     fresh: bool,
+    also: tuple[str, ...],
+    checked: str | None,
     middleware: Middleware,
     access: Access,
     record_path: Path | None,
@@ -122,20 +145,22 @@ def node(
         fail(exc)
     from cyborg.app.parts import RECORDER
     from cyborg.run.census import NAME_TAKEN_EXIT, NameTaken
-    from cyborg.run.local import default_data_dir
+    from cyborg.run.datadir import default_data_dir
     from cyborg.run.node import ApiOptions, NodeOptions, run_node
-    from cyborg.run.scenario import ScenarioFiles
     from cyborg.run.simtime import SimTime
 
     if speed is not None and speed <= 0:
         raise click.BadParameter(f"{speed!r} must be positive", param_hint="--speed")
     sim_time = SimTime(speed=speed, epoch=parse_epoch(epoch), start=parse_start(start_at), lockstep=lockstep)
     try:
-        config = load_or_default(config_path)
         record = None
         if name == RECORDER:
+            whole = load_or_default(config_path)
             # the recorder node records even when the configuration's recording is off: it was asked for
-            record = recorder_settings(config, record_path, no_record, data_dir, enabled=True)
+            record = recorder_settings(whole, record_path, no_record, data_dir, enabled=True)
+            config: LoadedConfig | ConfigSketch = whole
+        else:
+            config = _node_config([name, *also], config_path, checked)
         options = NodeOptions(
             # the part checks its own module's settings, loading only its kind
             config=config,
@@ -146,8 +171,9 @@ def node(
             time=sim_time,
             publish_clock=publish_clock,
             api=ApiOptions(host=host, port=port, access=access),
-            scenario=ScenarioFiles(script_path, transcript_path) if script_path is not None else None,
+            scenario=_scenario_files(script_path, transcript_path),
             record=record,
+            also=also,
         )
         code = run_node(name, options, middleware)
     except NameTaken as exc:
@@ -158,6 +184,27 @@ def node(
         return
     if code:
         sys.exit(code)
+
+
+def _node_config(names: list[str], path: Path | None, checked: str | None) -> LoadedConfig | ConfigSketch:
+    """The configuration a process of parts ``names`` builds from: a sketch of it when the launch
+    validated this very text and each is a module or gatekeeper (no configuration models
+    loaded), else the whole file, validated."""
+    if checked is not None and path is not None:
+        from cyborg.app.sketch import read_sketch
+
+        sketch = read_sketch(path, checked)
+        if sketch is not None and all(sketch.has_part(name) for name in names):
+            return sketch
+    return load_or_default(path)
+
+
+def _scenario_files(script: Path | None, transcript: Path | None) -> ScenarioFiles | None:
+    if script is None:
+        return None
+    from cyborg.run.scenario import ScenarioFiles
+
+    return ScenarioFiles(script, transcript)
 
 
 @click.command("launch")
@@ -183,6 +230,21 @@ def node(
 @ros2_option(
     "ROS 2 nodes (rclpy, .venv-ros2): no master is started; with --speed each node sets use_sim_time"
 )
+@click.option(
+    "--processes",
+    type=click.Choice(["shared", "per-part"]),
+    default=None,
+    help="shared: the thin modules and the gatekeepers share one process, each its own node "
+    "(ROS 2 only; its default); per-part: a process per part (ROS 1's only way: rospy runs one "
+    "node per process)",
+)
+@click.option(
+    "--fork/--no-fork",
+    default=True,
+    show_default=True,
+    help="fork the node processes from one that imported what they all import (shared memory, a faster "
+    "start); --no-fork starts each afresh",
+)
 @duration_option
 @record_options
 def launch_command(
@@ -198,6 +260,8 @@ def launch_command(
     duration: float | None,
     record_path: Path | None,
     no_record: bool,
+    processes: str | None,
+    fork: bool,
 ) -> None:
     """Start the whole robot over ROS 1 (a master if none runs) or ROS 2 (--ros2), a process a part.
 
@@ -209,7 +273,7 @@ def launch_command(
     records the run to MCAP (--record FILE.mcap names the file; --no-record: no recorder node).
     """
     from cyborg.app.parts import RECORDER
-    from cyborg.run.local import default_data_dir
+    from cyborg.run.datadir import default_data_dir
     from cyborg.run.middleware import ROS1
     from cyborg.run.roslaunch import all_parts, roslaunch_xml, with_recorder
     from cyborg.run.supervisor import Launch, launch
@@ -221,7 +285,7 @@ def launch_command(
 
     try:
         config = load_or_default(config_path)
-        check_modules(config)
+        _check_modules_apart(config)
         path = Path(config.source).resolve()
         parts = list(only) or all_parts(config)
         unknown = sorted(set(parts) - set(all_parts(config)))
@@ -255,10 +319,59 @@ def launch_command(
             start=start,
             middleware=middleware,
             extra_args=extra,
+            hosts=_shared_processes(processes, middleware, config, parts),
+            fork=fork,
         )
         launch(robot, duration=duration)
     except CyborgError as exc:
         fail(exc)
+
+
+def _check_modules_apart(config: LoadedConfig) -> None:
+    """:func:`check_modules` in a forked child: the module kinds it imports to check their settings
+    (the simulated base's scipy, the navigation's database, ~35 MB) stay out of the launcher,
+    which runs as long as the robot."""
+    if not hasattr(os, "fork"):
+        check_modules(config)
+        return
+    sys.stdout.flush()
+    sys.stderr.flush()
+    pid = os.fork()
+    if pid == 0:  # (the launcher is single-threaded here: nothing started yet)
+        code = 1
+        try:
+            check_modules(config)
+            code = 0
+        except CyborgError as exc:
+            click.secho(str(exc), fg="red", err=True)
+        except BaseException:
+            traceback.print_exc()
+        finally:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(code)
+    _, status = os.waitpid(pid, 0)
+    if os.waitstatus_to_exitcode(status) != 0:
+        sys.exit(1)
+
+
+def _shared_processes(
+    choice: str | None,
+    middleware: Middleware,
+    config: LoadedConfig,
+    parts: list[str],
+) -> dict[str, list[str]]:
+    """``--processes``: shared by default where a process may hold many nodes (ROS 2)."""
+    from cyborg.run.supervisor import shared_process
+
+    if choice == "shared" and not middleware.hosts_many:
+        raise click.UsageError(
+            f"--processes shared: {middleware.name} runs one node per process (rospy), and a gatekeeper "
+            "tells modules apart by their process's node name; fix: drop it, or add --ros2"
+        )
+    if choice == "per-part" or not middleware.hosts_many:
+        return {}
+    return shared_process(config, parts)
 
 
 def parse_epoch(value: str | None) -> float | str | None:

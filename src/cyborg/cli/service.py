@@ -56,7 +56,7 @@ def install(
     The unit carries this shell's ROS variables (ROS_MASTER_URI, ROS_IP, ROS_DOMAIN_ID, ...):
     set them as the robot needs them first. It restarts the robot when it fails and logs to
     the journal (`journalctl -u cyborg`)."""
-    from cyborg.run.local import default_data_dir
+    from cyborg.run.datadir import default_data_dir
     from cyborg.run.service import Service, carried_environment, launch_command, require_systemd, unit_text
 
     try:

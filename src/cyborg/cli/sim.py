@@ -189,7 +189,7 @@ def _sim_over_ros(
     no_record: bool = False,
 ) -> None:
     from cyborg.app.parts import RECORDER
-    from cyborg.run.local import default_data_dir
+    from cyborg.run.datadir import default_data_dir
     from cyborg.run.roslaunch import all_parts, with_recorder
     from cyborg.run.scenario import run_scenario_ros
     from cyborg.run.supervisor import Launch, launch

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import asyncio
 import logging
-import os
 import signal
 from collections.abc import Awaitable, Callable
 from pathlib import Path
@@ -14,6 +13,7 @@ from cyborg.app.config import LoadedConfig
 from cyborg.app.robot import Robot, build_robot
 from cyborg.observe.recorder import Recorder, RecorderSettings, RunFacts
 from cyborg.observe.records import RecordStream, to_ns
+from cyborg.run.datadir import default_data_dir
 from cyborg.run.tasks import watch_tasks
 from cyborg.storage import lock_data_dir
 from cyborg.transport import topics
@@ -24,12 +24,6 @@ from cyborg.transport.lockstep import LockstepClock
 from cyborg.transport.messages import String, SystemState
 
 log = logging.getLogger(__name__)
-
-
-def default_data_dir() -> Path:
-    """Where the robot keeps its databases: $CYBORG_DATA_DIR, else ~/.local/share/cyborg."""
-    env = os.environ.get("CYBORG_DATA_DIR")
-    return Path(env) if env else Path.home() / ".local" / "share" / "cyborg"
 
 
 def make_clock(speed: float | str | None) -> Clock:

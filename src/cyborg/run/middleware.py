@@ -23,7 +23,7 @@ import tempfile
 import urllib.parse
 import uuid
 from abc import ABC, abstractmethod
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -129,17 +129,26 @@ class Middleware(ABC):
     """True when a new node sees the others only after discovery (no master to ask at once)."""
     node_arguments: ClassVar[list[str]]
     """What ``cyborg node`` is given to run a node on it."""
+    preload: ClassVar[str]
+    """What every node of it imports, the launch's zygote imports once: a key of
+    :data:`cyborg.run.zygote.PRELOAD`."""
+    hosts_many: ClassVar[bool]
+    """True when one process may hold several real nodes (rclpy), each its own sender on the
+    graph; rospy allows one node per process, whose name every message it sends carries."""
 
     @abstractmethod
     def require(self) -> None:
         """Raise a :class:`CyborgError` naming the install step unless this Python can join."""
 
     @abstractmethod
-    def transport(self, clock: Clock, node_name: str, *, use_sim_time: bool = False) -> Transport:
-        """Join the graph as the process of node ``node_name`` (its log set up as the middleware's).
+    def transport(
+        self, clock: Clock, node_name: str, *, use_sim_time: bool = False, also: Sequence[str] = ()
+    ) -> Transport:
+        """Join the graph as the process of node ``node_name`` (its log set up as the middleware's),
+        which also hosts the nodes ``also`` (only where :attr:`hosts_many`).
 
-        Raises :class:`~cyborg.run.census.NameTaken` when a live node of that name is on the graph
-        (for the controller's node also: a parameter home there), see :mod:`cyborg.run.census`.
+        Raises :class:`~cyborg.run.census.NameTaken` when a live node of one of these names is on
+        the graph (for the controller's node also: a parameter home there), see :mod:`cyborg.run.census`.
         """
 
     def graph_name(self) -> str:
@@ -190,6 +199,8 @@ class Ros1(Middleware):
     base_api = BaseApi.ROSARNL
     discovers_late = False
     node_arguments: ClassVar[list[str]] = []
+    preload = "ros1"
+    hosts_many = False
 
     def require(self) -> None:
         require_ros()
@@ -199,7 +210,15 @@ class Ros1(Middleware):
         if not master_running():
             raise CyborgError(f"no ROS master answers at {master_uri()}; fix: {fix}")
 
-    def transport(self, clock: Clock, node_name: str, *, use_sim_time: bool = False) -> Transport:
+    def transport(
+        self, clock: Clock, node_name: str, *, use_sim_time: bool = False, also: Sequence[str] = ()
+    ) -> Transport:
+        if also:
+            raise CyborgError(
+                f"ROS 1 runs one node per process (rospy), so {node_name} cannot host "
+                f"{', '.join(also)}: a gatekeeper tells modules apart by their node's name; fix: run "
+                "each as its own `cyborg node`, or use ROS 2 (--ros2), whose processes hold many nodes"
+            )
         self._check_master("start roscore, or use `cyborg launch`")
         live = ros1_live_nodes([node_name], master_uri())
         if node_name in live:
@@ -240,11 +259,15 @@ class Ros2(Middleware):
     base_api = BaseApi.NAV2
     discovers_late = True
     node_arguments: ClassVar[list[str]] = ["--ros2"]
+    preload = "ros2"
+    hosts_many = True
 
     def require(self) -> None:
         require_ros2()
 
-    def transport(self, clock: Clock, node_name: str, *, use_sim_time: bool = False) -> Transport:
+    def transport(
+        self, clock: Clock, node_name: str, *, use_sim_time: bool = False, also: Sequence[str] = ()
+    ) -> Transport:
         self.require()
         problem = ros2_domain_problem()
         if problem is not None:
@@ -254,11 +277,13 @@ class Ros2(Middleware):
 
         log_to_file(self.log_file(node_name), node_name)
         transport = Ros2Transport(clock, use_sim_time=use_sim_time)
-        wanted = {node_name, PARAM_HOME} if node_name == CONTROLLER_NODE else {node_name}
+        wanted = {node_name, *also}
+        if node_name == CONTROLLER_NODE:
+            wanted.add(PARAM_HOME)
         taken = wait_for_graph(transport.graph_node_names, wanted)
         if taken:
             transport.close()
-            name = node_name if node_name in taken else PARAM_HOME
+            name = min(taken - {PARAM_HOME}) if taken - {PARAM_HOME} else PARAM_HOME
             raise NameTaken(taken_message(name, self.graph_name(), home=name == PARAM_HOME))
         return transport
 

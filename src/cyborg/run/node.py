@@ -22,13 +22,11 @@ from typing import TYPE_CHECKING
 
 import click
 
-from cyborg.app.config import LoadedConfig
 from cyborg.app.context import BuildContext
-from cyborg.app.parts import API, RECORDER, Part, build_part
+from cyborg.app.parts import API, CONTROLLER, RECORDER, SCENARIO, Part, build_part
 from cyborg.app.tuning import freeze_built
 from cyborg.errors import CyborgError
 from cyborg.run.middleware import Middleware
-from cyborg.run.scenario import SCENARIO, ScenarioFiles, ScenarioNode
 from cyborg.run.simtime import CLOCK_TOPIC, SimTime, is_simulated_base, publish_clock, wait_for_epoch
 from cyborg.run.tasks import watch_tasks
 from cyborg.transport import topics
@@ -41,7 +39,10 @@ from cyborg.transport.messages import String
 from cyborg.web.access import DEFAULT_PORT, Access
 
 if TYPE_CHECKING:
+    from cyborg.app.config import LoadedConfig
+    from cyborg.app.sketch import ConfigSketch
     from cyborg.observe.recorder import Recorder, RecorderSettings
+    from cyborg.run.scenario import ScenarioFiles, ScenarioNode
     from cyborg.web.api import RobotAPI
 
 __all__ = ["ApiOptions", "BuiltNode", "NodeOptions", "await_start", "build_node", "run_node", "serve_node"]
@@ -64,7 +65,9 @@ class ApiOptions:
 class NodeOptions:
     """Everything ``cyborg node`` (or a launch, through it) tells one node: built once, passed whole."""
 
-    config: LoadedConfig
+    config: LoadedConfig | ConfigSketch
+    """The whole validated configuration; a module's or gatekeeper's node started by a launch gets
+    a sketch of it (:mod:`cyborg.app.sketch`): the launch validated it."""
     data_dir: Path
     map_path: Path | None = None
     seed: int = 0
@@ -78,6 +81,9 @@ class NodeOptions:
     """What ``cyborg_scenario`` plays; only that part reads it."""
     record: RecorderSettings | None = None
     """Where ``cyborg_recorder`` records; only that part reads it."""
+    also: tuple[str, ...] = ()
+    """Modules and gatekeepers this process hosts beside NAME, each its own node on the graph
+    (ROS 2 only: :attr:`Middleware.hosts_many`; ``cyborg launch``'s shared processes)."""
 
 
 @dataclass
@@ -119,8 +125,13 @@ def run_node(name: str, options: NodeOptions, middleware: Middleware) -> int:
 
 def build_node(name: str, options: NodeOptions, middleware: Middleware) -> BuiltNode:
     """Join ``middleware``'s graph as node ``name`` and build its part, not started yet."""
+    for other in options.also:
+        if other in (CONTROLLER, API, RECORDER, SCENARIO) or is_simulated_base(options.config, other):
+            raise CyborgError(
+                f"{other} runs in a process of its own; fix: host only modules and gatekeepers beside {name}"
+            )
     clock = options.time.make_clock()
-    transport = middleware.transport(clock, name, use_sim_time=options.time.virtual)
+    transport = middleware.transport(clock, name, use_sim_time=options.time.virtual, also=options.also)
     context = BuildContext(
         data_dir=options.data_dir,
         seed=options.seed,
@@ -130,6 +141,8 @@ def build_node(name: str, options: NodeOptions, middleware: Middleware) -> Built
     )
     node = BuiltNode(name, middleware, clock, transport, context, Part(name))
     if name == SCENARIO:
+        from cyborg.run.scenario import ScenarioNode
+
         if options.scenario is None:
             raise CyborgError(f"{SCENARIO} plays a script; fix: give it --script FILE")
         node.scenario = ScenarioNode(transport.node(SCENARIO), options.scenario)
@@ -137,6 +150,8 @@ def build_node(name: str, options: NodeOptions, middleware: Middleware) -> Built
     else:
         try:
             node.part = build_part(name, options.config, transport, context)
+            for other in options.also:  # one process, one loop; each part its own node(s)
+                node.part.components += build_part(other, options.config, transport, context).components
         except BaseException:
             node.close()  # leave the graph: the error is the node's whole output
             raise
@@ -247,7 +262,7 @@ def _start_recorder(node: BuiltNode, options: NodeOptions) -> Recorder | None:
     if options.record is None:
         click.echo(f"node {node.name}: recording is off (--no-record); it records nothing", err=True)
         return None
-    config = options.config
+    config = _validated(options)
     recorder_node = node.transport.node(RECORDER)
     facts = RunFacts(
         start_ns=to_ns(node.clock.now()),
@@ -274,7 +289,7 @@ async def _serve_api(node: BuiltNode, options: NodeOptions) -> RobotAPI:
     from cyborg.web.build import build_api, start_api
     from cyborg.web.ros_view import remote_robot
 
-    config = options.config
+    config = _validated(options)
     api_node = node.transport.node(API)
     has_base = any(
         isinstance(m, dict) and m.get("kind") == "simulated_base" for m in config.model.modules.values()
@@ -296,6 +311,14 @@ async def _serve_api(node: BuiltNode, options: NodeOptions) -> RobotAPI:
         token_given=options.api.access is not None and options.api.access.token is not None,
     )
     return api
+
+
+def _validated(options: NodeOptions) -> LoadedConfig:
+    from cyborg.app.config import LoadedConfig
+
+    if not isinstance(options.config, LoadedConfig):
+        raise CyborgError("this part reads the whole validated configuration, not a sketch of it")
+    return options.config
 
 
 async def _play(scenario: ScenarioNode, stop: asyncio.Event, name: str) -> int:

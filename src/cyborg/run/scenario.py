@@ -20,7 +20,7 @@ import click
 
 from cyborg.app.config import LoadedConfig
 from cyborg.app.context import BuildContext
-from cyborg.app.parts import API, RECORDER, build_part, part_names
+from cyborg.app.parts import API, RECORDER, SCENARIO, build_part, part_names
 from cyborg.errors import CyborgError
 from cyborg.run.middleware import ROS1, Middleware
 from cyborg.run.simtime import READY_TIMEOUT
@@ -35,8 +35,6 @@ if TYPE_CHECKING:
     from cyborg.sim.script import Script
 
 __all__ = ["SCENARIO", "ScenarioFiles", "ScenarioNode", "prepare_calendar", "run_scenario_ros"]
-
-SCENARIO = "cyborg_scenario"
 
 
 @dataclass

@@ -21,16 +21,17 @@ from datetime import datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Protocol
 
-from cyborg.app.parts import CONTROLLER
 from cyborg.errors import CyborgError
 from cyborg.run.master import Master
 from cyborg.transport.base import Publisher
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, Clock, RealClock, VirtualClock
 from cyborg.transport.lockstep import LockstepClock
 from cyborg.transport.messages import Clock as ClockMessage
+from cyborg.transport.topics import CONTROLLER_NODE as CONTROLLER
 
 if TYPE_CHECKING:
     from cyborg.app.config import LoadedConfig
+    from cyborg.app.sketch import PartConfig
 
 __all__ = [
     "CLOCK_TOPIC",
@@ -173,7 +174,7 @@ async def publish_clock(publisher: Publisher[ClockMessage], clock: VirtualClock)
         await clock.sleep(step)
 
 
-def is_simulated_base(config: LoadedConfig, name: str) -> bool:
+def is_simulated_base(config: PartConfig, name: str) -> bool:
     raw = config.model.modules.get(name)
     return isinstance(raw, dict) and raw.get("kind") == "simulated_base"
 

@@ -8,6 +8,11 @@ speed the launch fixes the shared origin of virtual time once every node is read
 (:mod:`cyborg.run.simtime`). ``cyborg sim --ros --script FILE`` adds the ``cyborg_scenario``
 node (:mod:`cyborg.run.scenario`).
 
+On ROS 2 the launch shares one process among the thin parts (:func:`shared_process`: the
+built-in light module kinds and the gatekeepers), each still its own node on the graph, so a
+gatekeeper tells them apart as before; ROS 1 runs one node per process (rospy's rule, and a
+gatekeeper knows a sender by its process's node name). ``cyborg launch --processes`` chooses.
+
 A node that refuses to start because its name is taken on the graph (another robot there, or a
 node of its name: :mod:`cyborg.run.census`) stops the whole launch with that reason instead.
 
@@ -33,19 +38,38 @@ import click
 
 from cyborg.app.config import LoadedConfig
 from cyborg.app.parts import API, CONTROLLER
+from cyborg.app.sketch import text_digest
 from cyborg.errors import CyborgError
 from cyborg.run.census import NAME_TAKEN_EXIT
 from cyborg.run.lockstep import TimeServer
 from cyborg.run.middleware import ROS1, LaunchGraph, Middleware, exit_description
 from cyborg.run.simtime import EPOCH_MARGIN, READY_TIMEOUT, Rendezvous, check_virtual_time, clock_owner_of
+from cyborg.run.zygote import ForkedNode, Zygote
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, NS
 
-__all__ = ["Launch", "launch"]
+__all__ = ["THIN_KINDS", "Launch", "launch", "shared_process"]
 
 RESPAWN_DELAY = 1.0  # seconds before a stopped node is started again
 RESPAWN_STEADY = 10.0  # a node that ran this long before it stopped is started again after RESPAWN_DELAY
 RESPAWN_MAX_DELAY = 30.0  # a node stopping again and again waits at most this long
 REFUSAL_GRACE = 5.0  # seconds a refused node's launch waits for the controller's own reason
+THIN_KINDS = frozenset({"conversation", "event_script", "idle", "music", "placeholder", "question", "tts"})
+"""Built-in module kinds that only wait, talk and publish: they may share one process. Other kinds
+(the navigation, the simulated base, speech input, every plug-in's) keep a process of their own."""
+
+
+def shared_process(config: LoadedConfig, parts: Sequence[str]) -> dict[str, list[str]]:
+    """The thin parts among ``parts`` as one process: {the first: the others it hosts} (empty
+    when fewer than two are thin)."""
+    modules = config.model.modules
+    gates = {gate.name for gate in config.model.gatekeepers}
+
+    def thin(name: str) -> bool:
+        raw = modules.get(name)
+        return name in gates or (isinstance(raw, dict) and raw.get("kind") in THIN_KINDS)
+
+    names = [name for name in parts if thin(name)]
+    return {names[0]: names[1:]} if len(names) > 1 else {}
 
 
 @dataclass
@@ -72,9 +96,14 @@ class Launch:
     seed: int = 0
     extra_args: dict[str, list[str]] = field(default_factory=dict)
     say: Callable[[str], None] = click.echo
-    processes: dict[str, subprocess.Popen[bytes]] = field(default_factory=dict)
+    processes: dict[str, subprocess.Popen[bytes] | ForkedNode] = field(default_factory=dict)
     respawn: bool = False
     middleware: Middleware = ROS1
+    hosts: dict[str, list[str]] = field(default_factory=dict)
+    """A process's node name -> the parts it hosts beside its own (each its own node; ROS 2 only)."""
+    fork: bool = True
+    """Fork the node processes from a zygote that imported what they all import (:mod:`cyborg.run.zygote`)."""
+    _zygote: Zygote | None = None
     _graph: LaunchGraph | None = None
     _rendezvous: Rendezvous | None = None
     _epoch_argument: str | None = None
@@ -87,6 +116,13 @@ class Launch:
     def __post_init__(self) -> None:
         if self.speed is not None or self.lockstep:
             check_virtual_time(self.config)
+        if self.hosts and not self.middleware.hosts_many:
+            raise CyborgError(
+                f"{self.middleware.name} runs one node per process: no part can host another; "
+                "fix: launch with --processes per-part, or on ROS 2 (--ros2)"
+            )
+        hosted = {name for names in self.hosts.values() for name in names}
+        self.parts = [name for name in self.parts if name not in hosted]  # a process each
 
     def command(self, name: str, clock_owner: str | None, *, fresh: bool = True) -> list[str]:
         """The command line of part ``name``'s process."""
@@ -103,6 +139,8 @@ class Launch:
             "--seed",
             str(self.seed),
         ]
+        if self.config.text:  # validated here: a module's node reads only its own part (cyborg.app.sketch)
+            command += ["--checked", text_digest(self.config.text)]
         if self.map_path is not None:
             command += ["--map", str(self.map_path)]
         if name == API:
@@ -110,6 +148,8 @@ class Launch:
         if name == CONTROLLER and fresh:
             command += ["--fresh"]  # a launch is a fresh start: neutral, emotion system on
         command += self.middleware.node_arguments
+        for hosted in self.hosts.get(name, []):
+            command += ["--with", hosted]
         if self._time_server is not None:
             command += [
                 "--lockstep",
@@ -145,9 +185,24 @@ class Launch:
             )  # /clock first: the others wait for it
         if self.lockstep:
             self._time_server = TimeServer(set(self.parts), always={self._clock_owner or ""}).start()
+        if self.fork:
+            self._zygote = Zygote(
+                self.middleware.python(),
+                self.middleware.environment(),
+                self.middleware.preload,
+                echo=self.echo,
+            )
         for name in self.parts:
             self._spawn(name, fresh=True)
-        self.say(f"launched {len(self.processes)} nodes: {', '.join(self.parts)}")
+        nodes = len(self.processes) + sum(len(self.hosts.get(name, [])) for name in self.processes)
+        shared = f" in {len(self.processes)} processes" if nodes > len(self.processes) else ""
+        self.say(
+            f"launched {nodes} nodes{shared}: "
+            + ", ".join(
+                name + (f" (with {', '.join(self.hosts[name])})" if self.hosts.get(name) else "")
+                for name in self.parts
+            )
+        )
         self.say(
             f"their warnings and errors show here, prefixed [node]; every log line is in "
             f"{self.middleware.log_file('NODE').parent}/NODE.log"
@@ -180,12 +235,15 @@ class Launch:
             f"starting at {datetime.fromtimestamp(epoch, UTC):%H:%M:%S.%f} UTC"
         )
 
-    def _spawn(self, name: str, *, fresh: bool) -> subprocess.Popen[bytes]:
-        process = subprocess.Popen(
-            self.command(name, self._clock_owner, fresh=fresh),
-            stdout=None if self.echo else subprocess.DEVNULL,
-            env=self.middleware.environment(),
-        )
+    def _spawn(self, name: str, *, fresh: bool) -> subprocess.Popen[bytes] | ForkedNode:
+        command = self.command(name, self._clock_owner, fresh=fresh)
+        process: subprocess.Popen[bytes] | ForkedNode
+        if self._zygote is not None and self._zygote.alive:
+            process = self._zygote.spawn(command[3:])  # what follows `python -m cyborg.cli`
+        else:
+            process = subprocess.Popen(
+                command, stdout=None if self.echo else subprocess.DEVNULL, env=self.middleware.environment()
+            )
         self.processes[name] = process
         self._started_at[name] = time.monotonic()
         return process
@@ -226,7 +284,7 @@ class Launch:
         if failed:
             raise CyborgError(f"node(s) stopped: {', '.join(failed)}; the whole robot is stopped too")
 
-    def _check_refused(self, name: str, process: subprocess.Popen[bytes]) -> None:
+    def _check_refused(self, name: str, process: subprocess.Popen[bytes] | ForkedNode) -> None:
         """Raise a :class:`CyborgError` when node ``name`` refused to start: its name is taken."""
         if process.returncode != NAME_TAKEN_EXIT:
             return
@@ -278,6 +336,9 @@ class Launch:
                     process.kill()
                     process.wait(timeout=5)
         finally:
+            if self._zygote is not None:
+                self._zygote.close()
+                self._zygote = None
             if self._time_server is not None:
                 server = self._time_server
                 server.close()

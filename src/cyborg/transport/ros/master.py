@@ -12,8 +12,10 @@ from __future__ import annotations
 import copy
 import http.client
 import logging
+import select
 import threading
 import time
+import urllib.parse
 import weakref
 import xmlrpc.client
 from typing import Any, Protocol
@@ -26,8 +28,10 @@ from cyborg.transport.base import normalize_node_name
 __all__ = [
     "MASTER_CALL_TIMEOUT",
     "MASTER_CHECK_PERIOD",
+    "MASTER_RECHECK_PERIOD",
     "UNREACHABLE",
     "WATCH",
+    "MasterLine",
     "MasterWatch",
     "ParamHolder",
     "answer",
@@ -38,7 +42,11 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-MASTER_CHECK_PERIOD = 0.5  # seconds between two looks at the master, in each process
+MASTER_CHECK_PERIOD = 0.5  # seconds between two looks at the master while it is away or out of sync
+MASTER_RECHECK_PERIOD = 15.0
+"""Seconds between two looks at a master that answers: its going away is seen at once on the
+line the watch keeps open to it (rosmaster speaks HTTP/1.1), this look is for a line that broke
+without a word (another host's master, a cable pulled)."""
 MASTER_CALL_TIMEOUT = 2.0  # seconds a call to the master may take before it counts as away
 UNREACHABLE = (OSError, http.client.HTTPException, xmlrpc.client.Error)
 """What a call to a master that is not there (or not answering) raises."""
@@ -107,8 +115,10 @@ class MasterWatch:
     rospy tells the master of each publisher, subscriber and service once, when it is made, so a
     restarted master knows none of them (``rosnode list`` shows only /rosout) and no node that
     starts or subscribes afterwards finds them. Connections already made go on working (they do
-    not pass through the master). This thread asks the master for its pid every
-    MASTER_CHECK_PERIOD seconds. When it does not answer, that is logged once; when it answers
+    not pass through the master). This thread keeps a connection to the master open
+    (:class:`MasterLine`) and sees at once when the master closes it; it asks the master for its
+    pid then, every MASTER_RECHECK_PERIOD seconds besides, and every MASTER_CHECK_PERIOD seconds
+    while the master is away or something could not be sent to it. When it does not answer, that is logged once; when it answers
     again (with a new pid after a restart), or after a registration or a parameter could not be
     sent meanwhile, everything rospy holds is registered again as rospy's own first registration
     does (publishers, subscribers and services; actions are topics), the parameters this process
@@ -184,22 +194,36 @@ class MasterWatch:
 
     # the thread
     def _run(self) -> None:
-        proxy = master_proxy()
+        line = MasterLine(rosgraph.get_master_uri())
+        last_look = -MASTER_RECHECK_PERIOD  # the first look opens the line
         while True:
-            time.sleep(MASTER_CHECK_PERIOD)
+            steady = not self.away and not self._out_of_sync.is_set()
+            if steady:
+                # Waiting on the kept-open line costs the master nothing: no call every half second
+                # from every node (the idle robot's master was busiest with these).
+                closed = line.wait_closed(MASTER_CHECK_PERIOD)
+                if not closed and time.monotonic() - last_look < MASTER_RECHECK_PERIOD:
+                    if rospy.core.is_shutdown():
+                        line.close()
+                        return
+                    continue
+            else:
+                time.sleep(MASTER_CHECK_PERIOD)
             if rospy.core.is_shutdown():
+                line.close()
                 return
+            last_look = time.monotonic()
             try:
-                self._check(proxy)
+                self._check(line)
             except Exception:  # the watch must outlive any surprise
                 log.exception(
                     "looking at the ROS master failed; looking again in %.1f s", MASTER_CHECK_PERIOD
                 )
 
-    def _check(self, proxy: xmlrpc.client.ServerProxy) -> None:
+    def _check(self, line: MasterLine) -> None:
         uri = rosgraph.get_master_uri()
         try:
-            pid = int(answer(proxy.getPid(rospy.get_name()), "give its pid"))
+            pid = line.get_pid(rospy.get_name())
         except UNREACHABLE as exc:
             if self._went_away():
                 rospy.logwarn(
@@ -215,7 +239,7 @@ class MasterWatch:
         restarted = pid != self._pid
         self._out_of_sync.clear()
         try:
-            counts = self._register_all(proxy)
+            counts = self._register_all(master_proxy(uri))
         except UNREACHABLE as exc:
             self._out_of_sync.set()
             log.debug("registering again with the ROS master failed (%s); trying again", exc)
@@ -256,6 +280,65 @@ class MasterWatch:
             value = answer(proxy.subscribeParam(caller, node_uri, key), f"subscribe to {key}")
             cache.set(key, value)
         return len(publications), len(subscriptions), len(offered), len(wanted)
+
+
+class MasterLine:
+    """One HTTP/1.1 connection to the master, kept open between its ``getPid`` calls.
+
+    rosmaster keeps such a connection open and idle, so the connection's socket turns readable
+    (end of file) only when the master closes it: when it stops or restarts. Waiting on it
+    (:meth:`wait_closed`) sees that at once, without asking the master anything.
+    """
+
+    def __init__(self, uri: str) -> None:
+        parsed = urllib.parse.urlsplit(uri)
+        self._host = parsed.hostname or "localhost"
+        self._port = parsed.port or 11311
+        self._path = parsed.path or "/"
+        self._connection: http.client.HTTPConnection | None = None
+
+    def get_pid(self, caller: str) -> int:
+        """The master's pid (over the kept line; a new one when it is closed)."""
+        connection = self._connection or http.client.HTTPConnection(
+            self._host, self._port, timeout=MASTER_CALL_TIMEOUT
+        )
+        self._connection = None
+        try:
+            body = xmlrpc.client.dumps((caller,), "getPid").encode()
+            connection.request("POST", self._path, body, {"Content-Type": "text/xml"})
+            response = connection.getresponse()
+            data = response.read()
+            if response.status != 200:
+                raise xmlrpc.client.ProtocolError(self._path, response.status, response.reason, {})
+            (reply,), _ = xmlrpc.client.loads(data)
+        except BaseException:
+            connection.close()
+            raise
+        if response.will_close:
+            connection.close()
+        else:
+            self._connection = connection
+        return int(answer(reply, "give its pid"))
+
+    def wait_closed(self, timeout: float) -> bool:
+        """Wait up to ``timeout`` seconds for the master to close the line; True when it did."""
+        sock = self._connection.sock if self._connection is not None else None
+        if sock is None:  # a master that closes each connection: only the slow look is left
+            time.sleep(timeout)
+            return False
+        try:
+            readable, _, _ = select.select([sock], [], [], timeout)
+        except (OSError, ValueError):
+            readable = [sock]
+        if readable:
+            self.close()
+            return True
+        return False
+
+    def close(self) -> None:
+        if self._connection is not None:
+            self._connection.close()
+            self._connection = None
 
 
 WATCH = MasterWatch()

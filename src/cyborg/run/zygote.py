@@ -1,0 +1,283 @@
+"""Node processes forked from one that has imported, once, what every node imports.
+
+``cyborg launch`` runs each part as a process of its own (ROS 1: one rospy node per process).
+Most of a thin node's start-up is imports (rospy, actionlib, the messages, pydantic, the
+transport) and much of its memory is what they leave behind. So the launch starts one *zygote*
+(as Android starts its apps): a process that imports those modules and then waits. For each node
+it forks a child that runs ``cyborg node NAME ...`` as a freshly started process would, with the
+modules already there: their pages stay shared with the zygote and the other nodes until a
+process writes to them (copy on write). Every node is still its own process and, on ROS 1, its
+own rospy node: its own name on the graph, its own crash, its own restart.
+
+The zygote is single-threaded and joins no graph (a fork keeps only the forking thread). It reads
+one request a line on stdin (JSON: the node's ``argv``), answers on its control pipe with the
+child's pid, and reports each child's exit there too (JSON lines). :class:`Zygote` is the launch's
+side; :class:`ForkedNode` stands for one child as a :class:`subprocess.Popen` does (``poll``,
+``wait``, ``send_signal``, ``kill``). Ctrl-C reaches the nodes as before (one process group); the
+zygote ignores it and ends when the launch closes its stdin.
+
+Run as ``python -m cyborg.run.zygote CONTROL_FD ros1|ros2``. ``ps -e`` (the command's name, not
+its line) shows each node by its name (the first 15 characters).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import gc
+import importlib
+import json
+import logging
+import os
+import runpy
+import select
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Sequence
+from typing import IO, Any
+
+__all__ = ["PRELOAD", "ROS1_PRELOAD", "ROS2_PRELOAD", "ForkedNode", "Zygote"]
+
+log = logging.getLogger(__name__)
+
+_COMMON = (
+    "asyncio",
+    "click",
+    "pydantic",
+    "yaml",
+    "cyborg.cli",
+    "cyborg.cli.ros",
+    "cyborg.run.node",
+    "cyborg.run.middleware",
+    "cyborg.app.parts",
+    "cyborg.app.registry",
+    "cyborg.app.sketch",
+    "cyborg.configfile",
+    "cyborg.modules",
+    "cyborg.modules.gatekeeper",
+    "cyborg.modules.placeholder",
+    "cyborg.modules.idle",
+    "cyborg.modules.music",
+    "cyborg.modules.conversation",
+    "cyborg.modules.speech",
+)
+ROS1_PRELOAD = (
+    "rospy",
+    "actionlib",
+    "cyborg_controller.msg",
+    "std_msgs.msg",
+    "cyborg.transport.ros",
+    *_COMMON,
+)
+"""What every ROS 1 node imports (the thin modules' kinds too: most nodes are thin)."""
+ROS2_PRELOAD = ("rclpy", "rclpy.action", "cyborg_controller.msg", "cyborg.transport.ros2", *_COMMON)
+"""The same for ROS 2 (rclpy is imported, not initialised: no DDS participant before the fork)."""
+PRELOAD = {"ros1": ROS1_PRELOAD, "ros2": ROS2_PRELOAD}
+START_TIMEOUT = 60.0  # seconds the zygote may take to import and answer its first request
+
+
+class ForkedNode:
+    """One node forked by the zygote, used as the launch uses a :class:`subprocess.Popen`."""
+
+    def __init__(self, pid: int, zygote: Zygote) -> None:
+        self.pid = pid
+        self.returncode: int | None = None
+        self._zygote = zygote
+        self._ended = threading.Event()
+
+    def _exited(self, code: int) -> None:
+        self.returncode = code
+        self._ended.set()
+
+    def poll(self) -> int | None:
+        if self.returncode is None and not self._zygote.alive and not _exists(self.pid):
+            self._exited(-1)  # the zygote is gone: no one can tell its exit code any more
+        return self.returncode
+
+    def wait(self, timeout: float | None = None) -> int:
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while self.poll() is None:
+            left = None if deadline is None else deadline - time.monotonic()
+            if left is not None and left <= 0:
+                raise subprocess.TimeoutExpired(f"node {self.pid}", timeout or 0.0)
+            self._ended.wait(0.1 if left is None else min(left, 0.1))
+        assert self.returncode is not None
+        return self.returncode
+
+    def send_signal(self, sig: int) -> None:
+        if self.poll() is None:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(self.pid, sig)
+
+    def kill(self) -> None:
+        self.send_signal(signal.SIGKILL)
+
+
+def _exists(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+class Zygote:
+    """The launch's side of a zygote process: start it, have it fork nodes, hear their exits."""
+
+    def __init__(self, python: str, env: dict[str, str] | None, preload: str, *, echo: bool) -> None:
+        """``preload``: ``ros1`` or ``ros2`` (:data:`PRELOAD`)."""
+        read_fd, write_fd = os.pipe()
+        self._process = subprocess.Popen(
+            [python, "-m", "cyborg.run.zygote", str(write_fd), preload],
+            stdin=subprocess.PIPE,
+            stdout=None if echo else subprocess.DEVNULL,
+            env=env,
+            pass_fds=(write_fd,),
+        )
+        os.close(write_fd)
+        self._control: IO[str] = os.fdopen(read_fd, "r", encoding="utf-8")
+        self._nodes: dict[int, ForkedNode] = {}
+        self._forked: list[int] = []
+        self._answer = threading.Condition()
+        self._lock = threading.Lock()
+        self._reader = threading.Thread(target=self._read, name="zygote control", daemon=True)
+        self._reader.start()
+
+    @property
+    def alive(self) -> bool:
+        return self._process.poll() is None
+
+    def spawn(self, argv: Sequence[str]) -> ForkedNode:
+        """Fork a node running ``python -m cyborg.cli`` with ``argv`` (what follows ``cyborg``)."""
+        with self._lock:
+            assert self._process.stdin is not None
+            try:
+                self._process.stdin.write(json.dumps({"argv": list(argv)}).encode() + b"\n")
+                self._process.stdin.flush()
+            except (BrokenPipeError, ValueError) as exc:
+                raise OSError(f"the zygote process ended (exit code {self._process.poll()})") from exc
+            deadline = time.monotonic() + START_TIMEOUT
+            with self._answer:
+                while not self._forked:
+                    if not self.alive or time.monotonic() > deadline:
+                        raise OSError(f"the zygote process did not fork (exit code {self._process.poll()})")
+                    self._answer.wait(0.1)
+                pid = self._forked.pop(0)
+                node = self._nodes.setdefault(pid, ForkedNode(pid, self))
+            return node
+
+    def _read(self) -> None:
+        for line in self._control:
+            try:
+                message: dict[str, Any] = json.loads(line)
+            except ValueError:
+                continue
+            with self._answer:
+                if "forked" in message:
+                    self._forked.append(int(message["forked"]))
+                    self._answer.notify_all()
+                elif "exited" in message:
+                    pid = int(message["exited"])
+                    node = self._nodes.setdefault(pid, ForkedNode(pid, self))
+                    node._exited(int(message["code"]))
+
+    def close(self) -> None:
+        """End the zygote (its nodes are stopped already)."""
+        if self._process.stdin is not None:
+            with contextlib.suppress(OSError):
+                self._process.stdin.close()
+        try:
+            self._process.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            self._process.kill()
+            self._process.wait(timeout=5)
+        self._reader.join(timeout=2)
+        self._control.close()
+
+
+# --- the zygote process -------------------------------------------------------------------------
+
+
+def _serve(control: IO[str], preload: Sequence[str]) -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the nodes stop on Ctrl-C; the zygote on end of stdin
+    for name in preload:
+        try:
+            importlib.import_module(name)
+        except Exception as exc:  # a missing piece only costs its node the import
+            print(f"zygote: could not preload {name}: {exc}", file=sys.stderr, flush=True)
+    gc.collect()
+    gc.freeze()  # what the nodes inherit stays out of their collections: its pages stay shared
+    wake_read, wake_write = os.pipe()
+    os.set_blocking(wake_write, False)
+    signal.set_wakeup_fd(wake_write)
+    signal.signal(signal.SIGCHLD, lambda *_: None)
+    stdin = sys.stdin.buffer
+    pending = b""
+    while True:
+        ready, _, _ = select.select([stdin, wake_read], [], [])
+        if wake_read in ready:
+            os.read(wake_read, 512)
+        _reap(control)
+        if stdin in ready:
+            chunk = os.read(stdin.fileno(), 65536)
+            if not chunk:
+                return
+            pending += chunk
+            while b"\n" in pending:
+                line, pending = pending.split(b"\n", 1)
+                argv = json.loads(line)["argv"]
+                pid = os.fork()
+                if pid == 0:
+                    os.close(wake_read)
+                    os.close(wake_write)
+                    _child(argv, control)
+                control.write(json.dumps({"forked": pid}) + "\n")
+                control.flush()
+
+
+def _reap(control: IO[str]) -> None:
+    while True:
+        try:
+            pid, status = os.waitpid(-1, os.WNOHANG)
+        except ChildProcessError:
+            return
+        if pid == 0:
+            return
+        control.write(json.dumps({"exited": pid, "code": os.waitstatus_to_exitcode(status)}) + "\n")
+        control.flush()
+
+
+def _child(argv: list[str], control: IO[str]) -> None:
+    """In the forked child: become ``cyborg ARGV``. Never returns: click ends the command with
+    SystemExit, which ends this process as it ends a freshly started one (atexit, threads)."""
+    signal.set_wakeup_fd(-1)
+    signal.signal(signal.SIGCHLD, signal.SIG_DFL)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    control.close()
+    _name_process(argv[1] if len(argv) > 1 and argv[0] == "node" else "cyborg")
+    devnull = os.open(os.devnull, os.O_RDONLY)
+    os.dup2(devnull, 0)
+    os.close(devnull)
+    sys.argv = ["cyborg", *argv]
+    runpy.run_module("cyborg.cli", run_name="__main__", alter_sys=True)  # as `python -m cyborg.cli` does
+    raise SystemExit(0)
+
+
+def _name_process(name: str) -> None:
+    """Set the command's name (``ps -e``, ``top``; Linux keeps 15 characters)."""
+    with contextlib.suppress(OSError), open(f"/proc/{os.getpid()}/comm", "w", encoding="ascii") as comm:
+        comm.write(name.encode("ascii", errors="replace").decode()[:15])
+
+
+def main() -> None:
+    control_fd, preload = sys.argv[1:]
+    control = os.fdopen(int(control_fd), "w", encoding="utf-8")
+    _serve(control, PRELOAD[preload])
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,126 @@
+"""A module's or gatekeeper's node loads what its part runs, not the robot (issue 33).
+
+``cyborg launch`` validates the configuration once and tells each node so (``--checked DIGEST``);
+a thin node then reads a sketch of the file and builds its part without the controller, the
+emotion system, the motivator or the configuration models. A file changed since it was validated
+is validated again, whole.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from cyborg.app.config import packaged_config
+from cyborg.app.sketch import ConfigSketch, text_digest
+from cyborg.cli.ros import _node_config
+from cyborg.errors import ConfigError, CyborgError
+
+ROOT = Path(__file__).resolve().parents[2]
+
+# What a thin node must not load: the parts it does not run, and the configuration models.
+NOT_LOADED = (
+    "cyborg.controller",
+    "cyborg.emotion",
+    "cyborg.motivator",
+    "cyborg.app.robot",
+    "cyborg.app.config",
+    "cyborg.observe",
+    "cyborg.maps",
+    "cyborg.run.local",
+    "cyborg.run.supervisor",
+    "cyborg.run.scenario",
+    "cyborg.sim",
+    "cyborg.web.api",
+    "sqlite3",
+)
+
+# Builds parts the way `cyborg node NAME --checked DIGEST` does (cyborg.run.node.build_node), on
+# an in-process transport: the ROS transports import nothing of the app (tests/test_layers.py).
+BUILD = """
+import json, sys
+from pathlib import Path
+from cyborg.cli import main  # the console script's import
+from cyborg.cli.ros import _node_config
+from cyborg.run.middleware import Ros1
+from cyborg.run.node import NodeOptions, build_node
+from cyborg.transport.embedded import EmbeddedTransport
+
+class InProcess(Ros1):
+    def transport(self, clock, node_name, *, use_sim_time=False, also=()):
+        return EmbeddedTransport(clock)
+
+    def part_built(self, node_name):
+        return None
+
+path, digest, data = Path(sys.argv[1]), sys.argv[2], Path(sys.argv[3])
+built = {}
+for group in sys.argv[4:]:  # NAME, or NAME+HOSTED+...: one process hosting several parts
+    name, *also = group.split("+")
+    config = _node_config([name, *also], path, digest)
+    node = build_node(name, NodeOptions(config=config, data_dir=data, also=tuple(also)), InProcess())
+    built[group] = [[type(c).__name__, c.node.name] for c in node.part.components]
+    node.close()
+print(json.dumps({"built": built, "modules": sorted(sys.modules)}))
+"""
+
+
+def _build_in_fresh_python(config: Path, names: list[str], data: Path) -> dict[str, object]:
+    digest = text_digest(config.read_text(encoding="utf-8"))
+    result = subprocess.run(
+        [sys.executable, "-c", BUILD, str(config), digest, str(data), *names],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+        cwd=ROOT,
+    )
+    assert result.returncode == 0, result.stderr[-3000:]
+    answer: dict[str, object] = json.loads(result.stdout.strip().splitlines()[-1])
+    return answer
+
+
+def test_a_launched_module_node_and_gatekeeper_load_neither_the_controller_nor_the_config_models(
+    tmp_path: Path,
+) -> None:
+    shared = "cyborg_idle+cyborg_joke+cyborg_tts+cyborg_speech_gatekeeper"  # ROS 2's shared process
+    names = ["cyborg_music", "cyborg_speech_gatekeeper", shared]
+    answer = _build_in_fresh_python(packaged_config("cyborg.yaml"), names, tmp_path)
+    built = answer["built"]
+    assert isinstance(built, dict)
+    assert built["cyborg_speech_gatekeeper"] == [["Gatekeeper", "cyborg_speech_gatekeeper"]]
+    assert [node for _, node in built["cyborg_music"]] == ["cyborg_music"]
+    # one process, each part on a node of its own name: a gatekeeper still tells them apart
+    assert [node for _, node in built[shared]] == shared.split("+"), built[shared]
+    loaded = answer["modules"]
+    assert isinstance(loaded, list)
+    found = sorted(m for m in loaded if any(m == bad or m.startswith(bad + ".") for bad in NOT_LOADED))
+    assert found == [], f"a thin node loads what it does not run: {found}"
+
+
+def test_ros1_refuses_to_host_several_parts_in_one_process() -> None:
+    from cyborg.run.middleware import ROS1
+    from cyborg.transport.clock import RealClock
+
+    with pytest.raises(CyborgError, match="one node per process"):
+        ROS1.transport(RealClock(), "cyborg_idle", also=("cyborg_joke",))
+
+
+def test_a_node_validates_the_whole_file_when_it_changed_since_the_launch_checked_it(
+    tmp_path: Path,
+) -> None:
+    config = tmp_path / "robot.yaml"
+    text = packaged_config("demo.yaml").read_text(encoding="utf-8")
+    config.write_text(text, encoding="utf-8")
+    digest = text_digest(text)
+    assert isinstance(_node_config(["cyborg_joke"], config, digest), ConfigSketch)
+    assert not isinstance(_node_config(["cyborg_joke", "cyborg_controller"], config, digest), ConfigSketch)
+    assert not isinstance(_node_config(["cyborg_joke"], config, None), ConfigSketch)  # by hand: whole
+
+    config.write_text(text.replace("initial:", "initial_state:"), encoding="utf-8")
+    with pytest.raises(ConfigError, match="initial_state"):
+        _node_config(["cyborg_joke"], config, digest)  # edited after the launch: checked again, whole
