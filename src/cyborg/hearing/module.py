@@ -226,7 +226,7 @@ class SpeechInput:
     def _start_early(self) -> None:
         """Decode the cutter's tentative utterance now, unless a decode of it (or one that went on) runs."""
         tentative: bytes | None = getattr(self._utterances, "tentative", None)
-        if tentative is None or self._early is not None and self._early[0] is tentative:
+        if tentative is None or (self._early is not None and self._early[0] is tentative):
             return
         if self._early is not None:
             if not self._early[1].done():
