@@ -14,9 +14,9 @@ understanding (:mod:`~cyborg.hearing.understanding`): a transcript is believed w
 would act on it.
 
 Never a wrong place: the beam search's other hypotheses come for free, and a transcript that
-names a place is believed only when no hypothesis nearly as likely (:data:`DOUBT_MARGIN`) names
-another place or none ("where is the gym", heard as "where is the entrance" and, nearly as
-likely, "where is the june"): such a sentence is not passed on, and the person is heard again.
+names a place is believed only when every hypothesis nearly as likely (:data:`DOUBT_MARGIN`) names
+the same place, however it words the rest ("where is the gym", heard as "where is the entrance"
+and, nearly as likely, "where is the june", is not passed on: the person is heard again).
 """
 
 from __future__ import annotations
@@ -366,7 +366,7 @@ class WhisperRecogniser:
             if likelihood - other > DOUBT_MARGIN:
                 continue
             text = clean(raw)
-            alternative = self.understanding.of(text) if text else None
-            if alternative is None or alternative.place != understood.place:
-                return (alternative.place if alternative is not None else None) or repr(text)
+            place = self.understanding.matcher.find(text)  # wherever it stands, whatever the rest
+            if place is None or place.location != understood.place:
+                return place.location if place is not None else repr(text)
         return None
