@@ -1,6 +1,7 @@
 """Speech input per engine in one run: intended events, rejections, misdirections, latency, CPU and memory.
 
 Usage: .venv/bin/python benchmarks/bench_speech.py [--engines whisper,pocketsphinx,...] [--voices N] [--sets ...]
+       [--beside-robot]   (the packaged simulated robot runs beside it: the latency target's condition)
        .venv/bin/python benchmarks/bench_speech.py --footprint   (install size and import time per engine)
 
 Every utterance is synthesised once (espeak-ng and flite voices at several rates, quiet and loud
@@ -41,7 +42,9 @@ import sys
 import tempfile
 import time
 from collections import Counter
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _machine import machine_line, percentile
@@ -568,6 +571,54 @@ def child(engine: str, cache: Path, out: Path, options: dict[str, str]) -> None:
     )
 
 
+@contextlib.contextmanager
+def robot_running(on: bool) -> Iterator[None]:
+    """With ``on``, the packaged simulated robot (``cyborg sim``, real time, its dashboard served)
+    runs beside the benchmark: the latency target holds "while the robot runs"."""
+    if not on:
+        yield
+        return
+    import signal
+    import socket
+    import urllib.request
+
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    folder = Path(tempfile.mkdtemp())
+    log = (folder / "sim.log").open("wb")
+    command = "import sys; from cyborg.cli import main; sys.exit(main())"
+    robot = subprocess.Popen(
+        [sys.executable, "-c", command, "sim", "--port", str(port), "--db", str(folder)],
+        stdin=subprocess.DEVNULL,
+        stdout=log,
+        stderr=subprocess.STDOUT,
+        start_new_session=True,
+    )
+    try:
+        deadline = time.monotonic() + 180
+        while True:
+            with (
+                contextlib.suppress(OSError),
+                urllib.request.urlopen(f"http://127.0.0.1:{port}/api/status", timeout=2),
+            ):
+                break
+            if robot.poll() is not None or time.monotonic() > deadline:
+                raise SystemExit(f"cyborg sim did not start; its log: {folder / 'sim.log'}")
+            time.sleep(0.2)
+        print(f"beside the simulated robot (cyborg sim, pid {robot.pid}, http://127.0.0.1:{port})")
+        yield
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(robot.pid, signal.SIGINT)
+        try:
+            robot.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            os.killpg(robot.pid, signal.SIGKILL)
+            robot.wait()
+        log.close()
+
+
 def score(results: list[dict[str, object]]) -> dict[str, dict[str, float]]:
     """Per set and all together: intended %, quiet/loud intended %, rejected %, misdirections, asked."""
     table: dict[str, dict[str, float]] = {}
@@ -680,6 +731,35 @@ def footprint() -> None:
         print(f"{what}: {_median_seconds(code):.2f} s (median of 3)")
 
 
+def run_engine(
+    engine: str, cache: Path, folder: Path, args: argparse.Namespace, loads: list[float]
+) -> dict[str, Any]:
+    """Hear the cached utterances with ``engine`` in a process of its own; its report."""
+    out = folder / f"{engine}.json"
+    with open("/proc/loadavg", encoding="utf-8") as f:
+        loads.append(float(f.read().split()[0]))
+    subprocess.run(
+        [
+            sys.executable,
+            __file__,
+            "--child",
+            engine,
+            "--cache",
+            str(cache),
+            "--out",
+            str(out),
+            "--settings",
+            args.settings,
+            "--sets",
+            args.sets,
+        ],
+        check=True,
+    )
+    with open("/proc/loadavg", encoding="utf-8") as f:
+        loads.append(float(f.read().split()[0]))
+    return dict(json.loads(out.read_text()))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--engines", default=",".join(ENGINES))
@@ -699,6 +779,11 @@ def main() -> None:
     )
     parser.add_argument(
         "--text", action="store_true", help="score the understanding of the sentences' own text"
+    )
+    parser.add_argument(
+        "--beside-robot",
+        action="store_true",
+        help="run the packaged simulated robot (cyborg sim) beside the engines, as the latency target asks",
     )
     args = parser.parse_args()
     options = dict(item.split("=", 1) for item in args.settings.split(",") if item)
@@ -726,30 +811,9 @@ def main() -> None:
     )
     loads: list[float] = []
     reports = []
-    for engine in args.engines.split(","):
-        out = folder / f"{engine}.json"
-        with open("/proc/loadavg", encoding="utf-8") as f:
-            loads.append(float(f.read().split()[0]))
-        subprocess.run(
-            [
-                sys.executable,
-                __file__,
-                "--child",
-                engine,
-                "--cache",
-                str(cache),
-                "--out",
-                str(out),
-                "--settings",
-                args.settings,
-                "--sets",
-                args.sets,
-            ],
-            check=True,
-        )
-        with open("/proc/loadavg", encoding="utf-8") as f:
-            loads.append(float(f.read().split()[0]))
-        reports.append(json.loads(out.read_text()))
+    with robot_running(args.beside_robot):
+        for engine in args.engines.split(","):
+            reports.append(run_engine(engine, cache, folder, args, loads))
     print(f"load average (1 min) during the run: {min(loads):.1f}-{max(loads):.1f}")
     print(
         "engine | set | intended % (quiet / loud) | rejected % | misdirections | asked first | "
