@@ -102,7 +102,7 @@ def test_silero_says_early_that_an_utterance_may_be_over_and_cuts_it_there() -> 
     audio = quiet + synthesise("where is the cafeteria", VOICES[0]) + quiet
     cutter = SileroUtterances(silence=0.3, early=0.1)
     tentative: list[bytes | None] = []
-    found = []
+    found: list[bytes] = []
     for at in range(0, len(audio), 1024):  # 32 ms at a time
         found += cutter.feed(audio[at : at + 1024])
         if not found:
