@@ -14,14 +14,18 @@ import pytest
 
 from cyborg.hearing import HearingError
 from cyborg.hearing.grammar import PlaceWords
-from cyborg.hearing.module import SpeechInputSettings, grammar_of, recogniser_of
+from cyborg.hearing.module import SpeechInput, SpeechInputSettings, grammar_of, recogniser_of
 from cyborg.hearing.recogniser import Recogniser
 from cyborg.hearing.synth import VOICES, synthesise
 from cyborg.hearing.understanding import Understanding
 from cyborg.hearing.vad import SileroUtterances
-from cyborg.hearing.whisper import WhisperRecogniser, collapse_repeats, prompt_of
+from cyborg.hearing.whisper import DOUBT_MARGIN, WhisperRecogniser, collapse_repeats, prompt_of
 from cyborg.modules.kind import Listening
 from cyborg.navigation.database import NavigationDatabase
+from cyborg.transport import topics
+from cyborg.transport.clock import RealClock
+from cyborg.transport.embedded import EmbeddedTransport
+from cyborg.transport.messages import String
 
 
 @pytest.fixture(scope="module")
@@ -91,6 +95,67 @@ def test_silero_cuts_two_sentences_apart_and_ignores_noise() -> None:
     assert len(found) == 2
     assert 0.6 * len(first) < len(found[0]) < 1.3 * len(first)  # the speech, a little before and after
     assert [*cutter.feed(pause * 3), *cutter.finish()] == []
+
+
+def test_silero_says_early_that_an_utterance_may_be_over_and_cuts_it_there() -> None:
+    quiet = (np.random.default_rng(1).normal(0, 30, 16000).astype("<i2")).tobytes()
+    audio = quiet + synthesise("where is the cafeteria", VOICES[0]) + quiet
+    cutter = SileroUtterances(silence=0.3, early=0.1)
+    tentative: list[bytes | None] = []
+    found: list[bytes] = []
+    for at in range(0, len(audio), 1024):  # 32 ms at a time
+        found += cutter.feed(audio[at : at + 1024])
+        if not found:
+            tentative.append(cutter.tentative)
+    assert tentative[0] is None and len(found) == 1
+    assert tentative[-1] == found[0]  # said early, and cut where the tentative one was
+    early = next(i for i, t in enumerate(tentative) if t == found[0])
+    assert len(tentative) - early >= 5  # at least 0.16 s before the utterance was over
+    assert cutter.tentative is None
+
+
+def test_the_ears_decode_early_and_publish_the_same_text(
+    whisper: WhisperRecogniser, listening: Listening, tmp_path: Path
+) -> None:
+    clock = RealClock()
+    transport = EmbeddedTransport(clock)
+    published: list[str] = []
+    transport.node("listener").subscribe(
+        topics.TEXT_FROM_SPEECH, String, lambda m, i: published.append(m.data)
+    )
+    ears = SpeechInput(
+        transport.node("ears"),
+        NavigationDatabase(tmp_path / "navigation.db"),
+        recogniser=whisper,
+        listening=listening,
+        utterances=SileroUtterances(),
+    )
+    quiet = bytes(2 * 16_000)
+
+    async def main() -> None:
+        await ears.listen_to(quiet + synthesise("where is the elevator", VOICES[3]) + quiet, live=True)
+        await clock.sleep(0)
+
+    try:
+        clock.run(main())
+    finally:
+        ears.close()
+        clock.close()
+    assert published == ["where is the elevator"]
+    assert (ears.early_decodes, ears.early_wasted) == (1, 0)
+
+
+def test_a_place_is_believed_only_when_the_hypotheses_nearly_as_likely_name_it_too(
+    whisper: WhisperRecogniser,
+) -> None:
+    assert whisper.understanding is not None
+    heard = whisper.understanding.of("where is the entrance")
+    assert heard is not None and heard.place == "entrance"
+    near, far = -2.0 - DOUBT_MARGIN / 2, -2.0 - 2 * DOUBT_MARGIN
+    assert whisper._rival(heard, -2.0, [("Where is the June?", 0.6, near)]) == "'where is the june'"
+    assert whisper._rival(heard, -2.0, [("Where is the canteen?", 0.6, near)]) == "cafeteria"
+    assert whisper._rival(heard, -2.0, [("Where is the June?", 0.6, far)]) is None  # far less likely
+    assert whisper._rival(heard, -2.0, [("Where's the main entrance, then?", 0.6, near)]) is None
 
 
 def test_a_missing_model_names_the_fix_and_the_ears_fall_back_to_pocketsphinx(

@@ -234,6 +234,11 @@ def test_a_negated_command_is_none() -> None:
         ("locating entrance 2 is hard", INFO, "entrance 2"),
         ("your opinion, the waiting area?", FEEDBACK, "waiting area"),
         ("show me the wait on the information desk", CMD, "information desk"),  # a misheard "way to"
+        ("is the cafeteria close to here", INFO, "cafeteria"),  # nearness asks the way
+        ("el5, is it near", INFO, "el5"),
+        ("would you say the cafeteria is pleasant", FEEDBACK, "cafeteria"),  # liking asks an opinion
+        ("are you fond of el6", FEEDBACK, "el6"),
+        ("how do you find the waiting area", FEEDBACK, "waiting area"),  # not "find the"
     ],
 )
 def test_a_request_without_a_trigger_phrase_is_read_from_its_cue_words(
@@ -269,6 +274,11 @@ def test_a_place_without_a_request_is_none(text: str) -> None:
         ("never", Intent.NO),
         ("I do not like him at home", None),  # "do not" and "never" answer only in a short sentence
         ("it never rains here in the summer", None),
+        ("no, that's okay", Intent.NO),  # a leading no wins over the yes-words after it
+        ("nope, sure", Intent.NO),
+        ("I'd rather not", Intent.NO),
+        ("yeah, let's go", Intent.YES),
+        ("let's go dancing", None),  # "let's go" answers only at the end
     ],
 )
 def test_answers_said_many_ways_and_not_hidden_in_other_sentences(text: str, intent: Intent | None) -> None:

@@ -18,6 +18,11 @@ module would act on) or with pocketsphinx (``engine: pocketsphinx``, believing w
 the grammar); a missing or broken Whisper model is logged as a warning naming the fix, and the
 ears fall back to pocketsphinx. Utterances are cut by Silero VAD (``vad: silero``) or by
 pocketsphinx's end-pointer (``vad: pocketsphinx``).
+
+Decoding starts early: when the cutter says an utterance may be over (Silero's
+:attr:`~cyborg.hearing.vad.SileroUtterances.tentative`, after a tenth of a second of quiet) the
+ears decode it on their worker thread while they wait for the rest of the pause; when the
+utterance does end there, its text is ready or nearly so. One decode runs at a time.
 """
 
 from __future__ import annotations
@@ -28,6 +33,7 @@ import logging
 import time
 from collections import deque
 from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Protocol
 
@@ -127,6 +133,12 @@ class SpeechInput:
         self.understanding: Understanding | None = None
         """What the robot's modules would do with a text (for ``cyborg listen`` and the benchmark)."""
         self._queue: asyncio.Queue[bytes] = asyncio.Queue()
+        self._worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="speech decode")
+        self._early: tuple[bytes, asyncio.Future[Heard]] | None = None
+        self.early_decodes = 0
+        """Utterances decoded before their end was certain."""
+        self.early_wasted = 0
+        """Of them, those the speaker went on after (their decode thrown away)."""
         self._microphone = None
         if microphone:  # first: without one, nothing else is started
             from cyborg.hearing.audio import Microphone
@@ -176,22 +188,31 @@ class SpeechInput:
         """The audio handed over so far is complete: decode what is still open."""
         self._queue.put_nowait(b"")
 
-    async def listen_to(self, audio: bytes) -> list[Heard]:
+    async def listen_to(self, audio: bytes, *, live: bool = False) -> list[Heard]:
         """Decode a recording and publish what it holds, as it goes; returns what was heard.
 
         It is cut a second at a time, and each utterance decoded as soon as its end is seen: an
-        hour's recording prints its first sentence at once and costs time in proportion to its length.
+        hour's recording prints its first sentence at once and costs time in proportion to its
+        length. ``live``: the audio comes a tenth of a second at a time, and while an early decode
+        runs at the pace it was spoken, as from a microphone, so that the early decode has the time
+        it would have live (the benchmark's latency).
         """
         found = []
-        step = 2 * 16_000  # bytes of a second of 16 kHz 16-bit audio
-        for at in range(0, len(audio), step):
-            for utterance in list(self._utterances.feed(audio[at : at + step])):
-                ended = time.perf_counter()
-                found.append(self._publish(await self._decode(utterance), ended))
-            await asyncio.sleep(0)  # the rest of the loop runs between seconds of audio
-        for utterance in list(self._utterances.finish()):
-            ended = time.perf_counter()
-            found.append(self._publish(await self._decode(utterance), ended))
+        step, tenth = 2 * 16_000, 2 * 1_600  # bytes of a second and a tenth of 16 kHz 16-bit audio
+        size = tenth if live else step
+        at, paced_from = 0, None
+        while at < len(audio):
+            if live and self._early is not None:
+                paced_from = paced_from or (time.perf_counter(), at)
+                due = paced_from[0] + (at - paced_from[1]) / (2 * 16_000)
+                await asyncio.sleep(max(0.0, due - time.perf_counter()))
+            else:
+                paced_from = None
+            found += [await self._heard(u) for u in list(self._utterances.feed(audio[at : at + size]))]
+            self._start_early()
+            at += size
+            await asyncio.sleep(0)  # the rest of the loop runs between pieces of audio
+        found += [await self._heard(u) for u in list(self._utterances.finish())]
         return found
 
     async def _consume(self) -> None:
@@ -199,11 +220,37 @@ class SpeechInput:
             chunk = await self._queue.get()
             utterances = list(self._utterances.finish() if not chunk else self._utterances.feed(chunk))
             for utterance in utterances:
-                ended = time.perf_counter()
-                self._publish(await self._decode(utterance), ended)
+                await self._heard(utterance)
+            self._start_early()
+
+    def _start_early(self) -> None:
+        """Decode the cutter's tentative utterance now, unless a decode of it (or one that went on) runs."""
+        tentative: bytes | None = getattr(self._utterances, "tentative", None)
+        if tentative is None or (self._early is not None and self._early[0] is tentative):
+            return
+        if self._early is not None:
+            if not self._early[1].done():
+                return  # one decode at a time: the utterance's own decode follows it
+            self.early_wasted += 1
+        self.early_decodes += 1
+        self._early = (tentative, asyncio.ensure_future(self._decode(tentative)))
+
+    async def _heard(self, utterance: bytes) -> Heard:
+        """Publish ``utterance``'s text (its early decode's, when that was of the same audio)."""
+        ended = time.perf_counter()
+        early, self._early = self._early, None
+        if early is not None and early[0] == utterance:
+            heard = await early[1]
+        else:
+            if early is not None:
+                self.early_wasted += 1
+            heard = await self._decode(utterance)
+        return self._publish(heard, ended)
 
     async def _decode(self, utterance: bytes) -> Heard:
-        return await asyncio.get_running_loop().run_in_executor(None, self.recogniser.decode, utterance)
+        return await asyncio.get_running_loop().run_in_executor(
+            self._worker, self.recogniser.decode, utterance
+        )
 
     def _publish(self, heard: Heard, ended: float) -> Heard:
         self.heard.append(heard)
@@ -220,6 +267,9 @@ class SpeechInput:
             self._microphone.close()
         self._reload.cancel()
         self._task.cancel()
+        if self._early is not None:
+            self._early[1].cancel()
+        self._worker.shutdown(wait=False, cancel_futures=True)
         if self.places is not None:
             self.places.close()
 

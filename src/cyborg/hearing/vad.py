@@ -5,6 +5,11 @@ The model judges 32 ms frames; :class:`SileroUtterances` keeps its state from fr
 microphone), starts an utterance at the first frame it believes is speech (with a little audio
 before it, so the first sound is not clipped) and ends it after ``silence`` seconds of frames
 it believes are not. Same interface as pocketsphinx's :class:`~cyborg.hearing.recogniser.Utterances`.
+
+It also says early when an utterance may be over (:attr:`SileroUtterances.tentative`: after
+``early`` seconds of quiet), so that the ears can start decoding it while they wait to be sure;
+an utterance that does end is cut where the tentative one was (its speech and ``early`` seconds
+of quiet), so the early decode is the decode of the utterance itself.
 """
 
 from __future__ import annotations
@@ -55,6 +60,7 @@ class SileroUtterances:
         silence: float = 0.3,
         before: float = 0.2,
         min_speech: float = 0.1,
+        early: float = 0.1,
         model: Path | None = None,
     ) -> None:
         try:
@@ -79,6 +85,10 @@ class SileroUtterances:
         self.threshold = threshold
         self._end_threshold = max(0.0, threshold - 0.15)
         self._silence_frames = max(1, round(silence * SAMPLE_RATE / FRAME))
+        self._early_frames = min(self._silence_frames, max(1, round(early * SAMPLE_RATE / FRAME)))
+        self.tentative: bytes | None = None
+        """The open utterance as it would be cut if it ended now, once ``early`` seconds of quiet
+        followed its speech; None while speech goes on or no utterance is open."""
         self._min_speech_frames = max(1, round(min_speech * SAMPLE_RATE / FRAME))
         self._before: deque[np.ndarray] = deque(maxlen=max(1, round(before * SAMPLE_RATE / FRAME)))
         self._pending = np.zeros(0, np.float32)
@@ -90,6 +100,7 @@ class SileroUtterances:
         self._speech: list[np.ndarray] = []
         self._speech_frames = 0
         self._quiet = 0
+        self.tentative = None
 
     @property
     def in_speech(self) -> bool:
@@ -123,10 +134,14 @@ class SileroUtterances:
             if speech >= self._end_threshold:
                 self._speech_frames += 1
                 self._quiet = 0
+                self.tentative = None
             else:
                 self._quiet += 1
+                if self._quiet == self._early_frames:
+                    self.tentative = self._audio(self._speech) if self._enough() else None
                 if self._quiet >= self._silence_frames:
-                    utterance = self._take()
+                    cut = len(self._speech) - self._quiet + self._early_frames
+                    utterance = self._take(cut)
                     if utterance is not None:
                         yield utterance
 
@@ -141,10 +156,16 @@ class SileroUtterances:
         if utterance is not None:
             yield utterance
 
-    def _take(self) -> bytes | None:
-        frames, enough = self._speech, self._speech_frames >= self._min_speech_frames
-        self._speech, self._speech_frames, self._quiet = [], 0, 0
-        if not enough:
-            return None
+    def _enough(self) -> bool:
+        return self._speech_frames >= self._min_speech_frames
+
+    def _take(self, frames: int | None = None) -> bytes | None:
+        """The open utterance's audio (its first ``frames`` frames), or None if it held too little speech."""
+        taken, enough = self._speech[:frames], self._enough()
+        self._speech, self._speech_frames, self._quiet, self.tentative = [], 0, 0, None
+        return self._audio(taken) if enough else None
+
+    @staticmethod
+    def _audio(frames: list[np.ndarray]) -> bytes:
         audio = np.concatenate(frames) * 32768.0
         return bytes(np.clip(audio, -32768, 32767).astype("<i2").tobytes())

@@ -12,6 +12,11 @@ which is what makes a small model hear "el6" and "e16". The encoder reads a shor
 with the window (10 s: half the encoder's time of 15 s, the same accuracy in the benchmark). Whisper writes any English, so the rejecting is done by the robot's
 understanding (:mod:`~cyborg.hearing.understanding`): a transcript is believed when a module
 would act on it.
+
+Never a wrong place: the beam search's other hypotheses come for free, and a transcript that
+names a place is believed only when every hypothesis nearly as likely (:data:`DOUBT_MARGIN`) names
+the same place, however it words the rest ("where is the gym", heard as "where is the entrance"
+and, nearly as likely, "where is the june", is not passed on: the person is heard again).
 """
 
 from __future__ import annotations
@@ -31,7 +36,7 @@ import numpy as np
 from cyborg.hearing import HearingError
 from cyborg.hearing.grammar import ALWAYS_HEARD, Grammar
 from cyborg.hearing.recogniser import SAMPLE_RATE, Heard
-from cyborg.hearing.understanding import Understanding
+from cyborg.hearing.understanding import Understanding, Understood
 from cyborg.modules.conversation import is_greeting
 from cyborg.navigation.keywords import CUE_STOP_WORDS, detect_answer
 
@@ -39,6 +44,7 @@ __all__ = [
     "DEFAULT_BEAM",
     "DEFAULT_THREADS",
     "DEFAULT_WINDOW",
+    "DOUBT_MARGIN",
     "WhisperRecogniser",
     "collapse_repeats",
     "default_model_path",
@@ -54,6 +60,9 @@ DEFAULT_WINDOW = 10.0
 """Seconds of audio the encoder reads; shorter utterances are padded to it, longer ones cut."""
 MAX_TOKENS = 40
 """A command is a few words; a cap keeps a looping decode from running on."""
+DOUBT_MARGIN = 2.0
+"""Natural-log units of a whole transcript's probability: a hypothesis within this of the best that
+names another place (or none) makes the place doubtful (e^2: about 7 times less likely)."""
 PROMPT_TOKENS = 223
 """Whisper keeps at most this many tokens of previous text (half its text context, minus one)."""
 FRAMES_PER_SECOND = 100
@@ -292,6 +301,12 @@ class WhisperRecogniser:
 
     def transcribe(self, audio: bytes) -> tuple[str, float]:
         """Whisper's text for one utterance and its confidence (the mean token probability, 0-1)."""
+        [(text, confidence, _), *_] = self.hypotheses(audio)
+        return text, confidence
+
+    def hypotheses(self, audio: bytes) -> list[tuple[str, float, float]]:
+        """The beam's transcripts of one utterance, best first: text, confidence (the mean token
+        probability, 0-1) and the whole transcript's log probability."""
         import ctranslate2
 
         samples = np.frombuffer(audio, dtype="<i2").astype(np.float32) / 32768.0
@@ -306,13 +321,16 @@ class WhisperRecogniser:
             batch,
             [prompt],
             beam_size=self.beam,
+            num_hypotheses=self.beam,
             max_length=len(prompt) + MAX_TOKENS,  # CTranslate2 counts the prompt in
             return_scores=True,
             suppress_blank=True,
         )
-        text = self._tokenizer.decode(result.sequences_ids[0]) if result.sequences_ids else ""
-        score = float(result.scores[0]) if result.scores else -10.0
-        return text, float(np.exp(min(0.0, score)))
+        found = [
+            (self._tokenizer.decode(ids), float(np.exp(min(0.0, score))), score * (len(ids) + 1))
+            for ids, score in zip(result.sequences_ids, result.scores, strict=False)
+        ]  # a score is the mean log probability of the tokens and the end
+        return found or [("", float(np.exp(-10.0)), -100.0)]
 
     def decode(self, audio: bytes) -> Heard:
         """Decode one utterance (16-bit little-endian mono samples at :data:`SAMPLE_RATE`)."""
@@ -320,12 +338,15 @@ class WhisperRecogniser:
         if understanding is None:
             raise HearingError("the recogniser has no grammar yet; fix: call use(grammar) first")
         started = time.perf_counter()
-        raw, confidence = self.transcribe(audio)
+        [(raw, confidence, likelihood), *others] = self.hypotheses(audio)
         text = clean(raw)
+        understood = understanding.of(text) if text else None
         if not text:
             reason = "nothing heard"
-        elif understanding.of(text) is None:
+        elif understood is None:
             reason = "not understood"
+        elif understood.place is not None and (rival := self._rival(understood, likelihood, others)):
+            reason = f"unsure of the place: {understood.place} or {rival}"
         elif confidence < self.min_confidence:
             reason = f"confidence {confidence:.2f} < {self.min_confidence:.2f}"
         else:
@@ -334,3 +355,18 @@ class WhisperRecogniser:
         if reason:
             log.info("rejected speech %r (confidence %.2f): %s", raw.strip(), confidence, reason)
         return heard
+
+    def _rival(
+        self, understood: Understood, likelihood: float, others: list[tuple[str, float, float]]
+    ) -> str | None:
+        """What a hypothesis nearly as likely as the best (:data:`DOUBT_MARGIN`) heard instead of
+        ``understood``'s place ("the june", another place), or None when all that close agree."""
+        assert self.understanding is not None
+        for raw, _, other in others:
+            if likelihood - other > DOUBT_MARGIN:
+                continue
+            text = clean(raw)
+            place = self.understanding.matcher.find(text)  # wherever it stands, whatever the rest
+            if place is None or place.location != understood.place:
+                return place.location if place is not None else repr(text)
+        return None

@@ -28,7 +28,9 @@ from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Node
 from cyborg.transport.messages import SystemState
 
-GREETINGS = frozenset({"hello", "hi", "hey", "hallo", "hei", "greetings", "howdy", "yo", "hiya", "heya"})
+GREETINGS = frozenset(
+    {"hello", "hi", "hey", "hallo", "hei", "greetings", "howdy", "yo", "hiya", "heya", "morning", "evening"}
+)
 GREETING_PHRASES = (
     "good morning",
     "good afternoon",

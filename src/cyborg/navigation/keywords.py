@@ -174,6 +174,18 @@ TRIGGERS: dict[Intent, tuple[str, ...]] = {
         "how do you like",
         "do you like",
         "how would you rate",
+        "how do you find",
+        "make of",
+        "impression of",
+        "fond of",
+        "fan of",
+        "reckon about",
+        "reckon of",
+        "say about",
+        "feelings about",
+        "like about",
+        "describe",
+        "enjoy",
     ),
 }
 """Phrases (normalised) that start a navigation request; the place must come after them.
@@ -203,6 +215,11 @@ confusions than they gain (docs/benchmarks-history.md, issue 34)."""
 
 WEAK_ANSWERS = frozenset({"please", "right"})
 """Answers only when said (nearly) alone: "please" is yes, "turn around please" is not."""
+ENDING_ANSWERS = frozenset({"lets go"})
+"""Answers only at the end of a sentence (or before companions): "yes, let's go" is yes, "let's
+go dancing" is none."""
+LEADING_NO = frozenset({"no", "nope", "nah"})
+"""A sentence that starts with one of these is a no even when yes-words follow ("no, that's okay")."""
 WEAK_NO_ANSWERS = frozenset({"never", "dont", "do not"})
 """Answers only in a short sentence ("never!", "please don't"): "I do not like him at home" is none."""
 WEAK_NO_WORDS = 3
@@ -247,7 +264,9 @@ YES_PHRASES = (
     "id love that",
     "i would love that",
     "lets go",
+    "lets do it",
     "lead the way",
+    "no problem",
     "sounds good",
     "sounds great",
     "yes i do",
@@ -283,6 +302,9 @@ NO_PHRASES = (
     "i dont think so",
     "no need",
     "not necessary",
+    "rather not",
+    "no way",
+    "not interested",
 )
 
 
@@ -498,8 +520,32 @@ def _cue_shares() -> dict[str, dict[Intent, float]]:
     }
 
 
-CUES: dict[str, dict[Intent, float]] = _cue_shares()
-"""Cue words (stemmed) of the navigation intents, learnt from :data:`TRIGGERS`."""
+CUE_WORDS: dict[Intent, tuple[str, ...]] = {
+    Intent.NAVIGATION_INFORMATION: (
+        *("nearby", "near", "close", "far", "located", "location", "whereabouts", "floor"),
+        *("route", "path", "directions", "around", "somewhere", "way"),
+    ),
+    Intent.NAVIGATION_FEEDBACK: (
+        *("like", "love", "hate", "enjoy", "fond", "fan", "favourite", "favorite", "impression"),
+        *("reckon", "describe", "opinion", "nice", "good", "pleasant", "cozy", "cosy", "rate"),
+    ),
+}
+"""Words that lean a sentence to an intent without being a trigger phrase's, wherever the place
+stands ("is the canteen nearby", "are you fond of el6"): nearness and the way are questions of
+where; liking is a question of opinion."""
+
+
+def _with_cue_words(learnt: dict[str, dict[Intent, float]]) -> dict[str, dict[Intent, float]]:
+    """:data:`CUE_WORDS` (stemmed, each all its intent's) over the cue words learnt from the triggers."""
+    merged = dict(learnt)
+    for intent, words in CUE_WORDS.items():
+        for word in words:
+            merged[_stem(word)] = {intent: 1.0}
+    return merged
+
+
+CUES: dict[str, dict[Intent, float]] = _with_cue_words(_cue_shares())
+"""Cue words (stemmed) of the navigation intents, learnt from :data:`TRIGGERS`, and :data:`CUE_WORDS`."""
 
 
 def classify_request(words: Sequence[str], place: LocationMatch) -> Intent | None:
@@ -557,7 +603,8 @@ def detect_navigation(text: str, matcher: LocationMatcher) -> Detection | None:
     request is not :attr:`~Detection.certain`: the robot asks before it acts).
 
     The earliest place wins; of the triggers before it, the one nearest to it, then the
-    longest ("show me the way to" over "the way to"); a negated command is none.
+    longest ("show me the way to" over "the way to"), unless a phrase that starts earlier runs
+    into it ("how do you find" over "find the"); a negated command is none.
     """
     words = normalise(text).split()
     candidates: list[tuple[tuple[int, int, int], Intent, LocationMatch]] = []
@@ -582,7 +629,14 @@ def detect_navigation(text: str, matcher: LocationMatcher) -> Detection | None:
             return None  # two places: which one is meant is a guess
         # Read from cue words rather than said in a known way: the place is asked about first.
         return Detection(guessed, place.location, place.matched, min(place.score, CERTAIN_SCORE - 1))
-    _, intent, match = min(candidates, key=lambda c: c[0])
+    (place_at, after, size), intent, match = min(candidates, key=lambda c: c[0])
+    start = -after + size  # the keys hold -after and -size
+    for (other_at, other_after, other_size), other_intent, other_match in candidates:
+        # A longer phrase that runs into the nearest one is what was said: "how do you find the X"
+        # is "how do you find", not "find the".
+        other_start = -other_after + other_size
+        if other_at == place_at and other_start < start < -other_after:
+            start, intent, match = other_start, other_intent, other_match
     return Detection(intent, match.location, match.matched, match.score)
 
 
@@ -602,9 +656,13 @@ def detect_answer(text: str) -> Detection | None:
                 if intent is Intent.YES and i and words[i - 1] in NEGATIONS:
                     intent = Intent.NO  # "not right now", "not okay"
                 found[intent] = min(found.get(intent, (i, phrase)), (i, phrase))
+    if len(found) == 2 and words[0] in LEADING_NO:
+        del found[Intent.YES]
     if len(found) != 1:
         return None
     [(intent, (first, phrase))] = found.items()
+    if phrase in ENDING_ANSWERS and not set(words[first + len(phrase.split()) :]) <= ANSWER_COMPANIONS:
+        return None
     if first > ANSWER_START and len(words) > SHORT_ANSWER:
         return None
     if intent is Intent.YES and phrase in WEAK_ANSWERS and not set(words) <= WEAK_ANSWERS | ANSWER_COMPANIONS:
