@@ -25,9 +25,9 @@ File layout::
 
 from __future__ import annotations
 
+import unicodedata
 from collections.abc import Callable
 from dataclasses import dataclass
-import unicodedata
 from functools import partial
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
@@ -93,7 +93,10 @@ class TimeoutsModel(BaseModel):
         2.0, ge=MIN_TIMEOUT, le=MAX_TIMEOUT, description="seconds to wait for a module's action server"
     )
     preempt: float = Field(
-        2.0, ge=MIN_TIMEOUT, le=MAX_TIMEOUT, description="seconds to wait for a module to acknowledge a cancel"
+        2.0,
+        ge=MIN_TIMEOUT,
+        le=MAX_TIMEOUT,
+        description="seconds to wait for a module to acknowledge a cancel",
     )
     event_age: float = Field(
         10.0,
