@@ -108,3 +108,32 @@ def test_a_controller_store_of_a_newer_program_is_refused_and_left_in_place(tmp_
     assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith("controller.db")) == [
         "controller.db"
     ]
+
+
+def test_a_module_whose_database_is_newer_gets_that_fix_alone(tmp_path: Path) -> None:
+    """Review 3.4: a navigation.db of a newer program was refused with the right advice, but the
+    module-build wrapper then added "fix: correct its settings under modules: cyborg_navigation"."""
+    from cyborg.app.context import BuildContext
+    from cyborg.app.registry import build_module
+    from cyborg.errors import ConfigError
+    from cyborg.modules import ModuleKind, ModuleSettings
+    from cyborg.transport.clock import VirtualClock
+    from cyborg.transport.embedded import EmbeddedTransport
+
+    def build(node: object, settings: object, context: object) -> object:
+        raise DatabaseError(f"{tmp_path}/navigation.db has schema version 99, newer than this program's 5; "
+                            "fix: update cyborg, or point --db at another file")  # fmt: skip
+
+    kind: ModuleKind[ModuleSettings] = ModuleKind(ModuleSettings, build)  # type: ignore[arg-type]
+    clock = VirtualClock()
+    transport = EmbeddedTransport(clock)
+    try:
+        with pytest.raises(ConfigError) as raised:
+            build_module("cyborg_navigation", kind, transport.node("cyborg_navigation"), ModuleSettings(),
+                         BuildContext(data_dir=tmp_path))  # fmt: skip
+    finally:
+        transport.shutdown()
+        clock.close()
+    message = str(raised.value)
+    assert message.count("fix:") == 1 and "fix: update cyborg" in message, message
+    assert "module 'cyborg_navigation'" in message, message
