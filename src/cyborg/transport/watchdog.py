@@ -138,7 +138,9 @@ class LoopWatchdog:
             self._thread.join(timeout=5)
         if self._can_stop and threading.current_thread() is threading.main_thread():
             self._can_stop = False
-            signal.signal(STOP_SIGNAL, signal.SIG_DFL)
+            # SIG_DFL would end the process on a signal still on its way from a thread not yet gone.
+            alive = self._thread is not None and self._thread.is_alive()
+            signal.signal(STOP_SIGNAL, signal.SIG_IGN if alive else signal.SIG_DFL)
 
     def report(self) -> dict[str, Any] | None:
         """The last block, for the robot's status; None if the loop was never blocked."""
