@@ -29,6 +29,7 @@ from cyborg.transport import topics
 from cyborg.transport.clock import RealClock
 from cyborg.transport.embedded import EmbeddedTransport
 from cyborg.transport.messages import String, SystemState
+from cyborg.transport.watchdog import LoopWatchdog
 
 BLOCK = 6.0
 PREEMPT = 0.5
@@ -63,6 +64,12 @@ CLOSES_SLOWLY: ModuleKind[Any] = ModuleKind(ModuleSettings, lambda node, setting
 def test_the_handover_keeps_its_deadline_while_a_module_blocks(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
+    # An earlier robot of this process that was never closed left its watchdog's signal handler.
+    stale_loop = asyncio.new_event_loop()
+    stale = LoopWatchdog(stale_loop, deadline=lambda: None, stoppable=lambda module: False)
+    stale.start()
+    stale._stopped.set()
+    stale_loop.close()
     config = parse_config(MACHINE, source="robot.yaml")
     clock = RealClock()
     transport = EmbeddedTransport(clock)

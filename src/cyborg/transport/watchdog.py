@@ -125,7 +125,7 @@ class LoopWatchdog:
         if (
             self._deadline is not None
             and threading.current_thread() is threading.main_thread()
-            and signal.getsignal(STOP_SIGNAL) == signal.SIG_DFL
+            and _free_for_us(signal.getsignal(STOP_SIGNAL))
         ):
             signal.signal(STOP_SIGNAL, self._interrupt)
             self._can_stop = True
@@ -138,9 +138,10 @@ class LoopWatchdog:
             self._thread.join(timeout=5)
         if self._can_stop and threading.current_thread() is threading.main_thread():
             self._can_stop = False
-            # SIG_DFL would end the process on a signal still on its way from a thread not yet gone.
-            alive = self._thread is not None and self._thread.is_alive()
-            signal.signal(STOP_SIGNAL, signal.SIG_IGN if alive else signal.SIG_DFL)
+            if signal.getsignal(STOP_SIGNAL) == self._interrupt:  # (a later watchdog may have it now)
+                # SIG_DFL would end the process on a signal still on its way from a thread not yet gone.
+                alive = self._thread is not None and self._thread.is_alive()
+                signal.signal(STOP_SIGNAL, signal.SIG_IGN if alive else signal.SIG_DFL)
 
     def report(self) -> dict[str, Any] | None:
         """The last block, for the robot's status; None if the loop was never blocked."""
@@ -270,6 +271,14 @@ class LoopWatchdog:
         if innermost is None:
             return Block("(unknown)", None, "?", since)
         return Block(_name(innermost), None, _where(innermost), since)
+
+
+def _free_for_us(handler: object) -> bool:
+    """True if the stop signal has no handler of anyone else's: the default, ignored, or the handler
+    of an earlier watchdog of this process (a robot that was never closed)."""
+    if handler in (signal.SIG_DFL, signal.SIG_IGN):
+        return True
+    return isinstance(getattr(handler, "__self__", None), LoopWatchdog)
 
 
 def _module_of(frame: FrameType) -> str | None:
