@@ -13,12 +13,12 @@ blocked loop is a real-world stall whatever the robot's clock says.
 
 The controller's handover deadlines are kept through a block. Given ``deadline`` (when the
 controller's current wait on a module ends, on the loop's time line) and ``stoppable`` (the
-module nodes it may stop), the watchdog checks the loop at that deadline: if a stoppable
-module's callback or goal holds the loop then, it raises :class:`~cyborg.errors.ModuleBlockedError`
+module nodes it may stop), the watchdog checks the loop at that deadline (plus :data:`GRACE`):
+if a stoppable module's callback or goal holds the loop then, it raises :class:`~cyborg.errors.ModuleBlockedError`
 inside that call (a signal to the loop's thread, which must be the main thread: the blocking
 ``time.sleep``, socket or serial read returns at once), the module's call ends as a failure
-(a goal ends ABORTED), and the loop goes on to the handover, late by a fraction of a second
-instead of by the whole block. The handler checks on the loop's own thread that the very
+(a goal ends ABORTED), and the loop goes on to the handover, late by about a second instead
+of by the whole block. The handler checks on the loop's own thread that the very
 call the watchdog found is still running, so nothing else is ever interrupted.
 """
 
@@ -37,7 +37,7 @@ from typing import Any
 
 from cyborg.errors import ModuleBlockedError
 
-__all__ = ["Block", "LoopWatchdog"]
+__all__ = ["GRACE", "Block", "LoopWatchdog"]
 
 log = logging.getLogger(__name__)
 
@@ -45,6 +45,10 @@ STOP_SIGNAL = signal.SIGUSR2
 """Sent to the loop's (main) thread to stop a module's call that blocks it past a deadline."""
 MIN_BLOCK = 0.05
 """Real seconds the loop must have been held before a deadline may stop the call that holds it."""
+GRACE = 1.0
+"""Real seconds past the controller's deadline before the call holding the loop is stopped: a
+module's short burst of work (matching a sentence against thousands of places) that happens to
+straddle a deadline is let finish; a handover is late by about this much at most."""
 
 FIX = (
     "never block in a callback or goal (no time.sleep, synchronous requests, serial reads or long "
@@ -155,7 +159,7 @@ class LoopWatchdog:
         due = self._deadline() if self._can_stop and self._deadline is not None else None
         if due is None:
             return self.period
-        until = due - self._now()
+        until = due + GRACE - self._now()
         return min(self.period, until + 0.01 if until > 0 else 0.05)
 
     def _watch(self) -> None:
@@ -190,7 +194,7 @@ class LoopWatchdog:
         if not self._can_stop or self._deadline is None or self._stop_at is not None:
             return False
         due = self._deadline()
-        return due is not None and now >= due
+        return due is not None and now >= due + GRACE
 
     def _stop_culprit(self, asked: float) -> bool:
         """(Under the lock.) Stop the module call that holds the loop past a deadline; True if sent."""
