@@ -65,6 +65,46 @@ async def ws(n, burst):
         res = []; await probe(s, res)
         print(f"4.{'18' if burst else '11'} ws{' burst' if burst else ''}: {len(ok)} accepted of {n}; refusals {set(str(g)[:60] for g in got if isinstance(g, Exception))}; status {res}")
         for w in ok: await w.close()
-if MODE == "conc": asyncio.run(conc())
+async def say2k():
+    counts, lat = {}, []
+    text = json.dumps({"text": "where is the cafeteria " + "a" * 1970})
+    async with aiohttp.ClientSession(connector=aiohttp.TCPConnector(limit=100)) as s:
+        stop = time.monotonic() + 8
+        async def c():
+            while time.monotonic() < stop:
+                try:
+                    async with s.post(URL + "/api/say", data=text, headers={"Content-Type": "application/json"}) as r: await r.read(); st = r.status
+                except Exception as e: st = type(e).__name__
+                counts[st] = counts.get(st, 0) + 1
+        async def probes():
+            while time.monotonic() < stop:
+                res = []; await probe(s, res); lat.append(res[0][1]); await asyncio.sleep(0.2)
+        await asyncio.gather(probes(), *(c() for _ in range(100)))
+    lat.sort()
+    print(f"4.20 say flood: {sum(counts.values())} says {counts} ({sum(counts.values())/8:.0f}/s); status p50 {lat[len(lat)//2]*1000:.0f} ms, max {lat[-1]*1000:.0f} ms")
+async def wsstall(n):
+    async with aiohttp.ClientSession() as s:
+        ws = [await s.ws_connect(URL + "/api/ws") for _ in range(n)]  # never read
+        text = json.dumps({"text": "hello there"})
+        for _ in range(500):
+            async with s.post(URL + "/api/say", data=text, headers={"Content-Type": "application/json"}) as r: await r.read()
+        res = []; await probe(s, res)
+        print(f"4.12 {n} stalled websockets + 500 says: status {res}")
+        for w in ws: await w.close()
+async def wsspam():
+    async with aiohttp.ClientSession() as s:
+        w = await s.ws_connect(URL + "/api/ws"); n = 0; end = time.monotonic() + 6
+        while time.monotonic() < end:
+            for _ in range(1000): await w.send_str("x")
+            n += 1000
+        try:
+            await w.send_bytes(b"x" * 4_000_000); msg = await w.receive(timeout=10); close = (msg.type, w.close_code)
+        except Exception as e: close = type(e).__name__
+        res = []; await probe(s, res)
+        print(f"4.13 ws spam: {n} messages, then a 4 MB frame -> {close}; status {res}")
+if MODE == "say2k": asyncio.run(say2k())
+elif MODE == "wsstall": asyncio.run(wsstall(int(sys.argv[3])))
+elif MODE == "wsspam": asyncio.run(wsspam())
+elif MODE == "conc": asyncio.run(conc())
 elif MODE == "slowloris": asyncio.run(slowloris(int(sys.argv[3]), float(sys.argv[4])))
 else: asyncio.run(ws(int(sys.argv[3]), MODE == "wsburst"))
