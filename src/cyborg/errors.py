@@ -36,6 +36,12 @@ class ServiceUnavailableError(TransportError):
     """A service call was made to a service nobody offers."""
 
 
+class ModuleBlockedError(CyborgError):
+    """Raised inside a module's callback or goal that held the in-process robot's event loop past
+    one of the controller's handover deadlines: the loop watchdog stops the blocking call so the
+    handover goes on (see :mod:`cyborg.transport.watchdog`)."""
+
+
 class DatabaseError(CyborgError):
     """A database could not be opened, migrated or written."""
 

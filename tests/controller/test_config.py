@@ -215,7 +215,10 @@ MESSAGES: dict[str, tuple[str, list[str]]] = {
     ),
     "timeout not positive": (
         "timeouts: {preempt: -1}\n" + VALID,
-        ["timeouts > preempt: must be greater than 0, not the number -1", "fix: use a number greater than 0"],
+        [
+            "timeouts > preempt: must be greater than or equal to 0.1, not the number -1",
+            "fix: use a number of at least 0.1",
+        ],
     ),
     "unknown transition target": (
         VALID.replace("music_play: music", "music_play: musik"),

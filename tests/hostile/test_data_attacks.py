@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import sqlite3
 import subprocess
 import sys
 import time
@@ -19,6 +20,10 @@ from collections.abc import Callable
 from pathlib import Path
 from subprocess import CompletedProcess
 
+import pytest
+
+from cyborg.errors import DatabaseError
+from cyborg.motivator.store import ControllerStore
 from tests.hostile.robot import ServedRobot
 
 LOCKER = """
@@ -84,3 +89,51 @@ def test_a_deleted_data_folder_is_noticed(tmp_path: Path) -> None:
     finally:
         robot.kill()
         assert os.path.exists(tmp_path)
+
+
+def test_a_controller_store_of_a_newer_program_is_refused_and_left_in_place(tmp_path: Path) -> None:
+    """Review 3.5 (WEAK three rounds): a controller.db whose schema version is newer than this
+    program's was used silently (and, with a newer column, moved aside as broken)."""
+    path = tmp_path / "controller.db"
+    ControllerStore(path).close()
+    with sqlite3.connect(path) as conn:
+        conn.execute("UPDATE meta SET value = '99' WHERE key = 'schema_version'")
+        conn.execute("ALTER TABLE emotion ADD COLUMN mood_of_tomorrow TEXT")
+    conn.close()
+    with pytest.raises(DatabaseError) as raised:
+        ControllerStore(path)
+    message = str(raised.value)
+    assert f"{path} has schema version 99, newer than this program's" in message, message
+    assert "fix: update cyborg, or give --data-dir another folder" in message, message
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith("controller.db")) == [
+        "controller.db"
+    ]
+
+
+def test_a_module_whose_database_is_newer_gets_that_fix_alone(tmp_path: Path) -> None:
+    """Review 3.4: a navigation.db of a newer program was refused with the right advice, but the
+    module-build wrapper then added "fix: correct its settings under modules: cyborg_navigation"."""
+    from cyborg.app.context import BuildContext
+    from cyborg.app.registry import build_module
+    from cyborg.errors import ConfigError
+    from cyborg.modules import ModuleKind, ModuleSettings
+    from cyborg.transport.clock import VirtualClock
+    from cyborg.transport.embedded import EmbeddedTransport
+
+    def build(node: object, settings: object, context: object) -> object:
+        raise DatabaseError(f"{tmp_path}/navigation.db has schema version 99, newer than this program's 5; "
+                            "fix: update cyborg, or point --db at another file")  # fmt: skip
+
+    kind: ModuleKind[ModuleSettings] = ModuleKind(ModuleSettings, build)  # type: ignore[arg-type]
+    clock = VirtualClock()
+    transport = EmbeddedTransport(clock)
+    try:
+        with pytest.raises(ConfigError) as raised:
+            build_module("cyborg_navigation", kind, transport.node("cyborg_navigation"), ModuleSettings(),
+                         BuildContext(data_dir=tmp_path))  # fmt: skip
+    finally:
+        transport.shutdown()
+        clock.close()
+    message = str(raised.value)
+    assert message.count("fix:") == 1 and "fix: update cyborg" in message, message
+    assert "module 'cyborg_navigation'" in message, message

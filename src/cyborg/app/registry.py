@@ -22,7 +22,7 @@ from pydantic import ValidationError
 
 from cyborg.app.plugin_path import main_path, main_python
 from cyborg.configfile import describe_errors
-from cyborg.errors import ConfigError
+from cyborg.errors import ConfigError, CyborgError
 from cyborg.modules.kind import BuildContext, Component, ModuleKind, ModuleSettings
 from cyborg.transport.base import Node
 
@@ -265,6 +265,8 @@ def build_module(
         raise  # a disk or device problem: the commands word it with its own fix (os_problem)
     except Exception as exc:
         log.debug("module %r could not be built", name, exc_info=True)
+        if isinstance(exc, CyborgError) and "fix:" in str(exc):  # our own error names its fix already
+            raise ConfigError(f"{where}module {name!r} could not be built: {exc}", source=source) from exc
         reason = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
         raise ConfigError(
             f"{where}module {name!r} could not be built: {reason}; fix: correct its settings under "

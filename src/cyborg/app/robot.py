@@ -80,8 +80,16 @@ class Robot:
         """Start the controller; what the build made is frozen out of garbage collections from now
         on (:mod:`cyborg.app.tuning`), so none walks the whole machine on the controller's loop."""
         freeze_built()
-        if not self.transport.clock.is_virtual:  # where people wait on it (virtual runs stay as they were)
-            self.watchdog = LoopWatchdog(self.transport.clock.loop)
+        clock = self.transport.clock
+        if not clock.is_virtual:  # where people wait on it (virtual runs stay as they were)
+            # It also keeps the controller's handover deadlines: a module's call that holds the loop
+            # past one is stopped (the controller's own code, the emotion system and the motivator never).
+            self.watchdog = LoopWatchdog(
+                clock.loop,
+                now=clock.loop.time,
+                deadline=lambda: self.controller.deadline,
+                stoppable=self.components.__contains__,
+            )
             self.watchdog.start()
         self.controller.start()
 

@@ -74,7 +74,7 @@ def listen(
     from cyborg.app.context import heard_by
     from cyborg.app.registry import module_kinds
     from cyborg.cli.common import load_or_default
-    from cyborg.hearing.audio import read_wav
+    from cyborg.hearing.audio import probe_microphone, read_wav
     from cyborg.hearing.module import HEARD_TOPIC, SpeechInput, SpeechInputSettings, cutter, recogniser_of
     from cyborg.hearing.synth import as_heard
     from cyborg.navigation.database import NavigationDatabase
@@ -83,6 +83,8 @@ def listen(
     from cyborg.transport.embedded import EmbeddedTransport
     from cyborg.transport.messages import String
 
+    if wav is None:
+        probe_microphone(device)  # before the model: loading it takes seconds, and is for nothing then
     sending = [send]
     config = load_or_default(config_path)
     listening = heard_by(config, module_kinds())()  # what the robot's modules listen for

@@ -25,6 +25,7 @@ File layout::
 
 from __future__ import annotations
 
+import unicodedata
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
@@ -63,14 +64,44 @@ class StateModel(BaseModel):
         return value
 
 
+MIN_TIMEOUT = 0.1
+MAX_TIMEOUT = 3600.0
+"""Seconds: the range of every timeout of the machine."""
+
+_BIDI_CONTROLS = frozenset("\u200e\u200f\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069")
+
+
+def name_problem(name: str) -> str | None:
+    """Why a state or event name cannot be used (blank, or a control character), or None."""
+    if not name.strip():
+        return "is blank, so it can never be sent or shown"
+    for char in name:
+        if unicodedata.category(char) == "Cc" or char in _BIDI_CONTROLS:
+            return (
+                f"contains the control character U+{ord(char):04X}, which breaks drawing and logs, "
+                "or shows another name than the robot uses"
+            )
+    return None
+
+
 class TimeoutsModel(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
-    connect: float = Field(2.0, gt=0, description="seconds to wait for a module's action server")
-    preempt: float = Field(2.0, gt=0, description="seconds to wait for a module to acknowledge a cancel")
+    # Bounded both ways: a connect timeout is also the pace of retries (1e-9 retried 64,000 times a
+    # second), and 1e300 waits for ever for a module that is not there.
+    connect: float = Field(
+        2.0, ge=MIN_TIMEOUT, le=MAX_TIMEOUT, description="seconds to wait for a module's action server"
+    )
+    preempt: float = Field(
+        2.0,
+        ge=MIN_TIMEOUT,
+        le=MAX_TIMEOUT,
+        description="seconds to wait for a module to acknowledge a cancel",
+    )
     event_age: float = Field(
         10.0,
-        gt=0,
+        ge=MIN_TIMEOUT,
+        le=MAX_TIMEOUT,
         description="seconds an event may wait for the controller; an older one is dropped as stale",
     )
 
@@ -210,6 +241,7 @@ def build_machine(
     problems.extend(_region_problems(states, _Lines(lines, ()).of_state))
     names = sorted(states)
     where = _Lines(lines, ()).of_state
+    problems.extend(_name_problems(states, where))
     for state in states.values():
         for event, target in state.transitions.items():
             if target not in states:
@@ -278,6 +310,22 @@ def build_machine(
         if resource not in held
     )
     return machine, warnings
+
+
+def _name_problems(states: dict[str, StateSpec], where: Callable[..., str]) -> list[str]:
+    fix = "fix: use letters, digits and underscores, e.g. music_play"
+    problems = [
+        f"{where(states, state.name)}state {state.name!r} {why}; {fix}"
+        for state in states.values()
+        if (why := name_problem(state.name)) is not None
+    ]
+    problems.extend(
+        f"{where(states, state.name, 'transitions', event)}state {state.name!r}: event {event!r} {why}; {fix}"
+        for state in states.values()
+        for event in state.transitions
+        if (why := name_problem(event)) is not None
+    )
+    return problems
 
 
 def _region_problems(states: dict[str, StateSpec], where: Callable[..., str]) -> list[str]:

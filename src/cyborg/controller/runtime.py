@@ -37,7 +37,7 @@ import enum
 import json
 import logging
 from collections import deque
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 
 from cyborg.controller.intake import DropCounter, DropReason, EventIntake, QueuedEvent
@@ -137,6 +137,11 @@ class Controller:
         self._goal: _Handle | None = None
         self._goal_seq = 0
         self._goal_sent_at = 0.0
+        self.deadline: float | None = None
+        """While a handover waits on a module (an acknowledgement, a server, a retry): the clock's
+        monotonic time by which it goes on whatever the module does; None otherwise. The loop
+        watchdog of an in-process robot reads it (from its thread) to stop a module that blocks the
+        loop past it."""
         self._task: asyncio.Task[None] | None = None
         self._state_pub = node.publisher(topics.STATE_CHANGE, SystemState, latch=True)
         self.regions = Regions(machine)
@@ -411,7 +416,8 @@ class Controller:
         self.phase = Phase.HANDING_OVER
         goal.cancel()
         try:
-            await asyncio.wait_for(goal.wait(), self.machine.timeouts.preempt)
+            with self._deadline(self.machine.timeouts.preempt):
+                await asyncio.wait_for(goal.wait(), self.machine.timeouts.preempt)
         except TimeoutError:
             self.stats.preempt_timeouts += 1
             log.warning(
@@ -455,6 +461,15 @@ class Controller:
                 # Retrying the same missing server: wait a bit instead of spinning.
                 await self.node.clock.sleep(self.machine.timeouts.connect)
 
+    @contextlib.contextmanager
+    def _deadline(self, seconds: float) -> Iterator[None]:
+        """Publish :attr:`deadline` while a handover waits at most ``seconds`` on a module."""
+        self.deadline = self.node.clock.monotonic() + seconds
+        try:
+            yield
+        finally:
+            self.deadline = None
+
     def _on_feedback(self, action: str) -> None:
         self.last_feedback_at[action.lstrip("/")] = self.node.clock.now()
 
@@ -475,7 +490,9 @@ class Controller:
             client = self._clients[action] = self.node.action_client(action, StateMachineAction)
         if not client.server_available():
             connect = self.machine.timeouts.connect
-            if not await client.wait_for_server(connect):
+            with self._deadline(connect):
+                offered = await client.wait_for_server(connect)
+            if not offered:
                 log.warning(
                     "no action server %s for state %s within %.1f s: taking 'aborted'",
                     action,
@@ -590,13 +607,14 @@ class Controller:
         if not cancelled:
             return
         preempt = self.machine.timeouts.preempt
-        if len(cancelled) == 1:
-            with contextlib.suppress(TimeoutError):
-                await asyncio.wait_for(cancelled[0][1].wait(), preempt)
-        else:
-            waits = [asyncio.ensure_future(goal.wait()) for _, goal in cancelled]
-            for task in (await asyncio.wait(waits, timeout=preempt))[1]:
-                task.cancel()
+        with self._deadline(preempt):
+            if len(cancelled) == 1:
+                with contextlib.suppress(TimeoutError):
+                    await asyncio.wait_for(cancelled[0][1].wait(), preempt)
+            else:
+                waits = [asyncio.ensure_future(goal.wait()) for _, goal in cancelled]
+                for task in (await asyncio.wait(waits, timeout=preempt))[1]:
+                    task.cancel()
         for leaf, goal in cancelled:
             if not goal.status.is_terminal:
                 self.stats.preempt_timeouts += 1

@@ -43,7 +43,7 @@ from pydantic import ValidationError
 
 from cyborg.emotion.model import DIMENSIONS, PAD, clamp
 from cyborg.emotion.system import StoredEmotion
-from cyborg.errors import InvalidValueError
+from cyborg.errors import DatabaseError, InvalidValueError
 from cyborg.motivator.logic import MotivationalEvent
 from cyborg.storage import NotSaved, SaveStatus, SQLiteFile, Unusable, transaction
 from cyborg.transport.clock import Clock, Periodic
@@ -231,6 +231,14 @@ class ControllerStore(SQLiteFile):
             self._create(conn)
             return
         self.check_integrity(conn)
+        if "meta" in tables:  # before the columns: a newer program's file is not broken, only newer
+            row = conn.execute("SELECT value FROM meta WHERE key = 'schema_version'").fetchone()
+            version = str(row[0]) if row is not None else ""
+            if version.isdigit() and int(version) > int(SCHEMA_VERSION):
+                raise DatabaseError(
+                    f"{self.path} has schema version {version}, newer than this program's {SCHEMA_VERSION}; "
+                    "fix: update cyborg, or give --data-dir another folder"
+                )
         for table, columns in _COLUMNS.items():
             found = [row[1] for row in conn.execute(f"PRAGMA table_info({table})")]
             if found != columns:

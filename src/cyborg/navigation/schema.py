@@ -110,7 +110,7 @@ def prepare(conn: sqlite3.Connection, path: Path, *, foreign_keys: bool) -> None
     if version > SCHEMA_VERSION:
         raise DatabaseError(
             f"{path} has schema version {version}, newer than this program's {SCHEMA_VERSION}; "
-            "update cyborg, or point --db at another file"
+            "fix: update cyborg, or point --db at another file"
         )
     if version == 0 and tables:
         raise Unusable(f"it holds other tables ({', '.join(sorted(tables))}) and no schema version")

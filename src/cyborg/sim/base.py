@@ -157,6 +157,19 @@ class SimulatedBase:
             self.x, self.y, self.theta = start_pose.x, start_pose.y, start_pose.theta
         else:
             self.x, self.y, self.theta = start_pose[0], start_pose[1], 0.0
+        if not self.planner.is_free(self.x, self.y):
+            free = self.planner.nearest_free_point((self.x, self.y))
+            if free is not None:
+                log.warning(
+                    "the start (%.1f, %.1f) is inside a wall or within %.2f m of one; the simulated base starts "
+                    "at the nearest free place (%.1f, %.1f); fix: give the map a RobotHome or a goal named "
+                    "'information desk', or set start: to a named pose",
+                    self.x,
+                    self.y,
+                    self.planner.robot_radius,
+                    *free,
+                )
+                self.x, self.y = free
         self.route: list[Point] | None = None
         self.path_state = PathState.NOT_INITIALIZED
         self.distance_travelled = 0.0
@@ -399,7 +412,13 @@ class SimulatedBase:
 
     async def _wander(self, on_pose: Any = None) -> bool:
         while self.wandering:
-            target = self.planner.random_reachable_point(self.rng, near=(self.x, self.y))
+            try:
+                target = self.planner.random_reachable_point(self.rng, near=(self.x, self.y))
+            except PlanningError as exc:
+                log.warning("cannot wander: %s; the base stays where it is", exc)
+                self.wandering = False
+                self._failure = str(exc)
+                return False
             if self._ahead is not None:
                 self._ahead.foresee_wander(self.rng, target)
             if not await self._drive(target, None, on_pose):

@@ -170,6 +170,25 @@ class RoutePlanner:
             )
         return Route.through(self._pull_taut(start_point, self._without_corner_cuts(path), goal_point))
 
+    def nearest_free_point(self, location: Location) -> Point | None:
+        """The centre of the free cell nearest ``location`` (on the map), or None if the map has none."""
+        x, y = _point(location)
+        rows, cols = self.inflated.shape
+        row, col = self.map.world_to_cell(
+            min(max(x, self.map.origin[0]), self.map.origin[0] + self.map.size_m[0]),
+            min(max(y, self.map.origin[1]), self.map.origin[1] + self.map.size_m[1]),
+        )
+        row, col = min(max(row, 0), rows - 1), min(max(col, 0), cols - 1)
+        for reach in range(max(rows, cols)):  # squares of growing size: the first free cells are near
+            top, left = max(0, row - reach), max(0, col - reach)
+            window = self.inflated[top : row + reach + 1, left : col + reach + 1]
+            free = np.argwhere(~window)
+            if len(free):
+                distances = (free[:, 0] + top - row) ** 2 + (free[:, 1] + left - col) ** 2
+                best = free[int(distances.argmin())]
+                return self.map.cell_to_world(int(best[0]) + top, int(best[1]) + left)
+        return None
+
     def random_reachable_point(self, rng: random.Random, near: Location | None = None) -> Point:
         """A random free point (cell centre) reachable from ``near``, or in the largest free area.
 

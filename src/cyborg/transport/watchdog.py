@@ -10,12 +10,23 @@ module's node), and logs one WARNING naming that function, its module and its fi
 when the loop turns again, one more line says how long it was blocked. :meth:`report` gives
 the last block for the robot's status (the dashboard shows it). Time here is real time: a
 blocked loop is a real-world stall whatever the robot's clock says.
+
+The controller's handover deadlines are kept through a block. Given ``deadline`` (when the
+controller's current wait on a module ends, on the loop's time line) and ``stoppable`` (the
+module nodes it may stop), the watchdog checks the loop at that deadline (plus :data:`GRACE`):
+if a stoppable module's callback or goal holds the loop then, it raises :class:`~cyborg.errors.ModuleBlockedError`
+inside that call (a signal to the loop's thread, which must be the main thread: the blocking
+``time.sleep``, socket or serial read returns at once), the module's call ends as a failure
+(a goal ends ABORTED), and the loop goes on to the handover, late by about a second instead
+of by the whole block. The handler checks on the loop's own thread that the very
+call the watchdog found is still running, so nothing else is ever interrupted.
 """
 
 from __future__ import annotations
 
 import asyncio
 import logging
+import signal
 import sys
 import threading
 import time
@@ -24,9 +35,20 @@ from dataclasses import dataclass
 from types import FrameType
 from typing import Any
 
-__all__ = ["Block", "LoopWatchdog"]
+from cyborg.errors import ModuleBlockedError
+
+__all__ = ["GRACE", "Block", "LoopWatchdog"]
 
 log = logging.getLogger(__name__)
+
+STOP_SIGNAL = signal.SIGUSR2
+"""Sent to the loop's (main) thread to stop a module's call that blocks it past a deadline."""
+MIN_BLOCK = 0.05
+"""Real seconds the loop must have been held before a deadline may stop the call that holds it."""
+GRACE = 1.0
+"""Real seconds past the controller's deadline before the call holding the loop is stopped: a
+module's short burst of work (matching a sentence against thousands of places) that happens to
+straddle a deadline is let finish; a handover is late by about this much at most."""
 
 FIX = (
     "never block in a callback or goal (no time.sleep, synchronous requests, serial reads or long "
@@ -45,6 +67,8 @@ class Block:
     started: float
     seconds: float = 0.0
     ongoing: bool = True
+    stopped: bool = False
+    """True if the watchdog stopped it (ModuleBlockedError) to keep a handover deadline."""
 
     def describe(self) -> str:
         module = f"module {self.module}" if self.module else "no module (the robot's own code)"
@@ -57,6 +81,7 @@ class Block:
             "where": self.where,
             "seconds": round(self.seconds, 1),
             "ongoing": self.ongoing,
+            "stopped": self.stopped,
             "seconds_ago": round(max(0.0, now - self.started - self.seconds), 1),
             "fix": FIX,
         }
@@ -72,11 +97,23 @@ class LoopWatchdog:
         threshold: float = 2.0,
         period: float = 0.25,
         now: Callable[[], float] = time.monotonic,
+        deadline: Callable[[], float | None] | None = None,
+        stoppable: Callable[[str], bool] | None = None,
     ) -> None:
+        """``deadline`` and ``stoppable`` (see the module's docstring) must come together, with
+        ``now`` on the loop's time line; without them the watchdog only names a block."""
         self.loop = loop
         self.threshold = threshold
         self.period = period
         self._now = now
+        self._deadline = deadline
+        self._stoppable = stoppable
+        self._can_stop = False  # the signal handler is installed (start() on the main thread)
+        self._stop_at: tuple[float, FrameType, Block] | None = (
+            None  # (heartbeat asked, the call to stop, its block)
+        )
+        self.stops = 0
+        """How many blocking calls were stopped to keep a deadline."""
         self._asked: float | None = None  # when the pending heartbeat was asked for
         self._loop_thread = 0
         self._stopped = threading.Event()
@@ -89,6 +126,13 @@ class LoopWatchdog:
 
     def start(self) -> None:
         self._loop_thread = threading.get_ident()
+        if (
+            self._deadline is not None
+            and threading.current_thread() is threading.main_thread()
+            and _free_for_us(signal.getsignal(STOP_SIGNAL))
+        ):
+            signal.signal(STOP_SIGNAL, self._interrupt)
+            self._can_stop = True
         self._thread = threading.Thread(target=self._watch, name="cyborg loop watchdog", daemon=True)
         self._thread.start()
 
@@ -96,6 +140,12 @@ class LoopWatchdog:
         self._stopped.set()
         if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join(timeout=5)
+        if self._can_stop and threading.current_thread() is threading.main_thread():
+            self._can_stop = False
+            if signal.getsignal(STOP_SIGNAL) == self._interrupt:  # (a later watchdog may have it now)
+                # SIG_DFL would end the process on a signal still on its way from a thread not yet gone.
+                alive = self._thread is not None and self._thread.is_alive()
+                signal.signal(STOP_SIGNAL, signal.SIG_IGN if alive else signal.SIG_DFL)
 
     def report(self) -> dict[str, Any] | None:
         """The last block, for the robot's status; None if the loop was never blocked."""
@@ -104,8 +154,16 @@ class LoopWatchdog:
 
     # --- the watching thread ----------------------------------------------------------------
 
+    def _next_check(self) -> float:
+        """Real seconds until the next look: the period, or sooner to be there at a deadline."""
+        due = self._deadline() if self._can_stop and self._deadline is not None else None
+        if due is None:
+            return self.period
+        until = due + GRACE - self._now()
+        return min(self.period, until + 0.01 if until > 0 else 0.05)
+
     def _watch(self) -> None:
-        while not self._stopped.wait(self.period):
+        while not self._stopped.wait(self._next_check()):
             with self._lock:
                 asked = self._asked
                 if asked is None:
@@ -115,7 +173,10 @@ class LoopWatchdog:
                     except RuntimeError:  # the loop is closed
                         return
                     continue
-                waited = self._now() - asked
+                now = self._now()
+                waited = now - asked
+                if self._past_deadline(now) and waited >= MIN_BLOCK and self._stop_culprit(asked):
+                    continue
                 if waited < self.threshold or (self.last is not None and self.last.ongoing):
                     continue
                 block = self._culprit(asked)
@@ -129,6 +190,50 @@ class LoopWatchdog:
                 FIX,
             )
 
+    def _past_deadline(self, now: float) -> bool:
+        if not self._can_stop or self._deadline is None or self._stop_at is not None:
+            return False
+        due = self._deadline()
+        return due is not None and now >= due + GRACE
+
+    def _stop_culprit(self, asked: float) -> bool:
+        """(Under the lock.) Stop the module call that holds the loop past a deadline; True if sent."""
+        found = self._culprit_frame()
+        if found is None or self._stoppable is None:
+            return False
+        frame, module = found
+        if not self._stoppable(module):
+            return False
+        block = self.last if self.last is not None and self.last.ongoing else self._culprit(asked)
+        if block is not self.last:
+            self.last = block
+            self.blocks += 1
+        self._stop_at = (asked, frame, block)
+        log.warning(
+            "the robot is blocked: %s holds its event loop past the controller's handover deadline; "
+            "stopping that call (ModuleBlockedError) so the handover goes on; fix: %s",
+            block.describe(),
+            FIX,
+        )
+        signal.pthread_kill(self._loop_thread, STOP_SIGNAL)
+        return True
+
+    def _interrupt(self, signum: int, frame: FrameType | None) -> None:
+        """On the loop's thread, between two bytecodes of whatever runs: raise in the call to stop,
+        if it is still running (the loop did not turn, and its frame is on this stack)."""
+        target, self._stop_at = self._stop_at, None
+        if target is None or self._asked != target[0]:
+            return
+        while frame is not None:
+            if frame is target[1]:
+                target[2].stopped = True
+                self.stops += 1
+                raise ModuleBlockedError(
+                    f"{_name(frame)} held the robot's event loop past the controller's handover deadline, "
+                    f"so the loop watchdog stopped it; fix: {FIX}"
+                )
+            frame = frame.f_back
+
     def _beat(self) -> None:
         """On the loop: the heartbeat got through."""
         with self._lock:
@@ -139,8 +244,23 @@ class LoopWatchdog:
             block.ongoing = False
             block.seconds = self._now() - asked
         log.warning(
-            "the robot's event loop turns again after %.1f s blocked by %s", block.seconds, block.describe()
+            "the robot's event loop turns again after %.1f s blocked by %s%s",
+            block.seconds,
+            block.describe(),
+            "; the watchdog stopped that call to keep the controller's handover deadline"
+            if block.stopped
+            else "",
         )
+
+    def _culprit_frame(self) -> tuple[FrameType, str] | None:
+        """The frame of the module's code that runs on the loop now, and that module's node name."""
+        frame = sys._current_frames().get(self._loop_thread)
+        while frame is not None:
+            module = _module_of(frame)
+            if module is not None:
+                return frame, module
+            frame = frame.f_back
+        return None
 
     def _culprit(self, since: float) -> Block:
         frame = sys._current_frames().get(self._loop_thread)
@@ -155,6 +275,14 @@ class LoopWatchdog:
         if innermost is None:
             return Block("(unknown)", None, "?", since)
         return Block(_name(innermost), None, _where(innermost), since)
+
+
+def _free_for_us(handler: object) -> bool:
+    """True if the stop signal has no handler of anyone else's: the default, ignored, or the handler
+    of an earlier watchdog of this process (a robot that was never closed)."""
+    if handler in (signal.SIG_DFL, signal.SIG_IGN):
+        return True
+    return isinstance(getattr(handler, "__self__", None), LoopWatchdog)
 
 
 def _module_of(frame: FrameType) -> str | None:

@@ -64,7 +64,8 @@ STATUS_SCHEMA: dict[str, Any] = {
             "type": "object",
             "nullable": True,
             "description": "the last time a callback blocked the in-process robot's event loop (everything "
-            "stood still meanwhile): the callback, its module, file and line, how long, and the fix; "
+            "stood still meanwhile): the callback, its module, file and line, how long, whether the watchdog "
+            "stopped it to keep the controller's handover deadline, and the fix; "
             "null if never, absent under ROS",
         },
     },

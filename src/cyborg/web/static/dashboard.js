@@ -671,7 +671,9 @@
       const who = blocked.module ? `${blocked.callback} (${blocked.module})` : blocked.callback;
       $("blocked-reason").textContent = `${who} ${blocked.seconds.toFixed(1)} s`;
       box.title = `${who} at ${blocked.where} held the robot's event loop for ${blocked.seconds.toFixed(1)} s: ` +
-        `the controller, the other modules and this page stood still. Fix: ${blocked.fix}`;
+        `the controller, the other modules and this page stood still` +
+        (blocked.stopped ? " (the watchdog stopped that call to keep the controller's handover deadline)" : "") +
+        `. Fix: ${blocked.fix}`;
     }
     box.hidden = !recent;
   }
