@@ -5,6 +5,7 @@ segments rotate and the folder keeps its budget; ``cyborg rerun`` compares decis
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import pytest
@@ -64,10 +65,15 @@ def test_a_scripted_run_s_recording_read_by_the_mcap_library_holds_its_transcrip
             if channel.topic in kinds:
                 t_ns = message.log_time - start
                 fields = json.loads(message.data)
+                if kinds[channel.topic] == "pose":  # a foxglove.PoseInFrame, its yaw rounded as recorded
+                    pose = fields["pose"]
+                    yaw = 2 * math.atan2(pose["orientation"]["z"], pose["orientation"]["w"])
+                    assert fields["timestamp"]["sec"] * 10**9 + fields["timestamp"]["nsec"] == message.log_time
+                    fields = {"x": pose["position"]["x"], "y": pose["position"]["y"], "theta": round(yaw, 3)}
                 back.append({"t": round(t_ns / 1e9, 3), "t_ns": t_ns, "type": kinds[channel.topic], **fields})
     assert in_transcript_order(back) == expected  # the transcript orders each instant's records
     assert schemas["/log"] == ("foxglove.Log", "protobuf")
-    assert schemas["/robot/pose"] == ("foxglove.PoseInFrame", "protobuf")
+    assert schemas["/robot/pose"] == ("foxglove.PoseInFrame", "json")  # one message a pose
     assert schemas["/map"] == ("foxglove.Grid", "protobuf")
     assert schemas["/places"] == ("foxglove.SceneUpdate", "protobuf")
     assert schemas["/cyborg_controller/state_change"] == ("cyborg.StateChange", "json")
@@ -118,8 +124,8 @@ def test_bad_recordings_get_errors_that_name_the_fix(tmp_path: Path) -> None:
     assert result.exit_code == 1 and "not one this robot recorded" in result.output
     data = recording.read_bytes()
     newer = tmp_path / "newer.mcap"
-    newer.write_bytes(data.replace(b"format_version\x01\x00\x00\x001", b"format_version\x01\x00\x00\x009"))
-    with pytest.raises(RecordingError, match="recording format 9; this cyborg reads format 1; fix"):
+    newer.write_bytes(data.replace(b"format_version\x01\x00\x00\x002", b"format_version\x01\x00\x00\x009"))
+    with pytest.raises(RecordingError, match="recording format 9; this cyborg reads formats 1, 2; fix"):
         open_recording(newer)
     cut = tmp_path / "cut.mcap"
     longer = tmp_path / "longer.mcap"
