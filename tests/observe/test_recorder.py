@@ -68,7 +68,9 @@ def test_a_scripted_run_s_recording_read_by_the_mcap_library_holds_its_transcrip
                 if kinds[channel.topic] == "pose":  # a foxglove.PoseInFrame, its yaw rounded as recorded
                     pose = fields["pose"]
                     yaw = 2 * math.atan2(pose["orientation"]["z"], pose["orientation"]["w"])
-                    assert fields["timestamp"]["sec"] * 10**9 + fields["timestamp"]["nsec"] == message.log_time
+                    assert (
+                        fields["timestamp"]["sec"] * 10**9 + fields["timestamp"]["nsec"] == message.log_time
+                    )
                     fields = {"x": pose["position"]["x"], "y": pose["position"]["y"], "theta": round(yaw, 3)}
                 back.append({"t": round(t_ns / 1e9, 3), "t_ns": t_ns, "type": kinds[channel.topic], **fields})
     assert in_transcript_order(back) == expected  # the transcript orders each instant's records
@@ -181,13 +183,15 @@ def test_segments_rotate_by_robot_time_and_the_folder_keeps_its_budget(tmp_path:
     assert all(open_recording(p).attachments for p in segments), "each segment carries the configuration"
 
 
-def test_problems_and_mutes_are_recorded_for_the_mcap_reader(tmp_path: Path) -> None:
-    """A module's problem (with its fix) and the modules muted in a parallel state reach the file."""
+def test_problems_mutes_and_other_nodes_warnings_are_recorded_for_the_mcap_reader(tmp_path: Path) -> None:
+    """A module's problem (with its fix), the modules muted in a parallel state and other nodes'
+    warnings and errors (ROS 1's /rosout_agg, in one process here) reach the file."""
     import json as _json
 
     from cyborg.modules import ProblemReporter
     from cyborg.observe.recorder import Recorder, RunFacts
     from cyborg.observe.records import RecordStream
+    from cyborg.observe.rosout import Ros1Log, hear_ros_logs
     from cyborg.transport import topics
     from cyborg.transport.clock import VirtualClock
     from cyborg.transport.embedded import EmbeddedTransport
@@ -202,12 +206,21 @@ def test_problems_and_mutes_are_recorded_for_the_mcap_reader(tmp_path: Path) -> 
     )
     tts = ProblemReporter(transport.node("cyborg_tts"))
     mutes = transport.node("cyborg_controller").publisher(topics.RESOURCE_MUTES, String)
+    assert hear_ros_logs(recorder, "ROS 1") is not None
+    rosout = transport.node("rosout").publisher("/rosout_agg", Ros1Log)
 
     async def main() -> None:
         tts.report("the robot cannot speak aloud: no sound device", "plug in the speaker", key="sound")
         mutes.publish(
             String(_json.dumps({"states": ["music", "battery_warning"], "muted": [{"resource": "speaker"}]}))
         )
+        for level, name, text in [
+            (4, "/camera_driver", "lens dirty"),
+            (2, "/camera_driver", "frame 12"),  # information: left out
+            (8, "/cyborg_recorder", "the recorder's own"),  # told by its logging handler instead
+            (16, "/base_driver", "motor controller lost"),
+        ]:
+            rosout.publish(Ros1Log(level=level, name=name, msg=text, file="driver.py", line=7))
         await clock.sleep(1.0)
 
     clock.run(main())
@@ -229,6 +242,27 @@ def test_problems_and_mutes_are_recorded_for_the_mcap_reader(tmp_path: Path) -> 
             "problem": "the robot cannot speak aloud: no sound device",
             "fix": "plug in the speaker",
         }
+    ]
+    logs = [(d["sender"], d["detail"]) for d in seen["/cyborg/diagnostics"] if d["kind"] == "rosout"]
+    assert logs == [
+        (
+            "camera_driver",
+            {"level": "warning", "message": "lens dirty", "file": "driver.py", "function": "", "line": 7},
+        ),
+        (
+            "base_driver",
+            {
+                "level": "fatal",
+                "message": "motor controller lost",
+                "file": "driver.py",
+                "function": "",
+                "line": 7,
+            },
+        ),
+    ], "other nodes' warnings and errors, not their information nor the recorder's own"
+    assert [(e["level"], e["sender"]) for e in open_recording(file).logs if e["kind"] == "rosout"] == [
+        ("warning", "camera_driver"),
+        ("fatal", "base_driver"),
     ]
     [muted] = [d for d in seen["/cyborg/diagnostics"] if d["kind"] == "muted"]
     assert muted["sender"] == "cyborg_controller" and muted["detail"]["muted"] == [{"resource": "speaker"}]  # type: ignore[index]

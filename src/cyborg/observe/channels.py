@@ -55,7 +55,8 @@ INPUT_TOPIC = "/cyborg/inputs"
 """What came into the robot from outside (a script, the operator): what a re-run plays again."""
 DIAGNOSTIC_TOPIC = "/cyborg/diagnostics"
 """Gatekeeper passes and drops, module crashes, the controller's counters, the modules muted in a
-parallel state (``kind``: passed, dropped, crashed, controller, muted)."""
+parallel state, other nodes' warnings and errors on a ROS graph (``kind``: passed, dropped,
+crashed, controller, muted, rosout)."""
 MARK_CHANNEL = "/cyborg/marks"
 LOG_TOPIC = "/log"
 POSE_TOPIC = RECORD_TOPICS["pose"]

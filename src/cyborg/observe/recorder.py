@@ -109,6 +109,9 @@ INPUT_TOPICS: list[tuple[str, type[Any]]] = [
 ]
 
 
+_LOG_LEVELS = {"warning": LogLevel.Warning, "error": LogLevel.Error, "fatal": LogLevel.Fatal}
+
+
 class RecorderState(Enum):
     RECORDING = "recording"
     FAILED = "failed"
@@ -535,6 +538,20 @@ class Recorder:
             return
         try:
             self._log_entry(f"{kind}: {message.data}", info.sender or "diagnostics", level, t_ns)
+        except (OSError, RuntimeError) as exc:
+            self._fail(exc)
+
+    def node_log(self, *, node: str, level: str, text: str, where: Mapping[str, Any]) -> None:
+        """Another node's warning, error or fatal message (heard on ROS's ``/rosout``; see
+        :mod:`~cyborg.observe.rosout`): the diagnostics channel (kind ``rosout``, its ``level``,
+        ``message``, ``file``, ``function`` and ``line``) and a line of Foxglove's Log panel under
+        the node's name."""
+        t_ns = self.now_ns()
+        self._release()
+        detail = {"level": level, "message": text, **where}
+        self._write(ch.DIAGNOSTIC_TOPIC, {"kind": "rosout", "sender": node, "detail": detail}, t_ns)
+        try:
+            self._log_entry(text, node, _LOG_LEVELS.get(level, LogLevel.Warning), t_ns)
         except (OSError, RuntimeError) as exc:
             self._fail(exc)
 

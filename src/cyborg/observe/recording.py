@@ -62,8 +62,9 @@ class Recording:
     marks: list[dict[str, Any]] = field(default_factory=list)
     logs: list[dict[str, Any]] = field(default_factory=list)
     """Gatekeeper passes (level ``info``) and drops, module crashes, the controller node's counters
-    (``info``): ``t_ns``, ``level``, ``kind`` (passed, dropped, crashed, controller), ``sender``,
-    ``detail``."""
+    (``info``), other nodes' warnings and errors on a ROS graph (``rosout``, level ``warning``,
+    ``error`` or ``fatal``): ``t_ns``, ``level``, ``kind`` (passed, dropped, crashed, controller,
+    muted, rosout), ``sender``, ``detail``."""
     problem: str | None = None
     """Why the file was read only in part (it was cut short), else None."""
     scene: dict[str, tuple[Schema, bytes]] = field(default_factory=dict, repr=False)
@@ -205,7 +206,10 @@ def open_recording(path: Path) -> Recording:
                     scene.setdefault(topic, (_schema, bytes(message.data)))
                 elif topic == ch.DIAGNOSTIC_TOPIC:
                     diagnostic = json.loads(message.data)
-                    level = "warning" if diagnostic.get("kind") in ("dropped", "crashed") else "info"
+                    kind_of = diagnostic.get("kind")
+                    level = "warning" if kind_of in ("dropped", "crashed") else "info"
+                    if kind_of == "rosout":  # another node's warning, error or fatal message
+                        level = str(diagnostic.get("detail", {}).get("level", "warning"))
                     logs.append({"t_ns": t_ns, "level": level, **diagnostic})
         except (McapError, EOFError, ValueError, KeyError, struct.error) as exc:
             if metadata is None:
