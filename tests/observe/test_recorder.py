@@ -46,8 +46,10 @@ def record_d(tmp_path: Path) -> tuple[Path, Path, str]:
     return transcript, recording, result.output
 
 
-def test_a_scripted_run_s_recording_read_by_the_mcap_library_holds_its_transcript(tmp_path: Path) -> None:
-    transcript, recording, _ = record_d(tmp_path)
+def test_a_scripted_run_s_recording_read_by_the_mcap_library_holds_its_transcript(
+    d_run: tuple[Path, Path, str], tmp_path: Path
+) -> None:
+    transcript, recording, _ = d_run
     expected = [json.loads(line) for line in transcript.read_text().splitlines()]
     with recording.open("rb") as file:
         reader = make_reader(file)
@@ -89,8 +91,10 @@ def test_a_scripted_run_s_recording_read_by_the_mcap_library_holds_its_transcrip
     assert any(e["source"] == "motivator" for e in events), "the motivator's events carry their source"
 
 
-def test_rerun_says_where_another_configuration_decides_otherwise(tmp_path: Path) -> None:
-    _, recording, _ = record_d(tmp_path)
+def test_rerun_says_where_another_configuration_decides_otherwise(
+    d_run: tuple[Path, Path, str], tmp_path: Path
+) -> None:
+    _, recording, _ = d_run
     same = CliRunner().invoke(cli, ["rerun", str(recording), "--transcript", str(tmp_path / "again.jsonl")])
     assert same.exit_code == 0, same.output
     assert "same decisions as recorded" in same.output
@@ -104,8 +108,8 @@ def test_rerun_says_where_another_configuration_decides_otherwise(tmp_path: Path
     assert f"with {other}" in what_if.output
 
 
-def test_bad_recordings_get_errors_that_name_the_fix(tmp_path: Path) -> None:
-    _, recording, _ = record_d(tmp_path)
+def test_bad_recordings_get_errors_that_name_the_fix(d_run: tuple[Path, Path, str], tmp_path: Path) -> None:
+    _, recording, _ = d_run
     text_file = tmp_path / "notes.mcap"
     text_file.write_text("hello")
     with pytest.raises(RecordingError, match=r"is not an MCAP file.*fix:"):
@@ -266,3 +270,29 @@ def test_problems_mutes_and_other_nodes_warnings_are_recorded_for_the_mcap_reade
     ]
     [muted] = [d for d in seen["/cyborg/diagnostics"] if d["kind"] == "muted"]
     assert muted["sender"] == "cyborg_controller" and muted["detail"]["muted"] == [{"resource": "speaker"}]  # type: ignore[index]
+
+
+def test_the_controller_alone_re_runs_against_the_recorded_events_and_module_outcomes(
+    d_run: tuple[Path, Path, str],
+) -> None:
+    """What `cyborg rerun` does with a launch's real-time recording (tests/ros/test_quiet_stop.py
+    runs it on one made over ROS 1), here on scenario D's: the controller alone, fed the recorded
+    events and module outcomes at their times, makes the recorded state changes at the recorded
+    nanoseconds; a machine without one transition parts from the recording where it is used."""
+    from cyborg.app.config import parse_config
+    from cyborg.sim.rerun_controller import first_state_difference, rerun_controller
+
+    _, recording, _ = d_run
+    read = open_recording(recording)
+    recorded = [r for r in read.records if r["type"] == "state"]
+    text = packaged_config("cyborg.yaml").read_text()
+    result = rerun_controller(read, parse_config(text).machine)
+    assert result.events >= 10 and result.outcomes >= 10, result.inputs
+    assert result.changes == recorded
+    assert first_state_difference(recorded, result.changes) is None
+    calmer = text.replace("      conversation_interest: conversation\n", "", 1)
+    other = rerun_controller(read, parse_config(calmer).machine)
+    difference = first_state_difference(recorded, other.changes)
+    assert difference is not None and difference.index == 1, difference
+    assert difference.recorded is not None and difference.recorded["to"] == "conversation"
+    assert "state change 2: recorded t=9 s" in difference.describe(noun="state change")
