@@ -11,12 +11,11 @@ import pytest
 from click.testing import CliRunner
 
 from cyborg.cli import cli
-from tests.observe.test_recorder import record_d
 
 
 @pytest.mark.ros
-def test_a_ros1_export_opens_in_rosbag_info(tmp_path: Path) -> None:
-    _, recording, _ = record_d(tmp_path)
+def test_a_ros1_export_opens_in_rosbag_info(d_run: tuple[Path, Path, str], tmp_path: Path) -> None:
+    _, recording, _ = d_run
     bag = tmp_path / "d.bag"
     result = CliRunner().invoke(cli, ["export", str(recording), "--to", "rosbag", "-o", str(bag)])
     assert result.exit_code == 0, result.output
@@ -30,10 +29,10 @@ def test_a_ros1_export_opens_in_rosbag_info(tmp_path: Path) -> None:
     assert again.exit_code == 1 and "exists already; fix" in again.output
 
 
-def test_a_ros2_export_reads_back_with_rosbags(tmp_path: Path) -> None:
+def test_a_ros2_export_reads_back_with_rosbags(d_run: tuple[Path, Path, str], tmp_path: Path) -> None:
     from rosbags.highlevel import AnyReader
 
-    transcript, recording, _ = record_d(tmp_path)
+    transcript, recording, _ = d_run
     out = tmp_path / "d_ros2"
     result = CliRunner().invoke(cli, ["export", str(recording), "--to", "rosbag2", "-o", str(out)])
     assert result.exit_code == 0, result.output

@@ -5,6 +5,7 @@ segments rotate and the folder keeps its budget; ``cyborg rerun`` compares decis
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import pytest
@@ -45,8 +46,10 @@ def record_d(tmp_path: Path) -> tuple[Path, Path, str]:
     return transcript, recording, result.output
 
 
-def test_a_scripted_run_s_recording_read_by_the_mcap_library_holds_its_transcript(tmp_path: Path) -> None:
-    transcript, recording, _ = record_d(tmp_path)
+def test_a_scripted_run_s_recording_read_by_the_mcap_library_holds_its_transcript(
+    d_run: tuple[Path, Path, str], tmp_path: Path
+) -> None:
+    transcript, recording, _ = d_run
     expected = [json.loads(line) for line in transcript.read_text().splitlines()]
     with recording.open("rb") as file:
         reader = make_reader(file)
@@ -64,10 +67,17 @@ def test_a_scripted_run_s_recording_read_by_the_mcap_library_holds_its_transcrip
             if channel.topic in kinds:
                 t_ns = message.log_time - start
                 fields = json.loads(message.data)
+                if kinds[channel.topic] == "pose":  # a foxglove.PoseInFrame, its yaw rounded as recorded
+                    pose = fields["pose"]
+                    yaw = 2 * math.atan2(pose["orientation"]["z"], pose["orientation"]["w"])
+                    assert (
+                        fields["timestamp"]["sec"] * 10**9 + fields["timestamp"]["nsec"] == message.log_time
+                    )
+                    fields = {"x": pose["position"]["x"], "y": pose["position"]["y"], "theta": round(yaw, 3)}
                 back.append({"t": round(t_ns / 1e9, 3), "t_ns": t_ns, "type": kinds[channel.topic], **fields})
     assert in_transcript_order(back) == expected  # the transcript orders each instant's records
     assert schemas["/log"] == ("foxglove.Log", "protobuf")
-    assert schemas["/robot/pose"] == ("foxglove.PoseInFrame", "protobuf")
+    assert schemas["/robot/pose"] == ("foxglove.PoseInFrame", "json")  # one message a pose
     assert schemas["/map"] == ("foxglove.Grid", "protobuf")
     assert schemas["/places"] == ("foxglove.SceneUpdate", "protobuf")
     assert schemas["/cyborg_controller/state_change"] == ("cyborg.StateChange", "json")
@@ -81,8 +91,10 @@ def test_a_scripted_run_s_recording_read_by_the_mcap_library_holds_its_transcrip
     assert any(e["source"] == "motivator" for e in events), "the motivator's events carry their source"
 
 
-def test_rerun_says_where_another_configuration_decides_otherwise(tmp_path: Path) -> None:
-    _, recording, _ = record_d(tmp_path)
+def test_rerun_says_where_another_configuration_decides_otherwise(
+    d_run: tuple[Path, Path, str], tmp_path: Path
+) -> None:
+    _, recording, _ = d_run
     same = CliRunner().invoke(cli, ["rerun", str(recording), "--transcript", str(tmp_path / "again.jsonl")])
     assert same.exit_code == 0, same.output
     assert "same decisions as recorded" in same.output
@@ -96,8 +108,8 @@ def test_rerun_says_where_another_configuration_decides_otherwise(tmp_path: Path
     assert f"with {other}" in what_if.output
 
 
-def test_bad_recordings_get_errors_that_name_the_fix(tmp_path: Path) -> None:
-    _, recording, _ = record_d(tmp_path)
+def test_bad_recordings_get_errors_that_name_the_fix(d_run: tuple[Path, Path, str], tmp_path: Path) -> None:
+    _, recording, _ = d_run
     text_file = tmp_path / "notes.mcap"
     text_file.write_text("hello")
     with pytest.raises(RecordingError, match=r"is not an MCAP file.*fix:"):
@@ -118,8 +130,8 @@ def test_bad_recordings_get_errors_that_name_the_fix(tmp_path: Path) -> None:
     assert result.exit_code == 1 and "not one this robot recorded" in result.output
     data = recording.read_bytes()
     newer = tmp_path / "newer.mcap"
-    newer.write_bytes(data.replace(b"format_version\x01\x00\x00\x001", b"format_version\x01\x00\x00\x009"))
-    with pytest.raises(RecordingError, match="recording format 9; this cyborg reads format 1; fix"):
+    newer.write_bytes(data.replace(b"format_version\x01\x00\x00\x002", b"format_version\x01\x00\x00\x009"))
+    with pytest.raises(RecordingError, match="recording format 9; this cyborg reads formats 1, 2; fix"):
         open_recording(newer)
     cut = tmp_path / "cut.mcap"
     longer = tmp_path / "longer.mcap"
@@ -175,13 +187,15 @@ def test_segments_rotate_by_robot_time_and_the_folder_keeps_its_budget(tmp_path:
     assert all(open_recording(p).attachments for p in segments), "each segment carries the configuration"
 
 
-def test_problems_and_mutes_are_recorded_for_the_mcap_reader(tmp_path: Path) -> None:
-    """A module's problem (with its fix) and the modules muted in a parallel state reach the file."""
+def test_problems_mutes_and_other_nodes_warnings_are_recorded_for_the_mcap_reader(tmp_path: Path) -> None:
+    """A module's problem (with its fix), the modules muted in a parallel state and other nodes'
+    warnings and errors (ROS 1's /rosout_agg, in one process here) reach the file."""
     import json as _json
 
     from cyborg.modules import ProblemReporter
     from cyborg.observe.recorder import Recorder, RunFacts
     from cyborg.observe.records import RecordStream
+    from cyborg.observe.rosout import Ros1Log, hear_ros_logs
     from cyborg.transport import topics
     from cyborg.transport.clock import VirtualClock
     from cyborg.transport.embedded import EmbeddedTransport
@@ -196,12 +210,21 @@ def test_problems_and_mutes_are_recorded_for_the_mcap_reader(tmp_path: Path) -> 
     )
     tts = ProblemReporter(transport.node("cyborg_tts"))
     mutes = transport.node("cyborg_controller").publisher(topics.RESOURCE_MUTES, String)
+    assert hear_ros_logs(recorder, "ROS 1") is not None
+    rosout = transport.node("rosout").publisher("/rosout_agg", Ros1Log)
 
     async def main() -> None:
         tts.report("the robot cannot speak aloud: no sound device", "plug in the speaker", key="sound")
         mutes.publish(
             String(_json.dumps({"states": ["music", "battery_warning"], "muted": [{"resource": "speaker"}]}))
         )
+        for level, name, text in [
+            (4, "/camera_driver", "lens dirty"),
+            (2, "/camera_driver", "frame 12"),  # information: left out
+            (8, "/cyborg_recorder", "the recorder's own"),  # told by its logging handler instead
+            (16, "/base_driver", "motor controller lost"),
+        ]:
+            rosout.publish(Ros1Log(level=level, name=name, msg=text, file="driver.py", line=7))
         await clock.sleep(1.0)
 
     clock.run(main())
@@ -224,5 +247,52 @@ def test_problems_and_mutes_are_recorded_for_the_mcap_reader(tmp_path: Path) -> 
             "fix": "plug in the speaker",
         }
     ]
+    logs = [(d["sender"], d["detail"]) for d in seen["/cyborg/diagnostics"] if d["kind"] == "rosout"]
+    assert logs == [
+        (
+            "camera_driver",
+            {"level": "warning", "message": "lens dirty", "file": "driver.py", "function": "", "line": 7},
+        ),
+        (
+            "base_driver",
+            {
+                "level": "fatal",
+                "message": "motor controller lost",
+                "file": "driver.py",
+                "function": "",
+                "line": 7,
+            },
+        ),
+    ], "other nodes' warnings and errors, not their information nor the recorder's own"
+    assert [(e["level"], e["sender"]) for e in open_recording(file).logs if e["kind"] == "rosout"] == [
+        ("warning", "camera_driver"),
+        ("fatal", "base_driver"),
+    ]
     [muted] = [d for d in seen["/cyborg/diagnostics"] if d["kind"] == "muted"]
     assert muted["sender"] == "cyborg_controller" and muted["detail"]["muted"] == [{"resource": "speaker"}]  # type: ignore[index]
+
+
+def test_the_controller_alone_re_runs_against_the_recorded_events_and_module_outcomes(
+    d_run: tuple[Path, Path, str],
+) -> None:
+    """What `cyborg rerun` does with a launch's real-time recording (tests/ros/test_quiet_stop.py
+    runs it on one made over ROS 1), here on scenario D's: the controller alone, fed the recorded
+    events and module outcomes at their times, makes the recorded state changes at the recorded
+    nanoseconds; a machine without one transition parts from the recording where it is used."""
+    from cyborg.app.config import parse_config
+    from cyborg.sim.rerun_controller import first_state_difference, rerun_controller
+
+    _, recording, _ = d_run
+    read = open_recording(recording)
+    recorded = [r for r in read.records if r["type"] == "state"]
+    text = packaged_config("cyborg.yaml").read_text()
+    result = rerun_controller(read, parse_config(text).machine)
+    assert result.events >= 10 and result.outcomes >= 10, result.inputs
+    assert result.changes == recorded
+    assert first_state_difference(recorded, result.changes) is None
+    calmer = text.replace("      conversation_interest: conversation\n", "", 1)
+    other = rerun_controller(read, parse_config(calmer).machine)
+    difference = first_state_difference(recorded, other.changes)
+    assert difference is not None and difference.index == 1, difference
+    assert difference.recorded is not None and difference.recorded["to"] == "conversation"
+    assert "state change 2: recorded t=9 s" in difference.describe(noun="state change")

@@ -16,7 +16,6 @@ from aiohttp.test_utils import TestClient, TestServer
 
 from cyborg.observe.recording import open_recording
 from cyborg.web.replay import ReplayAPI
-from tests.observe.test_recorder import record_d
 
 
 def ask(api: ReplayAPI, *paths: str) -> list[tuple[int, Any]]:
@@ -38,8 +37,8 @@ def ask(api: ReplayAPI, *paths: str) -> list[tuple[int, Any]]:
     return asyncio.run(main())
 
 
-def test_the_replay_api_answers_as_at_that_moment(tmp_path: Path) -> None:
-    transcript, recording, _ = record_d(tmp_path)
+def test_the_replay_api_answers_as_at_that_moment(d_run: tuple[Path, Path, str], tmp_path: Path) -> None:
+    transcript, recording, _ = d_run
     import json
 
     records = [json.loads(line) for line in transcript.read_text().splitlines()]
@@ -85,12 +84,12 @@ def test_the_replay_api_answers_as_at_that_moment(tmp_path: Path) -> None:
 
 
 @pytest.mark.browser
-def test_dragging_the_slider_shows_that_moment(tmp_path: Path) -> None:
+def test_dragging_the_slider_shows_that_moment(d_run: tuple[Path, Path, str], tmp_path: Path) -> None:
     from playwright.sync_api import sync_playwright
 
     from tests.dashboard.test_dashboard_browser import CHROMIUM, CHROMIUM_ARGS
 
-    _, recording, _ = record_d(tmp_path)
+    _, recording, _ = d_run
     out = (tmp_path / "replay.log").open("w")
     began = time.monotonic()
     process = subprocess.Popen(

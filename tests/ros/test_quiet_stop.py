@@ -17,7 +17,9 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from click.testing import CliRunner
 
+from cyborg.cli import cli
 from cyborg.observe.recording import open_recording
 from cyborg.transport.messages import StateMachineAction
 from tests.support.paths import SCENARIOS
@@ -50,6 +52,17 @@ def test_a_launch_stopped_normally_prints_no_traceback(
     )
     processes.wait_ready(launch, timeout=60)
     changes.wait_state("idle", event="start", timeout=60)
+    if group:  # an event from outside, and another node's warning, for the recording
+        import rospy
+        from rosgraph_msgs.msg import Log  # type: ignore[import-not-found]
+
+        warnings = observe.topic("/rosout_agg", Log)
+        sender = observe.events()
+        sender.wait_connected()
+        sender.send("aborted")
+        changes.wait_state("idle", event="aborted", timeout=30)
+        rospy.logwarn("the camera's lens is dirty")
+        warnings.wait_for(lambda h: "lens is dirty" in h.message.msg, timeout=30)
     time.sleep(2.0)  # the motivator decides and the idle goal runs: the robot is busy as usual
     if group:
         os.killpg(launch.pid, signum)
@@ -67,6 +80,15 @@ def test_a_launch_stopped_normally_prints_no_traceback(
         assert started and started[0]["event"] == "start", "the launch's recorder heard the controller start"
         counters = [entry["detail"] for entry in recording.logs if entry["kind"] == "controller"]
         assert counters and counters[-1]["handovers"] >= 1, "the controller node's counters are recorded"
+        [warned] = [e for e in recording.logs if e["kind"] == "rosout" and "lens" in e["detail"]["message"]]
+        assert warned["level"] == "warning" and warned["sender"] == rospy.get_name().lstrip("/"), warned
+        # The launch's recording re-runs the controller alone against its recorded inputs.
+        again = CliRunner().invoke(cli, ["rerun", str(tmp_path / "launch.mcap")])
+        assert again.exit_code == 0, again.output
+        assert "recorded over ROS 1 in real time: the controller alone re-ran against its" in again.output
+        states = [r for r in recording.records if r["type"] == "state"]
+        assert [r["event"] for r in states[:2]] == ["start", "aborted"], states
+        assert f"same state changes as recorded ({len(states)})" in again.output, again.output
 
 
 def test_a_scripted_run_over_ros_in_simulated_time_ends_without_a_traceback(

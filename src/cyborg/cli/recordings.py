@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import click
 
@@ -37,8 +38,10 @@ def rerun(file: Path, transcript_path: Path | None, config_path: Path | None) ->
     """Re-run the recording FILE from its recorded inputs and compare what the robot did.
 
     A fresh robot (the recorded configuration, seed, start and calendar) hears and is sent what
-    the recording says came from outside, at the same nanosecond. Exit 0 when the decisions are
-    the same as recorded, 1 when they differ (with where they first differ).
+    the recording says came from outside, at the same nanosecond. A recording made in real time
+    (a launch over ROS 1 or ROS 2) re-runs the controller alone against the events and module
+    outcomes it recorded. Exit 0 when the decisions are the same as recorded, 1 when they differ
+    (with where they first differ).
     """
     try:
         from cyborg.sim.rerun import first_difference, write_transcript
@@ -50,6 +53,9 @@ def rerun(file: Path, transcript_path: Path | None, config_path: Path | None) ->
             from cyborg.app.config import load_config
 
             config = load_config(config_path)
+        if recording.metadata.get("clock", "").startswith("real"):
+            _rerun_controller(recording, config, config_path, transcript_path)
+            return
         result = run_again(recording, config=config)
         for line in result.skipped:
             click.secho(f"warning: {line}", fg="yellow", err=True)
@@ -72,6 +78,33 @@ def rerun(file: Path, transcript_path: Path | None, config_path: Path | None) ->
         fail(exc)
     except OSError as exc:
         fail(os_problem(exc))
+
+
+def _rerun_controller(
+    recording: Any, config: Any, config_path: Path | None, transcript_path: Path | None
+) -> None:
+    """``cyborg rerun`` of a real-time recording: the controller alone (cyborg.sim.rerun_controller)."""
+    from cyborg.sim.rerun import recorded_config, transcript_of, write_transcript
+    from cyborg.sim.rerun_controller import first_state_difference, rerun_controller
+
+    machine = (config or recorded_config(recording)).machine
+    result = rerun_controller(recording, machine)
+    over = recording.metadata.get("middleware") or "a graph"
+    click.echo(
+        f"{recording.path} was recorded over {over} in real time: the controller alone re-ran against "
+        f"its {result.events} recorded events and {result.outcomes} module outcomes (in virtual time)"
+    )
+    if transcript_path is not None:
+        write_transcript(transcript_path, transcript_of(result.changes))
+        click.echo(f"wrote {len(result.changes)} state changes to {transcript_path}")
+    recorded = [r for r in recording.records if r["type"] == "state"]
+    difference = first_state_difference(recorded, result.changes)
+    what = f"with {config_path}" if config_path is not None else "the re-run"
+    if difference is None:
+        click.secho(f"same state changes as recorded ({len(recorded)})", fg="green")
+        return
+    click.echo(f"the state changes first differ at {difference.describe(what, noun='state change')}")
+    raise SystemExit(1)
 
 
 @click.command()

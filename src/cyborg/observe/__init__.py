@@ -5,5 +5,7 @@ and hears, poses, motivator decisions) into records with their clock time (integ
 nanoseconds): scenario transcripts, the HTTP API's event log and the dashboard read the same
 stream. :mod:`~cyborg.observe.recorder` writes every run to MCAP as it happens, on the channels
 :mod:`~cyborg.observe.channels` names; :mod:`~cyborg.observe.recording` reads a recording back
-(replay, re-run) and :mod:`~cyborg.observe.export` writes it as a ROS 1 or ROS 2 bag.
+(replay, re-run) and :mod:`~cyborg.observe.export` writes it as a ROS 1 or ROS 2 bag;
+:mod:`~cyborg.observe.rosout` brings a launch's other nodes' warnings and errors (ROS's
+``/rosout``) to the recorder.
 """

@@ -11,12 +11,16 @@ marks), ``foxglove.PoseInFrame`` (the robot), ``foxglove.Grid`` (the map) and
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 FORMAT = "cyborg-recording"
 """The ``format`` key of the ``cyborg`` metadata record: what tells our recordings from others."""
-FORMAT_VERSION = "1"
-"""Bumped when a reader of an older recording would misread a newer one."""
+FORMAT_VERSION = "2"
+"""Bumped when a reader of an older recording would misread a newer one (2: the pose record is
+the ``foxglove.PoseInFrame`` of ``/robot/pose``, in JSON, no longer a channel of its own)."""
+READABLE_VERSIONS = ("1", "2")
+"""The formats this code reads."""
 METADATA_NAME = "cyborg"
 PROFILE = ""
 
@@ -36,11 +40,14 @@ RECORD_TOPICS: dict[str, str] = {
     "say": "/cyborg/speech/said",
     "heard": "/cyborg/speech/heard",
     "recognised": "/cyborg/speech/recognised",
-    "pose": "/cyborg/pose",
+    "pose": "/robot/pose",
     "problems": "/cyborg/problems",
 }
 """Record type -> the JSON channel that holds it."""
-TYPE_OF_TOPIC = {topic: kind for kind, topic in RECORD_TOPICS.items()}
+OLD_POSE_TOPIC = "/cyborg/pose"
+"""Format 1's pose records (``{x, y, theta}``), beside a protobuf ``foxglove.PoseInFrame``."""
+TYPE_OF_TOPIC = {topic: kind for kind, topic in RECORD_TOPICS.items()} | {OLD_POSE_TOPIC: "pose"}
+"""Channel -> the record type it holds (read with :func:`record_fields`)."""
 
 EVENT_TOPIC = "/cyborg/events"
 """Every event sent to the controller, with its sender and source."""
@@ -48,10 +55,11 @@ INPUT_TOPIC = "/cyborg/inputs"
 """What came into the robot from outside (a script, the operator): what a re-run plays again."""
 DIAGNOSTIC_TOPIC = "/cyborg/diagnostics"
 """Gatekeeper passes and drops, module crashes, the controller's counters, the modules muted in a
-parallel state (``kind``: passed, dropped, crashed, controller, muted)."""
+parallel state, other nodes' warnings and errors on a ROS graph (``kind``: passed, dropped,
+crashed, controller, muted, rosout)."""
 MARK_CHANNEL = "/cyborg/marks"
 LOG_TOPIC = "/log"
-POSE_TOPIC = "/robot/pose"
+POSE_TOPIC = RECORD_TOPICS["pose"]
 MAP_TOPIC = "/map"
 PLACES_TOPIC = "/places"
 FRAME = "map"
@@ -63,7 +71,7 @@ SCHEMA_NAMES: dict[str, str] = {
     "say": "cyborg.Said",
     "heard": "cyborg.Heard",
     "recognised": "cyborg.Recognised",
-    "pose": "cyborg.Pose",
+    "pose": "foxglove.PoseInFrame",
     "problems": "cyborg.Problems",
 }
 
@@ -88,7 +96,23 @@ RECORD_SCHEMAS: dict[str, dict[str, Any]] = {
     "say": {"text": _TEXT},
     "heard": {"text": _TEXT},
     "recognised": {"text": _TEXT, "confidence": _NUMBER, "accepted": {"type": "boolean"}},
-    "pose": {"x": _NUMBER, "y": _NUMBER, "theta": _NUMBER},
+    "pose": {
+        "timestamp": {
+            "type": "object",
+            "properties": {"sec": {"type": "integer"}, "nsec": {"type": "integer"}},
+        },
+        "frame_id": _TEXT,
+        "pose": {
+            "type": "object",
+            "properties": {
+                "position": {"type": "object", "properties": {"x": _NUMBER, "y": _NUMBER, "z": _NUMBER}},
+                "orientation": {
+                    "type": "object",
+                    "properties": {"x": _NUMBER, "y": _NUMBER, "z": _NUMBER, "w": _NUMBER},
+                },
+            },
+        },
+    },
     "problems": {"module": _TEXT, "open": {"type": "array"}},
 }
 
@@ -98,6 +122,32 @@ OTHER_SCHEMAS: dict[str, tuple[str, dict[str, Any]]] = {
     DIAGNOSTIC_TOPIC: ("cyborg.Diagnostic", {"kind": _TEXT, "sender": _TEXT, "detail": {}}),
     MARK_CHANNEL: ("cyborg.Mark", {"note": _TEXT}),
 }
+
+
+def pose_message(fields: dict[str, Any], log_time_ns: int) -> dict[str, Any]:
+    """A pose record's fields (``x``, ``y``, ``theta``) as a ``foxglove.PoseInFrame`` (its JSON form):
+    one message that Foxglove's 3D panel draws and :func:`record_fields` reads back exactly."""
+    half = float(fields["theta"]) / 2.0
+    sec, nsec = divmod(log_time_ns, 1_000_000_000)
+    return {
+        "timestamp": {"sec": sec, "nsec": nsec},
+        "frame_id": FRAME,
+        "pose": {
+            "position": {"x": fields["x"], "y": fields["y"], "z": 0.0},
+            "orientation": {"x": 0.0, "y": 0.0, "z": math.sin(half), "w": math.cos(half)},
+        },
+    }
+
+
+def record_fields(kind: str, message: dict[str, Any]) -> dict[str, Any]:
+    """A record's fields from its channel's message (decoded JSON). The pose comes back as the
+    transcript has it: ``theta`` was rounded to 1 mrad, so the quaternion gives it back exactly."""
+    if kind != "pose" or "pose" not in message:
+        return message
+    pose = message["pose"]
+    orientation = pose["orientation"]
+    theta = round(2.0 * math.atan2(orientation["z"], orientation["w"]), 3)
+    return {"x": pose["position"]["x"], "y": pose["position"]["y"], "theta": theta}
 
 
 def json_schema(title: str, properties: dict[str, Any]) -> dict[str, Any]:

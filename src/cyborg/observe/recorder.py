@@ -21,8 +21,8 @@ import contextlib
 import io
 import json
 import logging
-import math
-from collections.abc import Mapping
+import threading
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from enum import Enum
@@ -30,7 +30,7 @@ from pathlib import Path
 from typing import IO, Any
 
 import foxglove
-from foxglove.channels import GridChannel, LogChannel, PoseInFrameChannel, SceneUpdateChannel
+from foxglove.channels import GridChannel, LogChannel, SceneUpdateChannel
 from foxglove.mcap import MCAPCompression, MCAPWriteOptions, MCAPWriter
 from foxglove.messages import (
     Color,
@@ -40,7 +40,6 @@ from foxglove.messages import (
     PackedElementField,
     PackedElementFieldNumericType,
     Pose,
-    PoseInFrame,
     Quaternion,
     SceneEntity,
     SceneUpdate,
@@ -70,8 +69,28 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-_encode = json.JSONEncoder(separators=(",", ":"), check_circular=False).encode
-"""Compact JSON (no spaces): smaller files, a little faster; what it decodes to is the same."""
+
+def _compact_json() -> Callable[[Any], str]:
+    """Compact JSON (no spaces: smaller files; what it decodes to is the same), by the standard
+    library's C encoder made once, not once a message as ``JSONEncoder.encode`` makes it (a
+    third of a record's encoding time)."""
+    encoder = json.JSONEncoder(separators=(",", ":"), check_circular=False)
+    make = getattr(json.encoder, "c_make_encoder", None)
+    if make is None:  # an interpreter without the C accelerator
+        return encoder.encode
+    made = make(
+        None, encoder.default, json.encoder.encode_basestring_ascii, None, ":", ",", False, False, True
+    )
+    return lambda value: "".join(made(value, 0))
+
+
+_encode = _compact_json()
+
+HOLD_RECORDS = 512
+"""Records held before they are written together (see :meth:`Recorder.on_record`)."""
+HOLD_NS = 60 * 1_000_000_000
+"""Robot time a record is held at most before it is written (the MCAP writer holds a chunk of
+64 KiB, about 20 minutes of a robot day, until :meth:`Recorder.flush` anyway)."""
 
 DEFAULT_BUDGET_BYTES = 1024**3
 """1 GiB: about 5 MB a robot day (docs/benchmarks.md), so months of recordings."""
@@ -88,6 +107,9 @@ INPUT_TOPICS: list[tuple[str, type[Any]]] = [
     (topics.SET_EMOTIONAL_VALUES, EmotionalFeedback),
     (topics.EMOTIONAL_CONTROLLER, String),
 ]
+
+
+_LOG_LEVELS = {"warning": LogLevel.Warning, "error": LogLevel.Error, "fatal": LogLevel.Fatal}
 
 
 class RecorderState(Enum):
@@ -236,10 +258,11 @@ class Recorder:
         for topic, (name, properties) in ch.OTHER_SCHEMAS.items():
             self._json[topic] = self._channel(topic, name, ch.json_schema(name, properties))
         self._log = LogChannel(ch.LOG_TOPIC, context=self._context)
-        self._pose = PoseInFrameChannel(ch.POSE_TOPIC, context=self._context)
         self._map = GridChannel(ch.MAP_TOPIC, context=self._context)
         self._places = SceneUpdateChannel(ch.PLACES_TOPIC, context=self._context)
         self._writer: MCAPWriter | None = None
+        self._held: list[Record] = []
+        self._owner = threading.get_ident()  # the thread of the robot's loop: the one that holds records
         self._sink: _Sink | None = None
         self._file: IO[bytes] | None = None
         self._segment_start_ns = 0
@@ -389,19 +412,44 @@ class Recorder:
             raise self._sink.failure
 
     def on_record(self, record: Record) -> None:
+        """A transcript record: held, then written with the others held (see :meth:`_release`).
+
+        Written one at a time, each record's encoding ran between the robot's other work, with
+        the recorder's code and data out of the processor's caches: about three times its cost in
+        a loop of records. Held records keep their exact times (MCAP log times); what reads the
+        file sees them once :meth:`flush` or :meth:`close` is called, as with the chunk the MCAP
+        writer holds back.
+        """
+        if self._writer is None:
+            return
+        held = self._held
+        held.append(record)
+        if len(held) >= HOLD_RECORDS or record["t_ns"] - held[0]["t_ns"] >= HOLD_NS:
+            self._release()
+
+    def _release(self) -> None:
+        """Write the records held, in their order (before anything else is written)."""
+        held, self._held = self._held, []
+        for record in held:
+            if self._writer is None:
+                return
+            self._write_record(record)
+
+    def _write_record(self, record: Record) -> None:
         """A transcript record: to its JSON channel (and the Foxglove views of it)."""
         kind = str(record["type"])
         topic = ch.RECORD_TOPICS.get(kind)
-        if topic is None or self._writer is None:
+        if topic is None:
             return
         t_ns = int(record["t_ns"])
         fields = record.copy()
         del fields["t"], fields["t_ns"], fields["type"]
+        if kind == "pose":
+            self._write(topic, ch.pose_message(fields, self._log_time(t_ns)), t_ns)
+            return
         self._write(topic, fields, t_ns)
         try:
-            if kind == "pose":
-                self._log_pose(fields, t_ns)
-            elif kind in ("say", "heard"):
+            if kind in ("say", "heard"):
                 who = "robot" if kind == "say" else "user"
                 self._log_entry(f"{who}: {fields['text']}", "speech", LogLevel.Info, t_ns)
             elif kind == "recognised":
@@ -429,18 +477,10 @@ class Recorder:
         )
         self._check()
 
-    def _log_pose(self, fields: Mapping[str, Any], t_ns: int) -> None:
-        half = float(fields["theta"]) / 2.0
-        pose = Pose(
-            position=Vector3(x=float(fields["x"]), y=float(fields["y"]), z=0.0),
-            orientation=Quaternion(x=0.0, y=0.0, z=math.sin(half), w=math.cos(half)),
-        )
-        message = PoseInFrame(timestamp=self._stamp(t_ns), frame_id=ch.FRAME, pose=pose)
-        self._pose.log(message, log_time=self._log_time(t_ns))
-        self._check()
-
     def log_text(self, text: str, name: str, level: LogLevel) -> None:
         """A line for Foxglove's Log panel (warnings and errors of the package)."""
+        if threading.get_ident() == self._owner:  # (another thread's warning leaves the held records be)
+            self._release()
         try:
             self._log_entry(text, name, level, self.now_ns())
         except (OSError, RuntimeError) as exc:
@@ -449,12 +489,14 @@ class Recorder:
     def mark(self, note: str) -> None:
         """Put a note into the recording (the dashboard's "mark" button)."""
         t_ns = self.now_ns()
+        self._release()
         self._write(ch.MARK_CHANNEL, {"note": note}, t_ns)
         self.log_text(f"mark: {note}", "operator", LogLevel.Info)
 
     def _input_callback(self, topic: str) -> Any:
         def on_input(message: Any, info: MessageInfo) -> None:
             t_ns = self.now_ns()
+            self._release()
             if topic == topics.REGISTER_EVENT:
                 event = {"event": message.data, "sender": info.sender, "source": ch.source_of(info.sender)}
                 self._write(ch.EVENT_TOPIC, event, t_ns)
@@ -490,6 +532,7 @@ class Recorder:
         except ValueError:
             detail = message.data
         t_ns = self.now_ns()
+        self._release()
         self._write(ch.DIAGNOSTIC_TOPIC, {"kind": kind, "sender": info.sender, "detail": detail}, t_ns)
         if level is None:
             return
@@ -498,11 +541,26 @@ class Recorder:
         except (OSError, RuntimeError) as exc:
             self._fail(exc)
 
+    def node_log(self, *, node: str, level: str, text: str, where: Mapping[str, Any]) -> None:
+        """Another node's warning, error or fatal message (heard on ROS's ``/rosout``; see
+        :mod:`~cyborg.observe.rosout`): the diagnostics channel (kind ``rosout``, its ``level``,
+        ``message``, ``file``, ``function`` and ``line``) and a line of Foxglove's Log panel under
+        the node's name."""
+        t_ns = self.now_ns()
+        self._release()
+        detail = {"level": level, "message": text, **where}
+        self._write(ch.DIAGNOSTIC_TOPIC, {"kind": "rosout", "sender": node, "detail": detail}, t_ns)
+        try:
+            self._log_entry(text, node, _LOG_LEVELS.get(level, LogLevel.Warning), t_ns)
+        except (OSError, RuntimeError) as exc:
+            self._fail(exc)
+
     def _on_mark(self, message: String, info: MessageInfo) -> None:
         self.mark(message.data.strip()[:500] or "mark")
 
     def flush(self) -> None:
         """Write out the chunk held back, so that the file can be read up to now."""
+        self._release()
         if self._writer is None:
             return
         try:
@@ -579,7 +637,7 @@ class Recorder:
             "file": str(self.files[-1]) if self.files else None,
             "files": [str(path) for path in self.files[-2:]],
             "problem": self.problem,
-            "messages": self.messages,
+            "messages": self.messages + len(self._held),
         }
 
     def _publish_status(self, **extra: str) -> None:
@@ -598,6 +656,7 @@ class Recorder:
             "the robot runs on unrecorded"
         )
         self.state = RecorderState.FAILED
+        self._held = []
         log.error("%s", self.problem)
         logging.getLogger("cyborg").removeHandler(self._handler)
         with contextlib.suppress(Exception):
@@ -608,6 +667,7 @@ class Recorder:
     def close(self) -> None:
         """Finish the segment (its summary makes it seekable); the recorder then writes nothing."""
         logging.getLogger("cyborg").removeHandler(self._handler)
+        self._release()
         if self.state is RecorderState.RECORDING:
             try:
                 self._close_segment()

@@ -62,8 +62,9 @@ class Recording:
     marks: list[dict[str, Any]] = field(default_factory=list)
     logs: list[dict[str, Any]] = field(default_factory=list)
     """Gatekeeper passes (level ``info``) and drops, module crashes, the controller node's counters
-    (``info``): ``t_ns``, ``level``, ``kind`` (passed, dropped, crashed, controller), ``sender``,
-    ``detail``."""
+    (``info``), other nodes' warnings and errors on a ROS graph (``rosout``, level ``warning``,
+    ``error`` or ``fatal``): ``t_ns``, ``level``, ``kind`` (passed, dropped, crashed, controller,
+    muted, rosout), ``sender``, ``detail``."""
     problem: str | None = None
     """Why the file was read only in part (it was cut short), else None."""
     scene: dict[str, tuple[Schema, bytes]] = field(default_factory=dict, repr=False)
@@ -133,10 +134,10 @@ def _check_metadata(path: Path, metadata: dict[str, str] | None) -> dict[str, st
             "metadata); fix: open it in Foxglove or Lichtblick, or give a recording made by `cyborg`"
         )
     version = metadata.get("format_version")
-    if version != ch.FORMAT_VERSION:
+    if version not in ch.READABLE_VERSIONS:
         raise RecordingError(
             f"{path} was recorded by cyborg {metadata.get('version', '?')} in recording format "
-            f"{version}; this cyborg reads format {ch.FORMAT_VERSION}; fix: read it with cyborg "
+            f"{version}; this cyborg reads formats {', '.join(ch.READABLE_VERSIONS)}; fix: read it with cyborg "
             f"{metadata.get('version', 'of that version')} (pip install cyborg=={metadata.get('version', '?')})"
         )
     if "start_ns" not in metadata:
@@ -191,8 +192,8 @@ def open_recording(path: Path) -> Recording:
                 t_ns = message.log_time - start_ns
                 topic = channel.topic
                 kind = ch.TYPE_OF_TOPIC.get(topic)
-                if kind is not None:
-                    fields = json.loads(message.data)
+                if kind is not None and channel.message_encoding == "json":  # (format 1: a protobuf pose too)
+                    fields = ch.record_fields(kind, json.loads(message.data))
                     records.append({"t": readable_seconds(t_ns), "t_ns": t_ns, "type": kind, **fields})
                 elif topic == ch.INPUT_TOPIC:
                     data = json.loads(message.data)
@@ -205,7 +206,10 @@ def open_recording(path: Path) -> Recording:
                     scene.setdefault(topic, (_schema, bytes(message.data)))
                 elif topic == ch.DIAGNOSTIC_TOPIC:
                     diagnostic = json.loads(message.data)
-                    level = "warning" if diagnostic.get("kind") in ("dropped", "crashed") else "info"
+                    kind_of = diagnostic.get("kind")
+                    level = "warning" if kind_of in ("dropped", "crashed") else "info"
+                    if kind_of == "rosout":  # another node's warning, error or fatal message
+                        level = str(diagnostic.get("detail", {}).get("level", "warning"))
                     logs.append({"t_ns": t_ns, "level": level, **diagnostic})
         except (McapError, EOFError, ValueError, KeyError, struct.error) as exc:
             if metadata is None:
@@ -271,9 +275,12 @@ def window(path: Path, start_ns: int, end_ns: int, topics: Iterable[str] | None 
         for _schema, channel, message in reader.iter_messages(
             topics=wanted, starting_at=start + start_ns, ending_at=start + end_ns, log_time_order=False
         ):  # in the order written, as a whole read gives them (the robot's clock only moves on)
+            if channel.message_encoding != "json":
+                continue  # format 1's protobuf pose beside its JSON one
             t_ns = message.log_time - start
             kind = ch.TYPE_OF_TOPIC.get(channel.topic, channel.topic)
-            out.append({"t": readable_seconds(t_ns), "t_ns": t_ns, "type": kind, **json.loads(message.data)})
+            fields = ch.record_fields(kind, json.loads(message.data))
+            out.append({"t": readable_seconds(t_ns), "t_ns": t_ns, "type": kind, **fields})
         return out
 
 

@@ -257,6 +257,7 @@ def _start_recorder(node: BuiltNode, options: NodeOptions) -> Recorder | None:
     """The flight recorder of the graph, from now on (the clock is set: records start at 0)."""
     from cyborg.observe.recorder import Recorder, RunFacts
     from cyborg.observe.records import RecordStream, to_ns
+    from cyborg.observe.rosout import hear_ros_logs
     from cyborg.run.local import clock_kind
 
     if options.record is None:
@@ -280,6 +281,7 @@ def _start_recorder(node: BuiltNode, options: NodeOptions) -> Recorder | None:
         recorder_node, RecordStream(recorder_node), options.record, facts, occupancy=occupancy
     )
     node.part.components.append(recorder)  # closed with the part: its node leaves the graph
+    hear_ros_logs(recorder, node.middleware.name)  # the other nodes' warnings and errors (/rosout)
     click.echo(f"node {node.name}: recording to {recorder.path or recorder.problem}", err=True)
     return recorder
 

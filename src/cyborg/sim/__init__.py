@@ -7,5 +7,6 @@
 :mod:`~cyborg.sim.script` reads scenario scripts and :mod:`~cyborg.sim.scenario` runs them,
 writing transcripts with :mod:`~cyborg.sim.transcript`;
 :mod:`~cyborg.sim.witness` tells a failed step what dropped or broke what it waited for;
-:mod:`~cyborg.sim.rerun` re-runs a recording from its recorded inputs (``cyborg rerun``).
+:mod:`~cyborg.sim.rerun` re-runs a recording from its recorded inputs (``cyborg rerun``), and
+:mod:`~cyborg.sim.rerun_controller` the controller alone against a launch's real-time recording.
 """

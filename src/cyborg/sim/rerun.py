@@ -55,14 +55,14 @@ class Difference:
     recorded: Record | None
     rerun: Record | None
 
-    def describe(self, what: str = "the re-run") -> str:
+    def describe(self, what: str = "the re-run", noun: str = "decision") -> str:
         def brief(record: Record | None) -> str:
             if record is None:
                 return "nothing (the run had ended)"
             fields = {k: v for k, v in record.items() if k not in ("t", "t_ns")}
             return f"t={record['t']:g} s {json.dumps(fields)}"
 
-        return f"decision {self.index + 1}: recorded {brief(self.recorded)}; {what}: {brief(self.rerun)}"
+        return f"{noun} {self.index + 1}: recorded {brief(self.recorded)}; {what}: {brief(self.rerun)}"
 
 
 def inputs_script(recording: Recording) -> tuple[Script, list[str]]:
