@@ -14,7 +14,7 @@ from collections.abc import Callable, Iterator
 import pytest
 
 from cyborg.run.lockstep import TimeServer
-from cyborg.transport.ledger import Channel
+from cyborg.transport.ledger import Channel, Ledger
 from cyborg.transport.lockstep import LockstepClock
 
 UNTIL = 1.5
@@ -172,3 +172,17 @@ def test_a_node_outside_the_lockstep_is_named_and_the_time_waits_while_they_talk
         thread.join(timeout=30)
     assert named == [("student_module",), ()]
     assert reached == [("a", 0.1), ("a", 0.2), ("b", 0.3)] and server.foreign_seen == {"student_module"}
+
+
+def test_a_channel_the_ledger_ignores_is_no_step_of_the_run() -> None:
+    """The recorder hears the ROS log, which every node publishes outside the transport's counts:
+    counted, each warning would be a surplus from outside and slow the time down."""
+    ledger = Ledger()
+    ledger.ignore("/rosout")
+    ledger.listen("/rosout")
+    ledger.received("/rosout", 3)
+    ledger.listen("/state_change")
+    ledger.received("/state_change")
+    changes = ledger.take_changes()
+    assert changes is not None
+    assert changes["recv"] == {"/state_change": 1} and set(changes["listen"]) == {"/state_change"}

@@ -91,5 +91,10 @@ def hear_ros_logs(recorder: Recorder, middleware: str) -> RosLogSource | None:
             where={"file": message.file, "function": message.function, "line": message.line},
         )
 
+    ledger = recorder.node.clock.ledger
+    if ledger is not None:
+        # Lockstep: every node logs outside the transport's counts; counted, each warning would be a
+        # surplus from outside, and the time would slow down for a while after it.
+        ledger.ignore(source.topic)
     recorder.node.subscribe(source.topic, source.message_type, on_log, queue_size=1000)
     return source

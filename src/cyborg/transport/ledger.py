@@ -38,6 +38,13 @@ class Ledger:
         self._received: Counter[str] = Counter()
         self._listening: dict[str, tuple[int, Channel]] = {}
         self._changed_listening: set[str] = set()
+        self._ignored: set[str] = set()
+
+    def ignore(self, channel: str) -> None:
+        """Count nothing on ``channel``: what arrives there is no step of the run (the ROS log,
+        which every node publishes outside the transport). Call it before subscribing."""
+        with self._lock:
+            self._ignored.add(channel)
 
     def sent(self, channel: str, count: int = 1) -> None:
         with self._lock:
@@ -45,17 +52,22 @@ class Ledger:
 
     def received(self, channel: str, count: int = 1) -> None:
         with self._lock:
-            self._received[channel] += count
+            if channel not in self._ignored:
+                self._received[channel] += count
 
     def listen(self, channel: str, kind: Channel = Channel.BROADCAST) -> None:
         """One more endpoint of this process receives ``channel`` (a subscription, a server)."""
         with self._lock:
+            if channel in self._ignored:
+                return
             count, _ = self._listening.get(channel, (0, kind))
             self._listening[channel] = (count + 1, kind)
             self._changed_listening.add(channel)
 
     def unlisten(self, channel: str) -> None:
         with self._lock:
+            if channel in self._ignored:
+                return
             count, kind = self._listening.get(channel, (0, Channel.BROADCAST))
             self._listening[channel] = (max(0, count - 1), kind)
             self._changed_listening.add(channel)
