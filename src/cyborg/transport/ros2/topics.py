@@ -43,9 +43,6 @@ SENDER_LOOKUP = 0.5  # seconds a publisher unknown to the graph is waited for, f
 # Lockstep time stands still meanwhile, and a message of an unnamed sender is dropped by a
 # gatekeeper: on a loaded machine the graph may name a publisher seconds after its first message.
 LOCKSTEP_SENDER_LOOKUP = 10.0
-# Lockstep: a latched message waits this long for every reader to acknowledge the one before it
-# (see Ros2Publisher.publish).
-LOCKSTEP_ACK_WAIT = 10.0
 
 log = logging.getLogger(__name__)
 
@@ -113,11 +110,6 @@ class Ros2Publisher(Publisher[M]):
         self._cls = ros2_class(msg_type.ros_type)
         qos = latched_qos() if latch else volatile_qos(queue_size)
         self._node = node
-        # A latched topic keeps one message: the next replaces it in the writer's history even
-        # where a slow reader has not acknowledged it yet, and that reader never gets it. In
-        # lockstep (a burst of one instant, a loaded machine) that lost a state change or an
-        # emotion now and then; there the next waits for the acknowledgements first.
-        self._wait_acked = latch and transport.clock.is_lockstep
         # Every subscription of ours has a transient-local half that a volatile publisher does
         # not serve, by design (module docstring): no warning about it.
         self._pub: Any = node.create_publisher(
@@ -131,8 +123,6 @@ class Ros2Publisher(Publisher[M]):
         """Send ``message`` (latched: transient-local); nothing once unregistered."""
         if self._pub is None:
             return  # unregistered (its node shut down): a late publish while a process stops goes nowhere
-        if self._wait_acked:
-            self._pub.wait_for_all_acked(Duration(nanoseconds=int(LOCKSTEP_ACK_WAIT * 1e9)))
         self._pub.publish(to_ros2(message, self._cls))
         self._stats.published += 1
         if self._ledger is not None:
