@@ -4,19 +4,26 @@
   accepted. The controller (``Controller`` on ``Ros2Transport``) runs in one process, two
   modules that accept goals and acknowledge cancels at once (``Ros2Transport`` action servers)
   in another, and this process publishes the events with plain rclpy.
-* floor: plain ``rclpy.action``, no controller: an ``ActionClient`` cancels the running goal,
-  waits for CANCELED, sends the next goal to the other server and waits for it to be accepted;
-  the two servers are plain ``ActionServer`` s in a third process that accept goals and end a
-  goal CANCELED as soon as its cancel is accepted (the execute callback waits for it on an
-  event, then for rcl to mark the goal canceling).
+* floor: the same hops with plain rclpy, no controller: an event published on a topic -> a
+  plain rclpy node (its own process, ``rclpy.spin``) cancels the running goal and, when its
+  result (CANCELED) comes, sends the next goal to the other server -> accepted. Each step runs
+  in the rclpy callback that makes it possible. The two servers are plain ``ActionServer`` s in
+  a third process that accept goals and end a goal CANCELED as soon as its cancel is accepted
+  (the execute callback waits for it on an event, then for rcl to mark the goal canceling).
+* floor without the event hop (the floor of the benchmarks before 2026-11-26, kept for
+  comparison): an ``ActionClient`` in this process cancels the running goal, waits for
+  CANCELED, sends the next goal and waits for it to be accepted; timed from the cancel, so one
+  topic hop short of ours.
 
-Both are stamped on the server side, right after the goal was accepted, with
+All are stamped on the server side, right after the goal was accepted, with
 ``time.perf_counter()`` (CLOCK_MONOTONIC: one time line for every process of the machine),
-and reported back on a topic. Ours and the floor run in alternating blocks, so load changes of
-the shared machine hit both alike. Every process runs on one random ROS_DOMAIN_ID with
-discovery kept on this host.
+and reported back on a topic. The contenders run in alternating blocks (the order reversed
+every other round), back to back and then paced (a random 0.1-0.3 s pause before each
+handover, as on a robot), so load changes of the shared machine hit them alike. Every process
+runs on one random ROS_DOMAIN_ID with discovery kept on this host.
 
 Run: .venv-ros2/bin/python benchmarks/bench_ros2_handover.py [--handovers 1000] [--block 100]
+     [--paced 200] [--no-direct]
 """
 
 from __future__ import annotations
@@ -25,6 +32,7 @@ import argparse
 import asyncio
 import os
 import random
+from pathlib import Path
 import signal
 import subprocess
 import sys
@@ -43,6 +51,11 @@ states:
 OURS_REPORT = "/bench/ours_active"
 FLOOR_REPORT = "/bench/floor_active"
 FLOOR_ACTIONS = ("/bench_floor/a", "/bench_floor/b")
+FLOOR_EVENT = "/bench_floor/event"
+DIRECT_REPORT = "/bench/direct_active"
+DIRECT_ACTIONS = ("/bench_direct/a", "/bench_direct/b")
+PACED_PAUSE = (0.1, 0.3)  # seconds before each paced handover
+PACED_BLOCK = 25
 OUR_ACTIONS = ("/bench/a", "/bench/b")
 REGISTER_EVENT = "/cyborg_controller/register_event"
 
@@ -108,10 +121,14 @@ def role_floor() -> None:
 
     rclpy.init()
     node = Node("bench_floor")
-    report = node.create_publisher(String, FLOOR_REPORT, 1000)
+    reports = {
+        action: node.create_publisher(String, topic, 1000)
+        for actions, topic in ((FLOOR_ACTIONS, FLOOR_REPORT), (DIRECT_ACTIONS, DIRECT_REPORT))
+        for action in actions
+    }
     cancels: dict[bytes, threading.Event] = {}
 
-    def accepted(handle: Any) -> None:
+    def accepted(handle: Any, report: Any) -> None:
         cancels[bytes(handle.goal_id.uuid)] = threading.Event()
         report.publish(String(data=f"{handle.request.event} {time.perf_counter()!r}"))
         handle.execute()
@@ -138,11 +155,11 @@ def role_floor() -> None:
             action,
             execute_callback=execute,
             goal_callback=lambda goal: GoalResponse.ACCEPT,
-            handle_accepted_callback=accepted,
+            handle_accepted_callback=lambda handle, report=reports[action]: accepted(handle, report),
             cancel_callback=cancel,
             callback_group=group,
         )
-        for action in FLOOR_ACTIONS
+        for action in (*FLOOR_ACTIONS, *DIRECT_ACTIONS)
     ]
     executor = MultiThreadedExecutor(num_threads=8)
     executor.add_node(node)
@@ -153,6 +170,57 @@ def role_floor() -> None:
     print("ready", flush=True)
     stop.wait()
     executor.shutdown(timeout_sec=1)
+
+
+def role_floor_controller() -> None:
+    """The floor's plain rclpy node: on an event, cancel the goal; when its result comes, send the next.
+
+    Each step runs in the rclpy callback that makes it possible (``rclpy.spin``): the least a
+    node can do between the event and the next goal.
+    """
+    import rclpy
+    from cyborg_controller.action import StateMachine
+    from rclpy.action import ActionClient
+    from rclpy.node import Node
+    from std_msgs.msg import String
+
+    rclpy.init()
+    node = Node("bench_floor_controller")
+    clients = [ActionClient(node, StateMachine, name) for name in FLOOR_ACTIONS]
+    for client in clients:
+        if not client.wait_for_server(timeout_sec=30):
+            raise SystemExit("the floor's action servers did not come up")
+    state: dict[str, Any] = {"handle": None, "cancelled": None, "next": "", "count": 0}
+
+    def send(event: str) -> None:
+        client = clients[state["count"] % 2]
+        state["count"] += 1
+        client.send_goal_async(
+            StateMachine.Goal(previous_state="x", event=event, current_state="y")
+        ).add_done_callback(accepted)
+
+    def accepted(future: Any) -> None:
+        handle = future.result()
+        state["handle"] = handle
+        handle.get_result_async().add_done_callback(lambda _: ended(handle))
+
+    def ended(handle: Any) -> None:
+        if handle is state["cancelled"]:
+            state["cancelled"] = None
+            send(state["next"])
+
+    def on_event(message: Any) -> None:
+        state["cancelled"], state["next"] = state["handle"], message.data
+        state["handle"].cancel_goal_async()
+
+    send("first")
+    node.create_subscription(String, FLOOR_EVENT, on_event, 100)
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    threading.Thread(target=rclpy.spin, args=(node,), daemon=True).start()
+    print("ready", flush=True)
+    stop.wait()
 
 
 # --- the measuring process ---------------------------------------------------------------------
