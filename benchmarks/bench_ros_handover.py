@@ -114,9 +114,19 @@ def _run_until_signalled(
             start()
         await stop.wait()
 
+    profile_to = os.environ.get("BENCH_CPROFILE")  # a directory: profile the loop's thread there
+    profiler = None
+    if profile_to:
+        import cProfile
+
+        profiler = cProfile.Profile()
+        profiler.enable()
     try:
         clock.run(main())
     finally:
+        if profiler is not None:
+            profiler.disable()
+            profiler.dump_stats(str(Path(profile_to, f"{role}.prof")))
         transport.shutdown()
         rospy.signal_shutdown("benchmark done")
         clock.close()
