@@ -32,6 +32,9 @@ class _Rest(bytes):
 class WriteAtOnceConnection(QueuedConnection):  # type: ignore[misc]
     """rospy's queued connection, writing in the caller's thread when that cannot block."""
 
+    _queue: list[bytes]  # (rospy's, set in its __init__)
+    _error: Exception | None
+
     def __init__(self, connection: Any, queue_size: int) -> None:
         self._writing = False  # the writer thread has taken data from the queue and is writing it
         super().__init__(connection, queue_size)  # (starts the writer thread)
