@@ -37,6 +37,7 @@ import subprocess
 import sys
 import threading
 import time
+from pathlib import Path
 from typing import Any
 
 from _handover import PACED_BLOCK, PACED_PAUSE, cpu_seconds, load, measure, report
@@ -58,7 +59,7 @@ OUR_ACTIONS = ("/bench/a", "/bench/b")
 REGISTER_EVENT = "/cyborg_controller/register_event"
 
 
-def _run_until_signalled(clock: Any, transport: Any, start: Any = None) -> None:
+def _run_until_signalled(role: str, clock: Any, transport: Any, start: Any = None) -> None:
     async def main() -> None:
         stop = asyncio.Event()
         loop = asyncio.get_running_loop()
@@ -69,9 +70,19 @@ def _run_until_signalled(clock: Any, transport: Any, start: Any = None) -> None:
         print("ready", flush=True)
         await stop.wait()
 
+    profile_to = os.environ.get("BENCH_CPROFILE")  # a directory: profile the loop's thread there
+    profiler = None
+    if profile_to:
+        import cProfile
+
+        profiler = cProfile.Profile()
+        profiler.enable()
     try:
         clock.run(main())
     finally:
+        if profiler is not None:
+            profiler.disable()
+            profiler.dump_stats(os.path.join(profile_to, f"{role}.prof"))
         transport.close()
         clock.close()
 
@@ -85,7 +96,7 @@ def role_controller() -> None:
     clock = RealClock()
     transport = Ros2Transport(clock)
     controller = Controller(transport.node("cyborg_controller"), parse_config(MACHINE).machine)
-    _run_until_signalled(clock, transport, controller.start)
+    _run_until_signalled("controller", clock, transport, controller.start)
 
 
 def role_modules() -> None:
@@ -105,7 +116,7 @@ def role_modules() -> None:
 
     for name, action in zip(("mod_a", "mod_b"), OUR_ACTIONS, strict=True):
         transport.node(name).action_server(action, StateMachineAction, on_goal, lambda h: h.canceled())
-    _run_until_signalled(clock, transport)
+    _run_until_signalled("modules", clock, transport)
 
 
 def role_floor() -> None:
@@ -364,7 +375,9 @@ def spawn(role: str, env: dict[str, str]) -> subprocess.Popen[str]:
 
 
 def bench(args: argparse.Namespace) -> dict[str, Any]:
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    # ROS 1's generated messages on PYTHONPATH would shadow ROS 2's: the processes get this
+    # checkout's code only (without it they would run whatever .venv-ros2 installed).
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1] / "src")}
     env.setdefault("ROS_DOMAIN_ID", str(random.randint(101, 200)))
     env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     os.environ.update({k: env[k] for k in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE")})
