@@ -138,6 +138,16 @@ def machine_yaml(resources: bool) -> str:
     return MACHINE.replace("RESOURCES ", "resources: {speech: mod_b}, " if resources else "")
 
 
+def keep_writer_threads() -> None:
+    """``--writer-threads``: undo the transport's write-at-once (rospy's writer thread per
+    connection, as before 2026-11-26), to compare; called right after the transport is made."""
+    if os.environ.get("BENCH_WRITER_THREADS") == "1":
+        import rospy.impl.tcpros_pubsub
+        import rospy.topics
+
+        rospy.topics.QueuedConnection = rospy.impl.tcpros_pubsub.QueuedConnection
+
+
 def role_controller() -> None:
     from cyborg.app.config import parse_config
     from cyborg.controller.runtime import Controller
@@ -146,6 +156,7 @@ def role_controller() -> None:
 
     clock = RealClock()
     transport = RosTransport(clock, process_name="cyborg_controller")
+    keep_writer_threads()
     machine = parse_config(machine_yaml(os.environ.get("BENCH_RESOURCES") == "1")).machine
     if _trace.enabled():
         trace_controller()
@@ -189,6 +200,7 @@ def role_modules() -> None:
 
     clock = RealClock()
     transport = RosTransport(clock, process_name="bench_modules")
+    keep_writer_threads()
     report = transport.node("bench_report").publisher(OURS_REPORT, String, queue_size=1000)
 
     def on_goal(handle: ServerGoalHandle[Any, Any, Any]) -> None:
@@ -542,6 +554,7 @@ def bench(args: argparse.Namespace) -> dict[str, Any]:
     with ros_graph() as env:
         env["BENCH_RESOURCES"] = "1" if args.resources else "0"
         env["BENCH_TRACE"] = trace_dir
+        env["BENCH_WRITER_THREADS"] = "1" if args.writer_threads else "0"
         os.environ.update(env)  # rospy in this process reads them at init time
         import xmlrpc.client
 
@@ -617,6 +630,11 @@ def main() -> None:
     )
     parser.add_argument("--trace", action="store_true", help="print where the time of a handover goes")
     parser.add_argument(
+        "--writer-threads",
+        action="store_true",
+        help="our processes keep rospy's writer thread per connection (no write at once), to compare",
+    )
+    parser.add_argument(
         "--status-list-timeout",
         type=float,
         default=STATUS_LIST_TIMEOUT,
@@ -652,6 +670,7 @@ def main() -> None:
     print(
         f"status_list_timeout {args.status_list_timeout:g} s on all six servers; /state_resources "
         + ("changes on every handover" if args.resources else "stays the same")
+        + ("; our processes keep rospy's writer threads" if args.writer_threads else "")
     )
     print(f"wall time of the back-to-back blocks: {result['b2b_elapsed']:.1f} s")
     cpu = result["cpu"]

@@ -5,7 +5,7 @@ publisher made with a ``queue_size`` (ours, and actionlib's goal, cancel, status
 publishers) hands every message to a writer thread per connection. That costs a thread switch
 per message, and the writer waits for the interpreter lock while the publishing thread goes on:
 a controller that cancels a goal and then sets up its wait, or sends a goal and then records it,
-delays its own message by that much (about a fifth of a ROS 1 handover; docs/performance.md).
+delays its own message by that much (docs/benchmarks-history.md, handover over ROS 1).
 
 :class:`WriteAtOnceConnection` writes the message in the publishing thread when nothing is
 waiting in its queue and the socket takes it without blocking; otherwise (a slow or stuck
