@@ -415,16 +415,38 @@ class Controller:
             return
         self.phase = Phase.HANDING_OVER
         goal.cancel()
-        try:
-            with self._deadline(self.machine.timeouts.preempt):
-                await asyncio.wait_for(goal.wait(), self.machine.timeouts.preempt)
-        except TimeoutError:
+        with self._deadline(self.machine.timeouts.preempt):
+            finished = await self._finished_within(goal, self.machine.timeouts.preempt)
+        if not finished:
             self.stats.preempt_timeouts += 1
             log.warning(
                 "module of %s did not acknowledge the cancel within %.1f s; handing over anyway",
                 self.active_state,
                 self.machine.timeouts.preempt,
             )
+
+    async def _finished_within(self, goal: _Handle, timeout: float) -> bool:
+        """Wait until ``goal`` is finished (True) or ``timeout`` clock seconds have passed (False).
+
+        The handover's wait for the acknowledgement: the controller goes on in the loop turn after
+        the one that took the result (``asyncio.wait_for`` would run the wait in a task of its own
+        and go on three turns later).
+        """
+        if goal.status.is_terminal:
+            return True
+        woken = self.node.clock.loop.create_future()
+
+        def wake(*_: object) -> None:
+            if not woken.done():
+                woken.set_result(None)
+
+        goal.add_done_callback(wake)
+        timer = self.node.clock.call_later(timeout, wake)
+        try:
+            await woken
+        finally:
+            timer.cancel()
+        return goal.status.is_terminal
 
     async def _enter(self, state: str, event: str) -> None:
         """Enter ``state``; on a connection failure follow its 'aborted' transition."""
@@ -609,8 +631,7 @@ class Controller:
         preempt = self.machine.timeouts.preempt
         with self._deadline(preempt):
             if len(cancelled) == 1:
-                with contextlib.suppress(TimeoutError):
-                    await asyncio.wait_for(cancelled[0][1].wait(), preempt)
+                await self._finished_within(cancelled[0][1], preempt)
             else:
                 waits = [asyncio.ensure_future(goal.wait()) for _, goal in cancelled]
                 for task in (await asyncio.wait(waits, timeout=preempt))[1]:

@@ -20,7 +20,8 @@ Its modules, one idea each:
   :mod:`.connections`: waiting until this process's topics are connected;
   :mod:`.graph`: the graph as the master lists it, each node asked whether it answers;
 * :mod:`.patches`: rospy's behaviour changed, installed when a RosTransport is made
-  (importing changes nothing).
+  (importing changes nothing); :mod:`.writes`: publishers writing at once when the socket
+  takes it (one of those changes).
 
 The subscription queue, the client's goal handle and the message walk are the ones every
 transport shares (:mod:`cyborg.transport._queue`, :mod:`cyborg.transport._goals`,

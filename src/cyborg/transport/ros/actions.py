@@ -385,9 +385,10 @@ class RosActionClient(ActionClient[G, R, F]):
         handle = _RosClientGoalHandle(self, goal, on_feedback, on_status)
         transport = self.transport
         answered = False
+        forwarded: GoalStatus | None = None  # the status last handed to the loop
 
-        def transition(ros_handle: Any) -> None:  # rospy thread
-            nonlocal answered
+        def transition(ros_handle: Any) -> None:  # rospy thread (under the goal's lock)
+            nonlocal answered, forwarded
             status = GoalStatus(int(ros_handle.get_goal_status()))
             result = None
             text = ""
@@ -407,6 +408,9 @@ class RosActionClient(ActionClient[G, R, F]):
                 counted.append(f"{self.name}#accept")
             if done:
                 counted.append(f"{self.name}#result")
+            elif not counted and status is forwarded:
+                return  # nothing new (our own cancel() reports the status it had): no loop turn for it
+            forwarded = status
             leg = "result" if done else "accept" if status is GoalStatus.ACTIVE else "status"
             transport.arrive(
                 f"{self.name}#{leg}", "", handle.update_status, status, result, text, counted=counted

@@ -6,7 +6,10 @@ transport) changes nothing; :func:`install` patches rospy's classes for the whol
 
 * every subscriber, actionlib's own included, asks for TCP_NODELAY;
 * registering a new publisher, subscriber or service calls the master once instead of until it
-  answers, leaving the rest to :data:`~cyborg.transport.ros.master.WATCH`.
+  answers, leaving the rest to :data:`~cyborg.transport.ros.master.WATCH`;
+* a publisher with a queue (ours, actionlib's) writes a message in the publishing thread when the
+  socket takes it without blocking, instead of always through a writer thread
+  (:mod:`.writes`).
 """
 
 from __future__ import annotations
@@ -24,6 +27,16 @@ def install() -> None:
     """Patch rospy for this process (idempotent)."""
     _ask_for_tcp_nodelay()
     _register_once()
+    _write_at_once()
+
+
+def _write_at_once() -> None:
+    """Make every queued publisher connection made from now on a :class:`WriteAtOnceConnection`."""
+    import rospy.topics  # type: ignore[import-not-found]
+
+    from cyborg.transport.ros.writes import WriteAtOnceConnection
+
+    rospy.topics.QueuedConnection = WriteAtOnceConnection
 
 
 def _ask_for_tcp_nodelay() -> None:

@@ -368,7 +368,10 @@ class Ros2Transport(Transport):
         if self._home is not None:
             with self._params_lock:
                 self._params[key] = json.loads(text)
-            self._home.set_parameters([RclParameter(parameter_name(key), value=text)])
+            name = parameter_name(key)
+            if self._home.has_parameter(name) and self._home.get_parameter(name).value == text:
+                return  # held already (the controller sets /state_resources at every handover)
+            self._home.set_parameters([RclParameter(name, value=text)])
             return
         request = SetParameters.Request()
         request.parameters = [
