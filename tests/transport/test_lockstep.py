@@ -162,10 +162,11 @@ def test_a_node_outside_the_lockstep_is_named_and_the_time_waits_while_they_talk
 
     threads = [run_node(a, "a", main_a), run_node(b, "b", main_b)]
     deadline = time.monotonic() + 60  # a bound, not a pace: a loaded machine is slow
-    while not (named and reached) and time.monotonic() < deadline:
+    while not (server.foreign and reached) and time.monotonic() < deadline:
         time.sleep(0.02)
     time.sleep(0.3)
-    assert named == [("student_module",)] and server.foreign == ("student_module",)
+    # The nodes hear of it with their next grant (b's comes once the time moves on: below).
+    assert server.foreign == ("student_module",)
     assert reached == [("a", 0.1)] and server.time_ns == 100_000_000, "the time waited for quiet"
     graph.remove("student_module")
     for thread in threads:

@@ -194,6 +194,8 @@ class TimeServer:
                 participant.gen = -1
                 self._send(participant, {"start": True, "time_file": self._shared.path})
                 self._send(participant, {"gen": self.gen, "t": self.time_ns})
+                if self.foreign:  # named before it joined
+                    self._send(participant, {"foreign": list(self.foreign)})
                 self._rebase(f"{participant.name} joined")
             return
         self._last_report = time.monotonic()
