@@ -44,6 +44,7 @@ class _Transport:
 @pytest.fixture
 def pair() -> Iterator[tuple[socket.socket, socket.socket]]:
     writer, reader = socket.socketpair()
+    writer.settimeout(60.0)  # as rospy's sockets: it sets socket.setdefaulttimeout(60)
     writer.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, 4096)
     reader.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
     try:

@@ -16,6 +16,7 @@ connection is kept: nothing is written at once while the writer thread has data 
 
 from __future__ import annotations
 
+import select
 import socket
 import time
 from typing import Any
@@ -67,8 +68,12 @@ class WriteAtOnceConnection(QueuedConnection):  # type: ignore[misc]
         if connection.done or not isinstance(sock, socket.socket):
             return 0
         try:
+            # rospy gives every socket a timeout (socket.setdefaulttimeout(60)), and Python's send on
+            # such a socket first waits up to that long for room, whatever the flags: look first.
+            if not select.select([], [sock], [], 0)[1]:
+                return 0
             sent = sock.send(data, socket.MSG_DONTWAIT)
-        except OSError:
+        except (OSError, ValueError):
             return 0
         connection.stat_bytes += sent
         if sent == len(data):

@@ -458,8 +458,11 @@ class _RclClient(RclActionClient):  # type: ignore[misc]
     1.5 ms to every handover of the ROS 2 handover benchmark."""
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
-        super().__init__(*args, **kwargs)
+        # rclpy hands the client to the executor before it makes the client's lock: a turn of the
+        # executor in between raised "'_RclClient' object has no attribute '_lock'".
+        self._lock = threading.Lock()
         self._callbacks: dict[Any, Callable[[Any], None]] = {}  # future -> its callback, until called
+        super().__init__(*args, **kwargs)
 
     def when_done(self, future: Any, callback: Callable[[Any], None]) -> None:
         """Call ``callback(future)`` once, as soon as the future is done."""
