@@ -294,8 +294,10 @@
     const zoom = dash.graphZoom;
     if (!zoom || !node) return;
     const area = $("graph").querySelector("svg").getBoundingClientRect();
-    const box = node.getBoundingClientRect();
     const label = (node.querySelector("text") || node).getBoundingClientRect();
+    // An arrow is read by its event's name: bring that into view (a long arrow's middle may be
+    // far from it).
+    const box = node.classList.contains("edge") ? label : node.getBoundingClientRect();
     const point = { x: box.x + box.width / 2 - area.x, y: box.y + box.height / 2 - area.y };
     const factor = label.height > 0 ? Math.max(1, READABLE / label.height) : 1;
     if (factor > 1.01) zoom.zoomAtPointBy(factor, point);
