@@ -422,11 +422,13 @@ class EventSender:
         self._string = String
         self._publisher = rospy.Publisher("/cyborg_controller/register_event", String, queue_size=100)
 
-    def wait_connected(self, subscribers: int = 1, timeout: float = 10.0) -> None:
+    def wait_connected(self, subscriber: str = "/cyborg_controller", timeout: float = 10.0) -> None:
+        """Wait until ``subscriber`` (the controller) is connected: another listener (a launched
+        recorder) may connect first, and an event sent before the controller connects is lost."""
         deadline = time.monotonic() + timeout
-        while self._publisher.get_num_connections() < subscribers:
+        while not self._publisher.impl.has_connection(subscriber):
             if time.monotonic() > deadline:
-                raise AssertionError(f"the controller did not subscribe to register_event within {timeout} s")
+                raise AssertionError(f"{subscriber} did not subscribe to register_event within {timeout} s")
             time.sleep(0.01)
 
     def send(self, event: str) -> float:
