@@ -621,6 +621,12 @@ def test_layout_at_1280x800_shows_every_module_and_a_readable_log(browser: Brows
         assert page.evaluate("() => document.documentElement.scrollHeight") <= SMALL[1], (
             "the page does not scroll"
         )
+        header_cut = page.evaluate(
+            """() => [...document.querySelectorAll('header.topbar > *')]
+                .filter(e => e.offsetParent !== null && e.getBoundingClientRect().right > window.innerWidth)
+                .map(e => e.id || e.textContent.trim())"""
+        )
+        assert not header_cut, f"header items past the window's right edge: {header_cut}"
         for _ in range(6):  # short state records to fill the log
             go_idle(page, sim)
             page.request.post(sim + "/api/event", data={"name": "music_play"})

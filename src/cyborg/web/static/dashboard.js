@@ -238,6 +238,7 @@
     try {
       const status = await getJSON("/api/status");
       $("top-graph").textContent = status.graph || "–";
+      $("top-graph").title = status.graph || "";
       applyStatus({ valid_events: status.valid_events, state: status.state,
         previous_state: status.previous_state, event: status.event });
       if (status.problems) {
