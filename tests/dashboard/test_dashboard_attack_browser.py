@@ -27,6 +27,7 @@ from tests.dashboard.test_dashboard_browser import (  # the dashboard tests' rob
     CHROMIUM_ARGS,
     CYBORG,
     SHOTS,
+    START_GUARD,
     Sim,
     browser,  # noqa: F401  (a fixture)
     open_page,
@@ -198,7 +199,7 @@ def networked_robot(tmp_path: Path) -> Iterator[tuple[str, str, str]]:
             env={**os.environ, "PYTHONUNBUFFERED": "1"},
         )
     try:
-        deadline = time.monotonic() + 20
+        deadline = time.monotonic() + START_GUARD
         match = None
         while match is None and time.monotonic() < deadline and process.poll() is None:
             time.sleep(0.05)

@@ -51,6 +51,9 @@ SPEED = "2"  # virtual seconds per real second: the robot acts sooner and the ba
 SHOTS = Path("/tmp")
 CYBORG = [sys.executable, "-m", "cyborg.cli"]
 NOTHING = "\u2013"  # what the page shows before it knows a value
+START_GUARD = 180
+"""Real seconds a robot may take to print its address while its process runs: a guard against a
+hang, not a speed test (at load 40 a start took over 20 s, and the tests failed in setup)."""
 
 
 class Sim:
@@ -70,7 +73,7 @@ class Sim:
                 stderr=subprocess.STDOUT,
                 env={**os.environ, "PYTHONUNBUFFERED": "1"},
             )
-        deadline = time.monotonic() + 20
+        deadline = time.monotonic() + START_GUARD
         match = None
         while match is None and time.monotonic() < deadline and self.process.poll() is None:
             time.sleep(0.05)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Iterable
 from pathlib import Path
 
 import click
@@ -74,9 +75,9 @@ def listen(
     from cyborg.app.context import heard_by
     from cyborg.app.registry import module_kinds
     from cyborg.cli.common import load_or_default
-    from cyborg.hearing.audio import probe_microphone, read_wav
+    from cyborg.hearing.audio import probe_microphone, wav_chunks
     from cyborg.hearing.module import HEARD_TOPIC, SpeechInput, SpeechInputSettings, cutter, recogniser_of
-    from cyborg.hearing.synth import as_heard
+    from cyborg.hearing.synth import as_heard_chunks
     from cyborg.navigation.database import NavigationDatabase
     from cyborg.run.datadir import default_data_dir
     from cyborg.transport.clock import RealClock
@@ -105,7 +106,8 @@ def listen(
                 click.echo(f"not sent: {exc}", err=True)
 
     # quiet noise around a recording, as a microphone hears it: digital silence is no speech the model knows
-    audio = as_heard(read_wav(wav), noise=10.0, pad=0.5) if wav is not None else None
+    # (read a chunk at a time: an hour's recording costs the memory of seconds)
+    audio = as_heard_chunks(wav_chunks(wav), noise=10.0, pad=0.5) if wav is not None else None
     clock = RealClock()
     transport = EmbeddedTransport(clock)
     settings = SpeechInputSettings(
@@ -130,7 +132,7 @@ def listen(
         raise
     transport.node("cyborg_listen_print").subscribe(HEARD_TOPIC, String, show)
 
-    async def hear_file(data: bytes) -> None:
+    async def hear_file(data: Iterable[bytes]) -> None:
         await ears.listen_to(data)
         await clock.sleep(0.05)
 

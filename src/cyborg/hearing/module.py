@@ -32,7 +32,7 @@ import json
 import logging
 import time
 from collections import deque
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Protocol
@@ -188,12 +188,13 @@ class SpeechInput:
         """The audio handed over so far is complete: decode what is still open."""
         self._queue.put_nowait(b"")
 
-    async def listen_to(self, audio: bytes, *, live: bool = False) -> list[Heard]:
+    async def listen_to(self, audio: bytes | Iterable[bytes], *, live: bool = False) -> list[Heard]:
         """Decode a recording and publish what it holds, as it goes; returns what was heard.
 
         It is cut a second at a time, and each utterance decoded as soon as its end is seen: an
         hour's recording prints its first sentence at once and costs time in proportion to its
-        length. ``live``: the audio comes a tenth of a second at a time, and while an early decode
+        length; ``audio`` may come in chunks (:func:`~cyborg.hearing.audio.wav_chunks`), so that only
+        a chunk of it is held at a time. ``live``: the audio comes a tenth of a second at a time, and while an early decode
         runs at the pace it was spoken, as from a microphone, so that the early decode has the time
         it would have live (the benchmark's latency).
         """
@@ -201,16 +202,16 @@ class SpeechInput:
         step, tenth = 2 * 16_000, 2 * 1_600  # bytes of a second and a tenth of 16 kHz 16-bit audio
         size = tenth if live else step
         at, paced_from = 0, None
-        while at < len(audio):
+        for piece in _pieces(audio, size):
             if live and self._early is not None:
                 paced_from = paced_from or (time.perf_counter(), at)
                 due = paced_from[0] + (at - paced_from[1]) / (2 * 16_000)
                 await asyncio.sleep(max(0.0, due - time.perf_counter()))
             else:
                 paced_from = None
-            found += [await self._heard(u) for u in list(self._utterances.feed(audio[at : at + size]))]
+            found += [await self._heard(u) for u in list(self._utterances.feed(piece))]
             self._start_early()
-            at += size
+            at += len(piece)
             await asyncio.sleep(0)  # the rest of the loop runs between pieces of audio
         found += [await self._heard(u) for u in list(self._utterances.finish())]
         return found
@@ -382,3 +383,10 @@ def _build(node: Node, settings: SpeechInputSettings, context: BuildContext) -> 
 
 
 KIND = ModuleKind(SpeechInputSettings, _build)
+
+
+def _pieces(audio: bytes | Iterable[bytes], size: int) -> Iterator[bytes]:
+    """``audio`` (whole, or in chunks as a long recording is read) in pieces of at most ``size`` bytes."""
+    for chunk in [audio] if isinstance(audio, bytes) else audio:
+        for at in range(0, len(chunk), size):
+            yield chunk[at : at + size]

@@ -9,6 +9,7 @@ from __future__ import annotations
 import shutil
 import subprocess
 import tempfile
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -17,7 +18,7 @@ import numpy as np
 from cyborg.hearing import HearingError
 from cyborg.hearing.audio import read_wav
 
-__all__ = ["VOICES", "Voice", "as_heard", "synthesise"]
+__all__ = ["VOICES", "Voice", "as_heard", "as_heard_chunks", "synthesise"]
 
 
 @dataclass(frozen=True)
@@ -81,3 +82,21 @@ def as_heard(audio: bytes | np.ndarray, *, noise: float = 30.0, pad: float = 0.3
     heard = np.concatenate([quiet, samples.astype(np.float32), quiet])
     heard += np.random.default_rng(seed).normal(0.0, noise, len(heard)).astype(np.float32)
     return bytes(np.clip(heard, -32768, 32767).astype("<i2").tobytes())
+
+
+def as_heard_chunks(
+    chunks: Iterable[bytes], *, noise: float = 30.0, pad: float = 0.3, seed: int = 0
+) -> Iterator[bytes]:
+    """:func:`as_heard` of a recording given in chunks (:func:`~cyborg.hearing.audio.wav_chunks`),
+    a chunk at a time: the quiet before, each chunk with its noise, the quiet after."""
+    rng = np.random.default_rng(seed)
+    quiet = np.zeros(int(pad * 16000), np.float32)
+
+    def noisy(samples: np.ndarray) -> bytes:
+        heard = samples.astype(np.float32) + rng.normal(0.0, noise, len(samples)).astype(np.float32)
+        return bytes(np.clip(heard, -32768, 32767).astype("<i2").tobytes())
+
+    yield noisy(quiet)
+    for chunk in chunks:
+        yield noisy(np.frombuffer(chunk, dtype="<i2"))
+    yield noisy(quiet)

@@ -53,7 +53,8 @@ straddle a deadline is let finish; a handover is late by about this much at most
 FIX = (
     "never block in a callback or goal (no time.sleep, synchronous requests, serial reads or long "
     "computations on the loop): await ctx.sleep(...), or run the blocking call with "
-    "await asyncio.to_thread(call, ...); see docs/modules.md, 'Blocking work'"
+    "await asyncio.to_thread(call, ...); a module that cannot help blocking gets a process of its own "
+    "under `cyborg launch`; see docs/modules.md, 'Blocking work'"
 )
 
 
