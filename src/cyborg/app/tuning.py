@@ -14,9 +14,7 @@ costs and parents) and frees them after. glibc handed those blocks back to the k
 so each search page-faulted them in afresh: ~4,700 faults and 11 ms of system time a route, a third
 of the planning time. :func:`freeze_built` also asks glibc (``mallopt``) to keep blocks under
 64 MB in its heap and to return freed memory only beyond 128 MB: the peak is the same, what the
-process holds between searches stays near it. A node that searches no route (every other node of a
-launch) instead hands what its start-up freed back to the kernel once it is built
-(:func:`release_freed`, glibc's ``malloc_trim``): its private memory is what it keeps.
+process holds between searches stays near it.
 """
 
 from __future__ import annotations
@@ -26,7 +24,7 @@ import gc
 import logging
 import sys
 
-__all__ = ["freeze_built", "keep_freed_blocks", "release_freed", "thaw"]
+__all__ = ["freeze_built", "keep_freed_blocks", "thaw"]
 
 log = logging.getLogger(__name__)
 
@@ -39,33 +37,11 @@ TRIM_THRESHOLD = 128 * 2**20
 _tuned = False
 
 
-def freeze_built(*, keep_freed: bool = True) -> None:
+def freeze_built() -> None:
     """Keep every object that exists now out of later garbage collections (call once the robot is
-    built), and let big freed blocks be reused (:func:`keep_freed_blocks`); with ``keep_freed``
-    False (a process that searches no route) hand what was freed back instead (:func:`release_freed`)."""
+    built), and let big freed blocks be reused (:func:`keep_freed_blocks`)."""
     gc.freeze()
-    if keep_freed:
-        keep_freed_blocks()
-    else:
-        release_freed()
-
-
-def _libc() -> ctypes.CDLL | None:
-    if not sys.platform.startswith("linux"):
-        return None
-    try:
-        return ctypes.CDLL(None)
-    except OSError:
-        return None
-
-
-def release_freed() -> None:
-    """Give the free memory in glibc's heaps back to the kernel (``malloc_trim``; nothing
-    elsewhere than Linux with glibc)."""
-    libc = _libc()
-    trim = getattr(libc, "malloc_trim", None)
-    if trim is not None:
-        trim(0)
+    keep_freed_blocks()
 
 
 def keep_freed_blocks() -> None:

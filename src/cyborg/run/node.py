@@ -223,9 +223,7 @@ async def serve_node(node: BuiltNode, options: NodeOptions) -> int:
         background.append(loop.create_task(counters, name="controller stats"))
     api = await _serve_api(node, options) if node.name == API else None
     recorder = _start_recorder(node, options) if node.name == RECORDER else None
-    # What the part built lives as long as the node: out of GC's way; only a route-searching base
-    # keeps freed blocks for the next search, the others give them back (app.tuning).
-    freeze_built(keep_freed=is_simulated_base(options.config, node.name))
+    freeze_built()  # what the part built lives as long as the node: out of GC's way (app.tuning)
     controller_task = controller.start() if controller is not None else None
     tasks = watch_tasks(node.clock)  # a module leaking tasks is named (cyborg.run.tasks)
     click.echo(f"node {node.name} running", err=True)
