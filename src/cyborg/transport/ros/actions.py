@@ -237,6 +237,9 @@ class _CountingActionServer(actionlib.ActionServer):  # type: ignore[misc]
 
     arrived: Callable[[str], None] | None = None
     delivered = False  # a goal or cancel callback of ours ran for the message being taken
+    ns: str  # (actionlib's, set in its __init__ and initialize)
+    status_frequency: float
+    status_timer: Any
 
     def initialize(self) -> None:
         """actionlib's set-up, with our status frequency unless a parameter on the master sets one."""

@@ -30,6 +30,7 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
+from rclpy.action import ActionClient
 from rclpy.context import Context
 from rclpy.executors import (
     ConditionReachedException,
@@ -38,7 +39,6 @@ from rclpy.executors import (
     ShutdownException,
     TimeoutException,
 )
-from rclpy.action import ActionClient
 from rclpy.subscription import Subscription
 from rclpy.task import Task
 
