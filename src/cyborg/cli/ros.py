@@ -276,14 +276,17 @@ def launch_command(
     from cyborg.run.datadir import default_data_dir
     from cyborg.run.middleware import ROS1
     from cyborg.run.roslaunch import all_parts, roslaunch_xml, with_recorder
-    from cyborg.run.supervisor import Launch, launch
+    from cyborg.run.supervisor import Launch, launch, start_zygote
 
     parsed = parse_speed(speed)
     lockstep = parsed is None
     factor = None if parsed is None or parsed == "real" else float(parsed)
     start = parse_start(start_at)
 
+    zygote = None
     try:
+        if fork and write_path is None:  # it imports what the nodes import while this validates the file
+            zygote = start_zygote(middleware)
         config = load_or_default(config_path)
         _check_modules_apart(config)
         path = Path(config.source).resolve()
@@ -321,10 +324,15 @@ def launch_command(
             extra_args=extra,
             hosts=_shared_processes(processes, middleware, config, parts),
             fork=fork,
+            zygote=zygote,
         )
+        zygote = None  # the launch's now: it ends it
         launch(robot, duration=duration)
     except CyborgError as exc:
         fail(exc)
+    finally:
+        if zygote is not None:  # the launch never started
+            zygote.close(at_once=True)
 
 
 def _check_modules_apart(config: LoadedConfig) -> None:

@@ -47,7 +47,7 @@ from cyborg.run.simtime import EPOCH_MARGIN, READY_TIMEOUT, Rendezvous, check_vi
 from cyborg.run.zygote import ForkedNode, Zygote
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, NS
 
-__all__ = ["THIN_KINDS", "Launch", "launch", "shared_process"]
+__all__ = ["THIN_KINDS", "Launch", "launch", "shared_process", "start_zygote"]
 
 RESPAWN_DELAY = 1.0  # seconds before a stopped node is started again
 RESPAWN_STEADY = 10.0  # a node that ran this long before it stopped is started again after RESPAWN_DELAY
@@ -56,6 +56,11 @@ REFUSAL_GRACE = 5.0  # seconds a refused node's launch waits for the controller'
 THIN_KINDS = frozenset({"conversation", "event_script", "idle", "music", "placeholder", "question", "tts"})
 """Built-in module kinds that only wait, talk and publish: they may share one process. Other kinds
 (the navigation, the simulated base, speech input, every plug-in's) keep a process of their own."""
+
+
+def start_zygote(middleware: Middleware, *, echo: bool = True) -> Zygote:
+    """A zygote for ``middleware``'s nodes (:mod:`cyborg.run.zygote`), importing from now on."""
+    return Zygote(middleware.python(), middleware.environment(), middleware.preload, echo=echo)
 
 
 def shared_process(config: LoadedConfig, parts: Sequence[str]) -> dict[str, list[str]]:
@@ -103,7 +108,8 @@ class Launch:
     """A process's node name -> the parts it hosts beside its own (each its own node; ROS 2 only)."""
     fork: bool = True
     """Fork the node processes from a zygote that imported what they all import (:mod:`cyborg.run.zygote`)."""
-    _zygote: Zygote | None = None
+    zygote: Zygote | None = None
+    """A zygote started already (:func:`start_zygote`); with ``fork`` and none, the launch starts one."""
     _graph: LaunchGraph | None = None
     _rendezvous: Rendezvous | None = None
     _epoch_argument: str | None = None
@@ -185,13 +191,8 @@ class Launch:
             )  # /clock first: the others wait for it
         if self.lockstep:
             self._time_server = TimeServer(set(self.parts), always={self._clock_owner or ""}).start()
-        if self.fork:
-            self._zygote = Zygote(
-                self.middleware.python(),
-                self.middleware.environment(),
-                self.middleware.preload,
-                echo=self.echo,
-            )
+        if self.fork and self.zygote is None:
+            self.zygote = start_zygote(self.middleware, echo=self.echo)
         for name in self.parts:
             self._spawn(name, fresh=True)
         nodes = len(self.processes) + sum(len(self.hosts.get(name, [])) for name in self.processes)
@@ -238,8 +239,8 @@ class Launch:
     def _spawn(self, name: str, *, fresh: bool) -> subprocess.Popen[bytes] | ForkedNode:
         command = self.command(name, self._clock_owner, fresh=fresh)
         process: subprocess.Popen[bytes] | ForkedNode
-        if self._zygote is not None and self._zygote.alive:
-            process = self._zygote.spawn(command[3:])  # what follows `python -m cyborg.cli`
+        if self.zygote is not None and self.zygote.alive:
+            process = self.zygote.spawn(command[3:])  # what follows `python -m cyborg.cli`
         else:
             process = subprocess.Popen(
                 command, stdout=None if self.echo else subprocess.DEVNULL, env=self.middleware.environment()
@@ -336,9 +337,9 @@ class Launch:
                     process.kill()
                     process.wait(timeout=5)
         finally:
-            if self._zygote is not None:
-                self._zygote.close()
-                self._zygote = None
+            if self.zygote is not None:
+                self.zygote.close()
+                self.zygote = None
             if self._time_server is not None:
                 server = self._time_server
                 server.close()

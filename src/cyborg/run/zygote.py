@@ -54,6 +54,7 @@ _COMMON = (
     "cyborg.app.parts",
     "cyborg.app.registry",
     "cyborg.app.sketch",
+    "cyborg.app.config",  # the whole configuration's models: the controller, API, recorder, navigation, base
     "cyborg.configfile",
     "cyborg.modules",
     "cyborg.modules.gatekeeper",
@@ -185,13 +186,13 @@ class Zygote:
                     node = self._nodes.setdefault(pid, ForkedNode(pid, self))
                     node._exited(int(message["code"]))
 
-    def close(self) -> None:
-        """End the zygote (its nodes are stopped already)."""
+    def close(self, *, at_once: bool = False) -> None:
+        """End the zygote (its nodes are stopped already); ``at_once``: kill it (it forked none)."""
         if self._process.stdin is not None:
             with contextlib.suppress(OSError):
                 self._process.stdin.close()
         try:
-            self._process.wait(timeout=5)
+            self._process.wait(timeout=0 if at_once else 5)
         except subprocess.TimeoutExpired:
             self._process.kill()
             self._process.wait(timeout=5)

@@ -5,6 +5,14 @@ side keeps each goal in the shared :class:`~cyborg.transport._goals.ClientGoal`,
 actionlib's transition and feedback callbacks (rospy threads) on the clock's event loop. A
 server that stops reporting its status is gone: its goals end LOST (actionlib alone would wait
 forever).
+
+Our servers report their status once a second (STATUS_FREQUENCY) instead of actionlib's 5 Hz: ten
+idle modules sent the controller 50 status messages a second, each woke a thread at both ends.
+The status is latched and also sent at every change of a goal, so a client still learns at once
+of a new server and of every transition; only a server that hangs (alive, silent) is noticed later
+(SERVER_SILENCE_LIMIT). actionlib's own parameter ``actionlib_status_frequency`` (or the
+deprecated ``<action>/status_frequency``), when set on the master, wins as it does for any
+actionlib server.
 """
 
 from __future__ import annotations
@@ -18,6 +26,7 @@ from collections.abc import Awaitable, Callable
 from typing import Any
 
 import actionlib  # type: ignore[import-not-found]
+import rospy  # type: ignore[import-not-found]
 
 from cyborg.transport._goals import ClientGoal
 from cyborg.transport._host import LOCKSTEP_FIND_LIMIT, Host, poll_real
@@ -40,6 +49,7 @@ __all__ = [
     "ORDER_EXECUTE",
     "ORDER_FIELD",
     "SERVER_SILENCE_LIMIT",
+    "STATUS_FREQUENCY",
     "WATCHDOG_PERIOD",
     "RosActionClient",
     "RosActionServer",
@@ -48,7 +58,12 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-SERVER_SILENCE_LIMIT = 1.0  # seconds without a status message before an action server counts as gone
+STATUS_FREQUENCY = 1.0
+"""Status messages a second from our action servers while nothing changes (actionlib's default: 5)."""
+ACTIONLIB_STATUS_FREQUENCY = 5.0  # actionlib's default, used when no parameter sets it
+SERVER_SILENCE_LIMIT = 3.0
+"""Seconds without a status message before an action server counts as gone (three of our status
+periods; a server that dies is seen sooner: its connections close)."""
 LOCKSTEP_SILENCE_LIMIT = 5.0
 """Real seconds of silence in lockstep time: the server's status timer thread runs only when the
 machine gives it the CPU, and the granted time may race ahead meanwhile (3 CPU hogs beside a
@@ -222,6 +237,19 @@ class _CountingActionServer(actionlib.ActionServer):  # type: ignore[misc]
 
     arrived: Callable[[str], None] | None = None
     delivered = False  # a goal or cancel callback of ours ran for the message being taken
+    ns: str  # (actionlib's, set in its __init__ and initialize)
+    status_frequency: float
+    status_timer: Any
+
+    def initialize(self) -> None:
+        """actionlib's set-up, with our status frequency unless a parameter on the master sets one."""
+        super().initialize()
+        if self.status_frequency != ACTIONLIB_STATUS_FREQUENCY or _frequency_parameter_set(self.ns):
+            return
+        if self.status_timer is not None:
+            self.status_timer.shutdown()
+        self.status_frequency = STATUS_FREQUENCY
+        self.status_timer = rospy.Timer(rospy.Duration(1.0 / STATUS_FREQUENCY), self.publish_status_async)
 
     def internal_goal_callback(self, goal: Any) -> None:
         self.delivered = False
@@ -238,6 +266,18 @@ class _CountingActionServer(actionlib.ActionServer):  # type: ignore[misc]
         finally:
             if self.arrived is not None and not self.delivered:
                 self.arrived("cancel")
+
+
+def _frequency_parameter_set(namespace: str) -> bool:
+    """Whether the master holds a status frequency for the server at ``namespace`` (actionlib's
+    parameters; a master that does not answer holds none we could read)."""
+    try:
+        return bool(
+            rospy.has_param(rospy.remap_name(namespace) + "/status_frequency")
+            or rospy.search_param("actionlib_status_frequency") is not None
+        )
+    except UNREACHABLE:
+        return False
 
 
 def _nothing() -> None:

@@ -15,7 +15,10 @@ late, now and then):
   each time (seen: 900 copies of one task, scanned at every turn).
 
 :class:`HandOffExecutor` queues a task once, and after handing a ready entity to the pool
-waits (the GIL released) until a pool thread has begun it before it waits for new work. Nothing
+waits (the GIL released) until a pool thread has begun it before it waits for new work. A
+subscription's message and an action client's answers are taken on the executor's own thread
+instead (our callbacks for them only convert what came and hand it to the event loop): no pool
+thread, no hand-over. Nothing
 is lost by waiting: the pool begins its tasks in order, so no later task could run sooner, and
 our callbacks that hold a pool thread (an action server's goal decision and execution, a
 service request) wait for the event loop, never for this executor. A shutdown ends the wait.
@@ -27,6 +30,7 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
+from rclpy.action import ActionClient
 from rclpy.context import Context
 from rclpy.executors import (
     ConditionReachedException,
@@ -35,11 +39,15 @@ from rclpy.executors import (
     ShutdownException,
     TimeoutException,
 )
+from rclpy.subscription import Subscription
 from rclpy.task import Task
 
 __all__ = ["HandOffExecutor"]
 
 SHUTDOWN_CHECK = 0.1  # seconds between looks at a shutdown while a hand-off is waited for
+
+_QUICK = (Subscription, ActionClient)
+"""Entities whose callbacks (ours) only take what came and hand it to the event loop."""
 
 _IDLE = (ConditionReachedException, ExternalShutdownException, ShutdownException, TimeoutException)
 
@@ -63,6 +71,15 @@ class HandOffExecutor(MultiThreadedExecutor):  # type: ignore[misc]
         try:
             task, entity, _ = self.wait_for_ready_callbacks(timeout_sec, None, wait_condition)
         except _IDLE:
+            return
+        if isinstance(entity, _QUICK) and not task.executing():
+            # A message to a topic, or an action client's answer, feedback or result: taking it and
+            # handing it to the event loop is quick, so it runs here; a thread of the pool would
+            # cost two thread switches a message (most of the CPU of a node that hears 10 poses a
+            # second). An action server's or a service's callback may wait for the loop: the pool.
+            task()
+            if task.done():
+                task.result()  # raise what the callback raised, as rclpy's executor does
             return
         with self._begun:
             if task in self._queued:
