@@ -291,7 +291,10 @@ class Launch:
         for name in failed:
             self._check_refused(name, self.processes[name])
         if failed:
-            raise CyborgError(f"node(s) stopped: {', '.join(failed)}; the whole robot is stopped too")
+            stopped = ", ".join(
+                f"{name} ({exit_description(self.processes[name].returncode)})" for name in failed
+            )
+            raise CyborgError(f"node(s) stopped: {stopped}; the whole robot is stopped too")
 
     def _check_refused(self, name: str, process: subprocess.Popen[bytes] | ForkedNode) -> None:
         """Raise a :class:`CyborgError` when node ``name`` refused to start: its name is taken."""
