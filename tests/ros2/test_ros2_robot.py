@@ -187,7 +187,7 @@ def _wait_state(api: str, state: str) -> None:
 
 
 def test_ros2_command_tool_and_api_drive_a_launched_robot(
-    launched: tuple[subprocess.Popen[str], int], own_session: Ros2Session
+    launched: tuple[subprocess.Popen[str], int], own_session: Ros2Session, tmp_path: Path
 ) -> None:
     process, port = launched
     api = f"http://127.0.0.1:{port}"
@@ -273,3 +273,16 @@ def test_ros2_command_tool_and_api_drive_a_launched_robot(
         "cyborg_test_idle (with cyborg_test_worker), cyborg_api" in output  # ROS 2: thin parts share one
     )
     assert "stopping" in output and "Traceback" not in output, output[-3000:]
+
+    # Every node's lines are where the launch says: NODE.log; the worker shares the idle module's
+    # process, so its NODE.log leads to that process's file.
+    logs = tmp_path / "log"
+    assert (
+        f"every log line is in {logs}/NODE.log; cyborg_test_idle's process also runs cyborg_test_worker: "
+        "their lines are in cyborg_test_idle.log, which their NODE.log links to" in output
+    ), output[:3000]
+    nodes = ("cyborg_controller", "cyborg_recorder", "cyborg_test_idle", "cyborg_test_worker", "cyborg_api")
+    missing = [name for name in nodes if not (logs / f"{name}.log").is_file()]
+    assert not missing, f"no log file for {missing} in {sorted(p.name for p in logs.iterdir())}"
+    assert (logs / "cyborg_test_worker.log").resolve() == (logs / "cyborg_test_idle.log").resolve()
+    assert "the emotion system starts neutral" in (logs / "cyborg_controller.log").read_text()

@@ -187,3 +187,49 @@ def test_a_channel_the_ledger_ignores_is_no_step_of_the_run() -> None:
     changes = ledger.take_changes()
     assert changes is not None
     assert changes["recv"] == {"/state_change": 1} and set(changes["listen"]) == {"/state_change"}
+
+
+class _RacedLoopClock(LockstepClock):
+    """A node's clock whose event loop a middleware thread (a message arriving) and the thread that
+    builds the node's parts (a timer) ask for at once: the first asker makes it slowly."""
+
+    def __init__(self, address: str) -> None:
+        super().__init__(address)
+        self.arrival_making_loop = threading.Event()
+        self.timer_set = threading.Event()
+
+    def _make_loop(self) -> asyncio.AbstractEventLoop:
+        if threading.current_thread().name == "arrival":
+            self.arrival_making_loop.set()
+            self.timer_set.wait(0.3)  # (never set when the loop is made once: then it waits 0.3 s)
+        return super()._make_loop()
+
+
+def test_a_timer_set_while_a_message_arrives_on_another_thread_is_kept() -> None:
+    """Scenario D over ROS 2 once had a motivator that never decided: its periodic timer was set on
+    an event loop that a message arriving on an executor thread, at the same moment, replaced with
+    a loop of its own. The node's clock makes one loop, whoever asks first."""
+    server = TimeServer({"a"}, patience=30.0).start()
+    clock = _RacedLoopClock(server.address)
+    fired: list[float] = []
+    try:
+        arrival = threading.Thread(
+            target=clock.deliver, args=("/chat", "b", None), name="arrival", daemon=True
+        )
+        arrival.start()
+        assert clock.arrival_making_loop.wait(10)
+
+        def set_timer() -> None:
+            clock.call_later(0.5, lambda: fired.append(clock.monotonic()))
+            clock.timer_set.set()
+
+        builder = threading.Thread(target=set_timer, name="builder", daemon=True)
+        builder.start()
+        arrival.join(10)
+        builder.join(10)
+        clock.join("a")
+        clock.run(clock.sleep(1.0))
+    finally:
+        clock.close()
+        server.close()
+    assert fired == pytest.approx([0.5], abs=1e-9)

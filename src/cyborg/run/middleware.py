@@ -275,7 +275,7 @@ class Ros2(Middleware):
         from cyborg.transport.ros2 import Ros2Transport
         from cyborg.transport.ros2.transport import PARAM_HOME
 
-        log_to_file(self.log_file(node_name), node_name)
+        log_to_file(self.log_file(node_name), node_name, hosted=[self.log_file(name) for name in also])
         transport = Ros2Transport(clock, use_sim_time=use_sim_time)
         wanted = {node_name, *also}
         if node_name == CONTROLLER_NODE:

@@ -204,14 +204,23 @@ class Launch:
                 for name in self.parts
             )
         )
-        self.say(
-            f"their warnings and errors show here, prefixed [node]; every log line is in "
-            f"{self.middleware.log_file('NODE').parent}/NODE.log"
-        )
+        self.say(self._where_logs_go())
         if self.speed is not None:
             self._start_virtual_time()
         elif self.lockstep:
             self.say(f"virtual time: {self.start.isoformat()}, in lockstep (as fast as every node allows)")
+
+    def _where_logs_go(self) -> str:
+        """Where the nodes' lines go: NODE.log each; a shared process's nodes write its first node's."""
+        folder = self.middleware.log_file("NODE").parent
+        told = f"their warnings and errors show here, prefixed [node]; every log line is in {folder}/NODE.log"
+        shared = [(name, hosted) for name, hosted in self.hosts.items() if hosted and name in self.processes]
+        for name, hosted in shared:  # one file per process: Python's logging cannot tell its nodes apart
+            told += (
+                f"; {name}'s process also runs {', '.join(hosted)}: their lines are in {name}.log, "
+                f"which their NODE.log links to (their warnings show prefixed [{name}])"
+            )
+        return told
 
     def _start_virtual_time(self) -> None:
         assert self._rendezvous is not None and self._graph is not None
@@ -283,7 +292,10 @@ class Launch:
         for name in failed:
             self._check_refused(name, self.processes[name])
         if failed:
-            raise CyborgError(f"node(s) stopped: {', '.join(failed)}; the whole robot is stopped too")
+            stopped = ", ".join(
+                f"{name} ({exit_description(self.processes[name].returncode)})" for name in failed
+            )
+            raise CyborgError(f"node(s) stopped: {stopped}; the whole robot is stopped too")
 
     def _check_refused(self, name: str, process: subprocess.Popen[bytes] | ForkedNode) -> None:
         """Raise a :class:`CyborgError` when node ``name`` refused to start: its name is taken."""

@@ -46,13 +46,21 @@ class Clock(ABC):
 
     def __init__(self) -> None:
         self._loop: asyncio.AbstractEventLoop | None = None
+        self._making_loop = threading.Lock()
         self._on_close: list[Callable[[], object]] = []
 
     @property
     def loop(self) -> asyncio.AbstractEventLoop:
-        if self._loop is None:
-            self._loop = self._make_loop()
-        return self._loop
+        """The loop everything of this clock runs on, made by whoever asks first. Over ROS a
+        message may arrive on a middleware thread while the node's parts are being built: both ask
+        at once, and a second loop would replace the first with the timers already set on it."""
+        loop = self._loop
+        if loop is None:
+            with self._making_loop:
+                if self._loop is None:
+                    self._loop = self._make_loop()
+                loop = self._loop
+        return loop
 
     @abstractmethod
     def _make_loop(self) -> asyncio.AbstractEventLoop: ...
