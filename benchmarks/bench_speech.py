@@ -21,9 +21,12 @@ its final run. ``--sets tuning,new`` keeps the others held out while
 choosing; ``--settings window=10,beam=1`` tries other speech_input settings; ``--text`` scores the
 understanding of the sentences' own text. Each in-scope sentence is labelled with what the robot should do (event and
 place); it counts when some text is published and the robot's understanding of each gives that
-event and place ("yep, show me" may come as two utterances, both yes). Out-of-scope sentences count when nothing is published. A misdirection is
-a published text that sends the robot (or a person) to a place other than the one said, without
-asking first. Latency: from the end-pointer closing an utterance to its text on the topic; the
+event and place ("yep, show me" may come as two utterances, both yes). A request whose place the
+ears doubt goes to ``/cyborg_speech/unsure`` instead of ``/text_from_speech``: the robot asks "Did
+you mean the <place>?" first; it counts as published, not certain (intended when the place is the
+one said). Out-of-scope sentences count when nothing is published (asking about them is not
+rejecting them). A misdirection is a published text that sends the robot (or a person) to a place
+other than the one said, without asking first. Latency: from the end-pointer closing an utterance to its text on the topic; the
 audio is handed over faster than it was spoken, except while an early decode runs (from a tenth
 of a second into a pause), when it comes at the pace it was spoken, as from a microphone.
 Targets on every set: >= 95 % intended at the quiet noise level and >= 90 % at the loud one,
@@ -609,8 +612,12 @@ def child(engine: str, cache: Path, out: Path, options: dict[str, str]) -> None:
     )
     load_seconds = time.perf_counter() - started
     published: list[str] = []
+    unsure: list[str] = []  # texts the ears doubted the place of: the robot asks "Did you mean ...?"
     transport.node("listener").subscribe(
         topics.TEXT_FROM_SPEECH, String, lambda m, i: published.append(m.data)
+    )
+    transport.node("listener").subscribe(
+        topics.SPEECH_UNSURE, String, lambda m, i: unsure.append(json.loads(m.data)["text"])
     )
     understanding = recogniser.understanding if recogniser_name == "whisper" else None  # type: ignore[attr-defined]
     if understanding is None:
@@ -628,20 +635,23 @@ def child(engine: str, cache: Path, out: Path, options: dict[str, str]) -> None:
                 floors.append(floor_work() * 1000)
                 loads.append(os.getloadavg()[0])
             published.clear()
+            unsure.clear()
             before, cpu = len(ears.latencies), time.process_time()
             heard = await ears.listen_to(u["audio"], live=live)
             cpu = time.process_time() - cpu
             await clock.sleep(0)
             understood = [understanding.of(text) for text in published]
+            doubted = [understanding.of(text) for text in unsure]  # asked about first, never certain
             results.append(
                 {
                     **{k: v for k, v in u.items() if k != "audio"},
-                    "published": list(published),
+                    "published": [*published, *unsure],
+                    "unsure": list(unsure),
                     "did": [
                         f"{x.event}:{x.place}" if x and x.place else (x.event if x else None)
-                        for x in understood
+                        for x in understood + doubted
                     ],
-                    "certain": [bool(x and x.certain) for x in understood],
+                    "certain": [bool(x and x.certain) for x in understood] + [False] * len(doubted),
                     "heard": [f"{h.raw or '-'} ({h.reason or 'accepted'})" for h in heard],
                     "latencies": [s * 1000 for s in list(ears.latencies)[before:]],
                     "decode": [h.seconds * 1000 for h in heard],
@@ -750,6 +760,7 @@ def score(results: list[dict[str, object]]) -> dict[str, dict[str, float]]:
             "out": share(outside, lambda r: not r["published"]),
             "misdirections": sum(1 for r in chosen if misdirected(r)),
             "asked": sum(1 for r in chosen if not all(r["certain"])),  # type: ignore[arg-type]
+            "doubted": sum(1 for r in chosen if r.get("unsure")),
             "n_in": len(inside),
             "n_out": len(outside),
         }
@@ -916,7 +927,7 @@ def main() -> None:
             reports.append(run_engine(engine, cache, folder, args, loads))
     print(f"load average (1 min) during the run: {min(loads):.1f}-{max(loads):.1f}")
     print(
-        "engine | set | intended % (quiet / loud) | rejected % | misdirections | asked first | "
+        "engine | set | intended % (quiet / loud) | rejected % | misdirections | asked first (of them for the ears' doubt) | "
         "latency p50 / p95 ms (floor: fixed work's p50 / p95 ms, same run) | CPU ms per utterance | "
         "peak RSS MB | load s | load average in the run (min / median / max)"
     )
@@ -929,7 +940,7 @@ def main() -> None:
             print(
                 f"{report['engine']} | {name} ({row['n_in']:.0f} + {row['n_out']:.0f}) | {row['in']:.1f} "
                 f"({row['quiet']:.1f} / {row['loud']:.1f}) | {row['out']:.1f} | {row['misdirections']:.0f} | "
-                f"{row['asked']:.0f} | "
+                f"{row['asked']:.0f} ({row['doubted']:.0f}) | "
                 + (
                     f"{percentile(latencies, 50):.0f} / {percentile(latencies, 95):.0f} "
                     f"(floor {percentile(report['floors'], 50):.0f} / {percentile(report['floors'], 95):.0f}) | "

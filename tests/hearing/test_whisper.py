@@ -4,6 +4,7 @@ pocketsphinx; nothing imports av (FFmpeg with GPL codecs) or downloads anything.
 
 from __future__ import annotations
 
+import json
 import logging
 import subprocess
 import sys
@@ -214,3 +215,55 @@ def test_the_prompt_can_also_hold_the_other_phrasings_within_whispers_budget(lis
     places_last = "Where is the canteen? Go to the cafeteria. What do you think of the elevator?"
     assert plain.endswith(places_last) and varied.endswith(places_last)  # the places are kept
     assert round(1.4 * len(varied.split())) <= 223  # Whisper keeps no more of its prompt
+
+
+def test_a_place_whisper_found_unlikely_is_in_doubt_whatever_the_words_around_it(
+    listening: Listening,
+) -> None:
+    ears = WhisperRecogniser.__new__(WhisperRecogniser)
+    ears.understanding = Understanding(
+        [("entrance", []), ("el6", ["e16"])], listening.phrases, listening.place_phrases
+    )
+    sure = [(" Where", 0.9), (" is", 0.95), (" the", 0.2), (" entrance", 0.97), ("?", 0.1)]
+    assert ears.place_odds("where is the entrance", sure) == 0.97  # "the" and "?" are no place
+    gym = [(" Where", 0.9), (" is", 0.95), (" the", 0.9), (" entrance", 0.31), ("?", 0.9)]
+    assert ears.place_odds("where is the entrance", gym) == 0.31
+    six = [(" Where", 0.9), (" is", 0.9), (" el", 0.95), ("6", 0.4), (".", 0.9)]
+    assert ears.place_odds("where is el6", six) == 0.4  # el5 or el6: the digit decides
+    assert ears.place_odds("hello there", [(" Hello", 0.2), (" there", 0.1)]) == 1.0  # no place
+
+
+def test_a_doubted_place_goes_to_the_unsure_topic_and_never_to_the_text(
+    listening: Listening, tmp_path: Path
+) -> None:
+    doubting = WhisperRecogniser(beam=1, place_doubt=1.01)  # every place in doubt
+    clock = RealClock()
+    transport = EmbeddedTransport(clock)
+    text: list[str] = []
+    unsure: list[dict[str, object]] = []
+    listener = transport.node("listener")
+    listener.subscribe(topics.TEXT_FROM_SPEECH, String, lambda m, i: text.append(m.data))
+    listener.subscribe(topics.SPEECH_UNSURE, String, lambda m, i: unsure.append(json.loads(m.data)))
+    ears = SpeechInput(
+        transport.node("ears"),
+        NavigationDatabase(tmp_path / "navigation.db"),
+        recogniser=doubting,
+        listening=listening,
+        utterances=SileroUtterances(),
+    )
+    quiet = bytes(2 * 16_000)
+
+    async def main() -> None:
+        for said in ("where is the elevator", "yes"):
+            await ears.listen_to(quiet + synthesise(said, VOICES[3]) + quiet)
+        await clock.sleep(0)
+
+    try:
+        clock.run(main())
+    finally:
+        ears.close()
+        clock.close()
+    assert text == ["yes"]  # an answer names no place: believed
+    [doubt] = unsure
+    assert doubt["text"] == "where is the elevator" and doubt["place"] == "elevator"
+    assert str(doubt["reason"]).startswith("unsure of the place: elevator")

@@ -2,16 +2,21 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from cyborg.errors import ConfigError
 from cyborg.navigation.keywords import (
+    PHRASINGS_FILE,
     Intent,
     LocationMatcher,
     detect,
     detect_answer,
     detect_navigation,
+    load_phrasings,
     normalise,
 )
 
@@ -304,3 +309,25 @@ def test_a_number_heard_as_a_word_is_not_certain_even_before_polite_words() -> N
         assert found is not None and found.location == "entrance 2" and not found.certain, text
     plain = detect_navigation("go to the entrance please", MATCHER)
     assert plain is not None and plain.location == "entrance" and plain.certain
+
+
+def test_the_phrasings_are_content_and_a_broken_file_names_the_entry_and_the_fix(tmp_path: Path) -> None:
+    shipped = PHRASINGS_FILE.read_text(encoding="utf-8")
+    added = tmp_path / "phrasings.yaml"
+    added.write_text(
+        shipped.replace("    - go to\n", "    - go to\n    - zoom over to\n", 1), encoding="utf-8"
+    )
+    assert "zoom over to" in load_phrasings(added).requests[CMD]
+    broken = tmp_path / "broken.yaml"
+    broken.write_text(
+        shipped.replace("    - go to\n", "    - Go to!\n", 1).replace(
+            "requests:\n", "requests:\n  navigation_dance: [x]\n", 1
+        ),
+        encoding="utf-8",
+    )
+    with pytest.raises(ConfigError) as raised:
+        load_phrasings(broken)
+    message = str(raised.value)
+    assert "requests.navigation_dance: no such request; fix: use one of navigation_command" in message
+    assert "'Go to!' is not as the robot reads speech; fix: write 'go to'" in message
+    assert "plain: 'go to' is no request or answer of the file" in message  # it was renamed above

@@ -58,6 +58,9 @@ class Heard:
     """How long decoding took."""
     reason: str = ""
     """Why it was rejected ("" when accepted)."""
+    ask: str | None = None
+    """The place a request named when the ears are unsure of it (the text is then not accepted):
+    a module may ask "Did you mean the <place>?" (``/cyborg_speech/unsure``)."""
 
     def as_json(self) -> dict[str, object]:
         """The record the dashboard shows."""
@@ -66,6 +69,16 @@ class Heard:
             "confidence": round(self.confidence, 3),
             "accepted": self.accepted,
             "raw": self.raw,
+            "reason": self.reason,
+            "ask": self.ask,
+        }
+
+    def unsure_json(self) -> dict[str, object]:
+        """The message of ``/cyborg_speech/unsure`` (only for a text with a place to ask about)."""
+        return {
+            "text": self.text,
+            "place": self.ask,
+            "confidence": round(self.confidence, 3),
             "reason": self.reason,
         }
 

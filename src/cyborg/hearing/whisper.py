@@ -16,7 +16,10 @@ would act on it.
 Never a wrong place: the beam search's other hypotheses come for free, and a transcript that
 names a place is believed only when every hypothesis nearly as likely (:data:`DOUBT_MARGIN`) names
 the same place, however it words the rest ("where is the gym", heard as "where is the entrance"
-and, nearly as likely, "where is the june", is not passed on: the person is heard again).
+and, nearly as likely, "where is the june", is not passed on as text), nor a place whose words
+Whisper itself found unlikely (:data:`PLACE_ODDS`: the least likely token of the place). Such a
+request goes to ``/cyborg_speech/unsure`` with its place, and the navigation module asks "Did you
+mean the entrance?" before it acts (``Heard.ask``).
 """
 
 from __future__ import annotations
@@ -38,13 +41,14 @@ from cyborg.hearing.grammar import ALWAYS_HEARD, Grammar
 from cyborg.hearing.recogniser import SAMPLE_RATE, Heard
 from cyborg.hearing.understanding import Understanding, Understood
 from cyborg.modules.conversation import is_greeting
-from cyborg.navigation.keywords import CUE_STOP_WORDS, detect_answer
+from cyborg.navigation.keywords import CUE_STOP_WORDS, detect_answer, normalise
 
 __all__ = [
     "DEFAULT_BEAM",
     "DEFAULT_THREADS",
     "DEFAULT_WINDOW",
     "DOUBT_MARGIN",
+    "PLACE_ODDS",
     "WhisperRecogniser",
     "collapse_repeats",
     "default_model_path",
@@ -60,12 +64,17 @@ DEFAULT_WINDOW = 10.0
 """Seconds of audio the encoder reads; shorter utterances are padded to it, longer ones cut."""
 MAX_TOKENS = 40
 """A command is a few words; a cap keeps a looping decode from running on."""
+PLACE_ODDS = 0.5
+"""A place whose least likely token Whisper gave less than this probability is in doubt: asked about
+(chosen on the development sets' decodes: docs/benchmarks-history.md, issue 34's fourth round)."""
 DOUBT_MARGIN = 2.0
 """Natural-log units of a whole transcript's probability: a hypothesis within this of the best that
 names another place (or none) makes the place doubtful (e^2: about 7 times less likely)."""
 PROMPT_TOKENS = 223
 """Whisper keeps at most this many tokens of previous text (half its text context, minus one)."""
 FRAMES_PER_SECOND = 100
+Token = tuple[str, float]
+"""A token of a transcript and the probability Whisper gave it."""
 
 NO_MODEL = (
     "the Whisper model is not installed ({detail}); fix: run scripts/setup (it installs "
@@ -232,8 +241,11 @@ class WhisperRecogniser:
         phrasings: bool = False,
         min_confidence: float = 0.0,
         understanding: Callable[[Grammar], Understanding] | None = None,
+        place_doubt: float = PLACE_ODDS,
     ) -> None:
         self.model_path = model or default_model_path()
+        self.place_doubt = place_doubt
+        """A place whose least likely token had a lower probability is asked about (:data:`PLACE_ODDS`)."""
         self.beam = beam
         self.window = window
         self.extra_prompt = prompt
@@ -307,6 +319,10 @@ class WhisperRecogniser:
     def hypotheses(self, audio: bytes) -> list[tuple[str, float, float]]:
         """The beam's transcripts of one utterance, best first: text, confidence (the mean token
         probability, 0-1) and the whole transcript's log probability."""
+        return self._beam(audio, token_odds=False)[0]
+
+    def _beam(self, audio: bytes, *, token_odds: bool) -> tuple[list[tuple[str, float, float]], list[Token]]:
+        """:meth:`hypotheses`, and with ``token_odds`` the best hypothesis's tokens (text, probability)."""
         import ctranslate2
 
         samples = np.frombuffer(audio, dtype="<i2").astype(np.float32) / 32768.0
@@ -324,13 +340,22 @@ class WhisperRecogniser:
             num_hypotheses=self.beam,
             max_length=len(prompt) + MAX_TOKENS,  # CTranslate2 counts the prompt in
             return_scores=True,
+            return_logits_vocab=token_odds,
             suppress_blank=True,
         )
         found = [
             (self._tokenizer.decode(ids), float(np.exp(min(0.0, score))), score * (len(ids) + 1))
             for ids, score in zip(result.sequences_ids, result.scores, strict=False)
         ]  # a score is the mean log probability of the tokens and the end
-        return found or [("", float(np.exp(-10.0)), -100.0)]
+        tokens: list[Token] = []
+        if token_odds and result.sequences_ids:
+            ids = result.sequences_ids[0]
+            for step, token in zip(result.logits[0], ids, strict=False):
+                logits = np.asarray(step, dtype=np.float64).reshape(-1)
+                top = logits.max()
+                odds = float(np.exp(logits[token] - top) / np.exp(logits - top).sum())
+                tokens.append((self._tokenizer.decode([token]), odds))
+        return found or [("", float(np.exp(-10.0)), -100.0)], tokens
 
     def decode(self, audio: bytes) -> Heard:
         """Decode one utterance (16-bit little-endian mono samples at :data:`SAMPLE_RATE`)."""
@@ -338,23 +363,47 @@ class WhisperRecogniser:
         if understanding is None:
             raise HearingError("the recogniser has no grammar yet; fix: call use(grammar) first")
         started = time.perf_counter()
-        [(raw, confidence, likelihood), *others] = self.hypotheses(audio)
+        [(raw, confidence, likelihood), *others], tokens = self._beam(audio, token_odds=True)
         text = clean(raw)
         understood = understanding.of(text) if text else None
+        ask = None
         if not text:
             reason = "nothing heard"
         elif understood is None:
             reason = "not understood"
         elif understood.place is not None and (rival := self._rival(understood, likelihood, others)):
-            reason = f"unsure of the place: {understood.place} or {rival}"
+            reason, ask = f"unsure of the place: {understood.place} or {rival}", understood.place
+        elif understood.place is not None and (odds := self.place_odds(text, tokens)) < self.place_doubt:
+            reason, ask = (
+                f"unsure of the place: {understood.place} heard at odds {odds:.2f}",
+                understood.place,
+            )
         elif confidence < self.min_confidence:
             reason = f"confidence {confidence:.2f} < {self.min_confidence:.2f}"
         else:
             reason = ""
-        heard = Heard(text, confidence, not reason, raw.strip(), time.perf_counter() - started, reason)
+        heard = Heard(text, confidence, not reason, raw.strip(), time.perf_counter() - started, reason, ask)
         if reason:
             log.info("rejected speech %r (confidence %.2f): %s", raw.strip(), confidence, reason)
         return heard
+
+    def place_odds(self, text: str, tokens: list[Token]) -> float:
+        """The probability Whisper gave the least likely token of the place's words in ``text`` (the
+        cleaned transcript of ``tokens``); 1.0 when no place is found."""
+        assert self.understanding is not None
+        place = self.understanding.matcher.find(text)
+        if place is None:
+            return 1.0
+        span = range(place.start, place.start + len(place.matched.split()))
+        odds, said = 1.0, ""
+        for piece, probability in tokens:
+            said += piece
+            if not re.search(r"[a-z0-9]", piece.lower()):
+                continue  # punctuation and spaces: no word of the place
+            words = len(normalise(clean(said)).split())
+            if words - 1 in span:
+                odds = min(odds, probability)
+        return odds
 
     def _rival(
         self, understood: Understood, likelihood: float, others: list[tuple[str, float, float]]
