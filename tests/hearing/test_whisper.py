@@ -20,7 +20,13 @@ from cyborg.hearing.recogniser import Recogniser
 from cyborg.hearing.synth import VOICES, synthesise
 from cyborg.hearing.understanding import Understanding
 from cyborg.hearing.vad import SileroUtterances
-from cyborg.hearing.whisper import DOUBT_MARGIN, WhisperRecogniser, collapse_repeats, prompt_of
+from cyborg.hearing.whisper import (
+    DOUBT_MARGIN,
+    PLACE_ODDS,
+    WhisperRecogniser,
+    collapse_repeats,
+    prompt_of,
+)
 from cyborg.modules.kind import Listening
 from cyborg.navigation.database import NavigationDatabase
 from cyborg.transport import topics
@@ -234,9 +240,9 @@ def test_a_place_whisper_found_unlikely_is_in_doubt_whatever_the_words_around_it
 
 
 def test_a_doubted_place_goes_to_the_unsure_topic_and_never_to_the_text(
-    listening: Listening, tmp_path: Path
+    whisper: WhisperRecogniser, listening: Listening, tmp_path: Path
 ) -> None:
-    doubting = WhisperRecogniser(beam=1, place_doubt=1.01)  # every place in doubt
+    whisper.place_doubt = 1.01  # every place in doubt
     clock = RealClock()
     transport = EmbeddedTransport(clock)
     text: list[str] = []
@@ -247,7 +253,7 @@ def test_a_doubted_place_goes_to_the_unsure_topic_and_never_to_the_text(
     ears = SpeechInput(
         transport.node("ears"),
         NavigationDatabase(tmp_path / "navigation.db"),
-        recogniser=doubting,
+        recogniser=whisper,
         listening=listening,
         utterances=SileroUtterances(),
     )
@@ -261,6 +267,7 @@ def test_a_doubted_place_goes_to_the_unsure_topic_and_never_to_the_text(
     try:
         clock.run(main())
     finally:
+        whisper.place_doubt = PLACE_ODDS
         ears.close()
         clock.close()
     assert text == ["yes"]  # an answer names no place: believed

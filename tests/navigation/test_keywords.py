@@ -43,6 +43,8 @@ CMD, INFO, FEEDBACK = Intent.NAVIGATION_COMMAND, Intent.NAVIGATION_INFORMATION, 
         ("go to entrance 2", CMD, "entrance 2"),
         ("Where is el6 ?", INFO, "el6"),
         ("where is the e16", INFO, "el6"),
+        ("where is entrance number 2", INFO, "entrance 2"),  # not the entrance
+        ("travel to entrance 2", CMD, "entrance 2"),
         # case, punctuation, filler words
         ("GO TO THE CAFETERIA!!!", CMD, "cafeteria"),
         ("Could you please move to the waiting area, robot?", CMD, "waiting area"),
@@ -84,6 +86,8 @@ def test_navigation_requests_are_detected(text: str, intent: Intent, location: s
         "where is my dog",
         "I think of nothing",
         "cafeteria",  # a place but no request
+        "i saw you near the cafeteria",  # a statement about the past
+        "where is entrance number 3",
         "go to the",
         "",
         "?!.",
@@ -162,6 +166,8 @@ def test_navigation_takes_precedence_over_yes() -> None:
         ("e sixteen", "e 16"),
         ("go to the ... cafeteria", "go to the cafeteria"),
         ("Glassgården", "glassgården"),
+        ("entrance number two", "entrance 2"),
+        ("my number is 5", "my number is 5"),
     ],
 )
 def test_normalise(text: str, expected: str) -> None:

@@ -30,6 +30,7 @@ import logging
 import re
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -75,6 +76,16 @@ PROMPT_TOKENS = 223
 FRAMES_PER_SECOND = 100
 Token = tuple[str, float]
 """A token of a transcript and the probability Whisper gave it."""
+
+
+@dataclass(frozen=True)
+class _Searched:
+    """A beam search's encoder output, prompt and best transcript's tokens (to score them again)."""
+
+    encoded: Any
+    prompt: list[int]
+    best: list[int]
+
 
 NO_MODEL = (
     "the Whisper model is not installed ({detail}); fix: run scripts/setup (it installs "
@@ -319,10 +330,10 @@ class WhisperRecogniser:
     def hypotheses(self, audio: bytes) -> list[tuple[str, float, float]]:
         """The beam's transcripts of one utterance, best first: text, confidence (the mean token
         probability, 0-1) and the whole transcript's log probability."""
-        return self._beam(audio, token_odds=False)[0]
+        return self._search(audio)[0]
 
-    def _beam(self, audio: bytes, *, token_odds: bool) -> tuple[list[tuple[str, float, float]], list[Token]]:
-        """:meth:`hypotheses`, and with ``token_odds`` the best hypothesis's tokens (text, probability)."""
+    def _search(self, audio: bytes) -> tuple[list[tuple[str, float, float]], _Searched]:
+        """:meth:`hypotheses`, and what :meth:`_token_odds` needs to score the best one."""
         import ctranslate2
 
         samples = np.frombuffer(audio, dtype="<i2").astype(np.float32) / 32768.0
@@ -332,30 +343,56 @@ class WhisperRecogniser:
         if features.shape[1] < frames:  # as faster-whisper pads a segment: zeros after the speech
             features = np.pad(features, ((0, 0), (0, frames - features.shape[1])))
         batch = ctranslate2.StorageView.from_array(np.ascontiguousarray(features[None], dtype=np.float32))
+        encoded = self._model.encode(batch, to_cpu=False)  # once: the place's check decodes it again
         prompt = self._prompt + self._start
         [result] = self._model.generate(
-            batch,
+            encoded,
             [prompt],
             beam_size=self.beam,
             num_hypotheses=self.beam,
             max_length=len(prompt) + MAX_TOKENS,  # CTranslate2 counts the prompt in
             return_scores=True,
-            return_logits_vocab=token_odds,
             suppress_blank=True,
         )
         found = [
             (self._tokenizer.decode(ids), float(np.exp(min(0.0, score))), score * (len(ids) + 1))
             for ids, score in zip(result.sequences_ids, result.scores, strict=False)
         ]  # a score is the mean log probability of the tokens and the end
+        best = list(result.sequences_ids[0]) if result.sequences_ids else []
+        return found or [("", float(np.exp(-10.0)), -100.0)], _Searched(encoded, prompt, best)
+
+    def _token_odds(self, searched: _Searched, end: int) -> list[Token]:
+        """The first ``end`` tokens of the best transcript, each with the probability Whisper gave it
+        where it stands.
+
+        CTranslate2 returns a step's probabilities only from a greedy decode, so those tokens are
+        decoded once more, greedily, as a forced prefix (on the encoder's output already computed):
+        the decoder's distribution at every forced position comes back with it (20-40 ms of CPU).
+        """
+        ids = searched.best[:end]
+        if not ids:
+            return []
+        [forced] = self._model.generate(
+            searched.encoded,
+            [searched.prompt + ids],
+            beam_size=1,
+            max_length=len(searched.prompt) + len(ids) + 1,
+            return_logits_vocab=True,
+            suppress_blank=True,
+        )
         tokens: list[Token] = []
-        if token_odds and result.sequences_ids:
-            ids = result.sequences_ids[0]
-            for step, token in zip(result.logits[0], ids, strict=False):
-                logits = np.asarray(step, dtype=np.float64).reshape(-1)
-                top = logits.max()
-                odds = float(np.exp(logits[token] - top) / np.exp(logits - top).sum())
-                tokens.append((self._tokenizer.decode([token]), odds))
-        return found or [("", float(np.exp(-10.0)), -100.0)], tokens
+        for step, token in zip(forced.logits[0], ids, strict=False):
+            logits = np.asarray(step, dtype=np.float64)  # softmax of the token, without overflow:
+            tokens.append(
+                (self._tokenizer.decode([token]), float(1.0 / np.exp(logits - logits[token]).sum()))
+            )
+        return tokens
+
+    def _place_doubt(self, text: str, searched: _Searched) -> float:
+        """:meth:`place_odds` of the best transcript, scoring its tokens up to the place's last."""
+        pieces = [self._tokenizer.decode([token]) for token in searched.best]
+        place = self._place_tokens(text, pieces)
+        return self.place_odds(text, self._token_odds(searched, max(place) + 1)) if place else 1.0
 
     def decode(self, audio: bytes) -> Heard:
         """Decode one utterance (16-bit little-endian mono samples at :data:`SAMPLE_RATE`)."""
@@ -363,7 +400,7 @@ class WhisperRecogniser:
         if understanding is None:
             raise HearingError("the recogniser has no grammar yet; fix: call use(grammar) first")
         started = time.perf_counter()
-        [(raw, confidence, likelihood), *others], tokens = self._beam(audio, token_odds=True)
+        [(raw, confidence, likelihood), *others], searched = self._search(audio)
         text = clean(raw)
         understood = understanding.of(text) if text else None
         ask = None
@@ -373,7 +410,7 @@ class WhisperRecogniser:
             reason = "not understood"
         elif understood.place is not None and (rival := self._rival(understood, likelihood, others)):
             reason, ask = f"unsure of the place: {understood.place} or {rival}", understood.place
-        elif understood.place is not None and (odds := self.place_odds(text, tokens)) < self.place_doubt:
+        elif understood.place is not None and (odds := self._place_doubt(text, searched)) < self.place_doubt:
             reason, ask = (
                 f"unsure of the place: {understood.place} heard at odds {odds:.2f}",
                 understood.place,
@@ -389,21 +426,23 @@ class WhisperRecogniser:
 
     def place_odds(self, text: str, tokens: list[Token]) -> float:
         """The probability Whisper gave the least likely token of the place's words in ``text`` (the
-        cleaned transcript of ``tokens``); 1.0 when no place is found."""
+        cleaned transcript of ``tokens``, which may stop after the place); 1.0 when no place is found."""
+        return min((tokens[i][1] for i in self._place_tokens(text, [t for t, _ in tokens])), default=1.0)
+
+    def _place_tokens(self, text: str, pieces: list[str]) -> list[int]:
+        """The indices of the tokens (``pieces``, the transcript's) that spell the place in ``text``."""
         assert self.understanding is not None
         place = self.understanding.matcher.find(text)
         if place is None:
-            return 1.0
+            return []
         span = range(place.start, place.start + len(place.matched.split()))
-        odds, said = 1.0, ""
-        for piece, probability in tokens:
+        found, said = [], ""
+        for i, piece in enumerate(pieces):
             said += piece
-            if not re.search(r"[a-z0-9]", piece.lower()):
-                continue  # punctuation and spaces: no word of the place
-            words = len(normalise(clean(said)).split())
-            if words - 1 in span:
-                odds = min(odds, probability)
-        return odds
+            spells = re.search(r"[a-z0-9]", piece.lower())  # punctuation and spaces: no word of it
+            if spells and len(normalise(clean(said)).split()) - 1 in span:
+                found.append(i)
+        return found
 
     def _rival(
         self, understood: Understood, likelihood: float, others: list[tuple[str, float, float]]

@@ -92,15 +92,25 @@ class Intent(enum.Enum):
     NO = "no"
 
 
+NUMBER_LEADS = frozenset({"number", "nr"})
+"""Words before a number that say only that a number comes ("entrance number 2" is entrance 2)."""
+
+
 def normalise(text: str) -> str:
-    """Lower-case, drop punctuation and apostrophes, spell numbers as digits, single spaces.
+    """Lower-case, drop punctuation and apostrophes, spell numbers as digits, single spaces; "number"
+    before a number is left out.
 
     >>> normalise("Where's  Entrance-Two?")
     'wheres entrance 2'
+    >>> normalise("where is entrance number two")
+    'where is entrance 2'
     """
     text = text.casefold().replace("'", "").replace("\u2019", "")
-    words = re.sub(r"[\W_]+", " ", text).split()
-    return " ".join(NUMBER_WORDS.get(word, word) for word in words)
+    kept: list[str] = []
+    for word in reversed(re.sub(r"[\W_]+", " ", text).split()):  # from the end: "number number 2" is 2
+        if not (word in NUMBER_LEADS and kept and kept[-1].isdigit()):
+            kept.append(NUMBER_WORDS.get(word, word))
+    return " ".join(reversed(kept))
 
 
 PHRASINGS_FILE = Path(str(resources.files("cyborg") / "navigation" / "data" / "phrasings.yaml"))
@@ -113,6 +123,7 @@ class _PhrasingsFile(BaseModel):
 
     requests: dict[str, list[str]]
     cue_words: dict[str, list[str]] = Field(default_factory=dict)
+    statement_words: list[str] = Field(default_factory=list)
     yes_answers: list[str]
     no_answers: list[str]
     plain: list[str] = Field(default_factory=list)
@@ -124,6 +135,7 @@ class Phrasings:
 
     requests: dict[Intent, tuple[str, ...]]
     cue_words: dict[Intent, tuple[str, ...]]
+    statement_words: tuple[str, ...]
     yes_answers: tuple[str, ...]
     no_answers: tuple[str, ...]
     plain: tuple[str, ...]
@@ -160,6 +172,7 @@ def load_phrasings(path: Path = PHRASINGS_FILE) -> Phrasings:
     sections = {
         **{f"requests.{i.value}": p for i, p in requests.items()},
         **{f"cue_words.{i.value}": p for i, p in cue_words.items()},
+        "statement_words": tuple(raw.statement_words),
         "yes_answers": tuple(raw.yes_answers),
         "no_answers": tuple(raw.no_answers),
         "plain": tuple(raw.plain),
@@ -170,7 +183,7 @@ def load_phrasings(path: Path = PHRASINGS_FILE) -> Phrasings:
                 problems.append(
                     f"{section}: {phrase!r} is not as the robot reads speech; fix: write {normalise(phrase)!r}"
                 )
-    known = {p for section, ps in sections.items() if section != "plain" for p in ps}
+    known = {p for section, ps in sections.items() if section not in ("plain", "statement_words") for p in ps}
     problems += [
         f"plain: {p!r} is no request or answer of the file; fix: add it to one, or leave it out"
         for p in raw.plain
@@ -181,6 +194,7 @@ def load_phrasings(path: Path = PHRASINGS_FILE) -> Phrasings:
     return Phrasings(
         {i: requests.get(i, ()) for i in _NAVIGATION},
         cue_words,
+        tuple(raw.statement_words),
         tuple(raw.yes_answers),
         tuple(raw.no_answers),
         tuple(raw.plain),
@@ -406,6 +420,9 @@ STATEMENT_OPENERS = frozenset(
 )
 """First words of a sentence about something rather than a request ("my friend is looking at the
 lift", "the lift smells funny"): without a trigger phrase, no request."""
+STATEMENT_WORDS = frozenset(_PHRASINGS.statement_words)
+"""Words (``phrasings.yaml``) that make a sentence without a trigger phrase a statement about the
+past ("i saw you near the cafeteria"): no request."""
 FUZZY_TRIGGER_SCORE = 85.0
 """Lowest rapidfuzz ratio at which the words before a place count as a misheard trigger phrase
 ("show me the wait on" for "show me the way to")."""
@@ -463,7 +480,7 @@ def classify_request(words: Sequence[str], place: LocationMatch) -> Intent | Non
     :data:`CUE_SCORE` and a clear lead over the next; a negated command and a statement ("the
     lift is ...") are none.
     """
-    if not words or words[0] in STATEMENT_OPENERS:
+    if not words or words[0] in STATEMENT_OPENERS or any(w in STATEMENT_WORDS for w in words):
         return None
     span = range(place.start, place.start + len(place.matched.split()))
     lead = words[: place.start]
