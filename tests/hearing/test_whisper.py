@@ -228,15 +228,19 @@ def test_a_place_whisper_found_unlikely_is_in_doubt_whatever_the_words_around_it
 ) -> None:
     ears = WhisperRecogniser.__new__(WhisperRecogniser)
     ears.understanding = Understanding(
-        [("entrance", []), ("el6", ["e16"])], listening.phrases, listening.place_phrases
+        [("entrance", []), ("entrance 2", []), ("el6", ["e16"])], listening.phrases, listening.place_phrases
     )
     sure = [(" Where", 0.9), (" is", 0.95), (" the", 0.2), (" entrance", 0.97), ("?", 0.1)]
-    assert ears.place_odds("where is the entrance", sure) == 0.97  # "the" and "?" are no place
+    assert ears.place_odds(sure, "entrance") == 0.97  # "the" and "?" are no place
     gym = [(" Where", 0.9), (" is", 0.95), (" the", 0.9), (" entrance", 0.31), ("?", 0.9)]
-    assert ears.place_odds("where is the entrance", gym) == 0.31
+    assert ears.place_odds(gym, "entrance") == 0.31
     six = [(" Where", 0.9), (" is", 0.9), (" el", 0.95), ("6", 0.4), (".", 0.9)]
-    assert ears.place_odds("where is el6", six) == 0.4  # el5 or el6: the digit decides
-    assert ears.place_odds("hello there", [(" Hello", 0.2), (" there", 0.1)]) == 1.0  # no place
+    assert ears.place_odds(six, "el6") == 0.4  # el5 or el6: the digit decides
+    looped = [*sure[:4], ("?", 0.9), (" Where", 0.9), (" is", 0.9), (" the", 0.9), (" entrance", 0.01)]
+    assert ears.place_odds(looped, "entrance") == 0.97  # the first time it is said
+    two = [(" Go", 0.9), (" to", 0.9), (" entrance", 0.9), (" number", 0.3), (" two", 0.6), (".", 0.9)]
+    assert ears.place_odds(two, "entrance 2") == 0.3  # entrance 2, said "entrance number two"
+    assert ears.place_odds([(" Hello", 0.2), (" there", 0.1)], "el6") == 1.0  # no place
 
 
 def test_a_doubted_place_goes_to_the_unsure_topic_and_never_to_the_text(

@@ -388,11 +388,10 @@ class WhisperRecogniser:
             )
         return tokens
 
-    def _place_doubt(self, text: str, searched: _Searched) -> float:
-        """:meth:`place_odds` of the best transcript, scoring its tokens up to the place's last."""
-        pieces = [self._tokenizer.decode([token]) for token in searched.best]
-        place = self._place_tokens(text, pieces)
-        return self.place_odds(text, self._token_odds(searched, max(place) + 1)) if place else 1.0
+    def _place_doubt(self, searched: _Searched, place: str) -> float:
+        """:meth:`place_odds` of ``place`` in the best transcript, scoring its tokens up to the place's last."""
+        spelt = self._place_tokens([self._tokenizer.decode([token]) for token in searched.best], place)
+        return self.place_odds(self._token_odds(searched, max(spelt) + 1), place) if spelt else 1.0
 
     def decode(self, audio: bytes) -> Heard:
         """Decode one utterance (16-bit little-endian mono samples at :data:`SAMPLE_RATE`)."""
@@ -410,7 +409,10 @@ class WhisperRecogniser:
             reason = "not understood"
         elif understood.place is not None and (rival := self._rival(understood, likelihood, others)):
             reason, ask = f"unsure of the place: {understood.place} or {rival}", understood.place
-        elif understood.place is not None and (odds := self._place_doubt(text, searched)) < self.place_doubt:
+        elif (
+            understood.place is not None
+            and (odds := self._place_doubt(searched, understood.place)) < self.place_doubt
+        ):
             reason, ask = (
                 f"unsure of the place: {understood.place} heard at odds {odds:.2f}",
                 understood.place,
@@ -424,25 +426,34 @@ class WhisperRecogniser:
             log.info("rejected speech %r (confidence %.2f): %s", raw.strip(), confidence, reason)
         return heard
 
-    def place_odds(self, text: str, tokens: list[Token]) -> float:
-        """The probability Whisper gave the least likely token of the place's words in ``text`` (the
-        cleaned transcript of ``tokens``, which may stop after the place); 1.0 when no place is found."""
-        return min((tokens[i][1] for i in self._place_tokens(text, [t for t, _ in tokens])), default=1.0)
+    def place_odds(self, tokens: list[Token], place: str) -> float:
+        """The probability Whisper gave the least likely token of the words that name ``place`` in
+        the transcript ``tokens`` spell (which may stop after them); 1.0 when they do not name it."""
+        return min((tokens[i][1] for i in self._place_tokens([t for t, _ in tokens], place)), default=1.0)
 
-    def _place_tokens(self, text: str, pieces: list[str]) -> list[int]:
-        """The indices of the tokens (``pieces``, the transcript's) that spell the place in ``text``."""
+    def _place_tokens(self, pieces: list[str], place: str) -> list[int]:
+        """The indices of the tokens (``pieces``, a transcript's) that spell ``place``: the words
+        nearest its name (the best match), the first of equals (a looping decode says it twice)."""
         assert self.understanding is not None
-        place = self.understanding.matcher.find(text)
-        if place is None:
+        words = normalise("".join(pieces)).split()
+        best: tuple[float, int, int] | None = None
+        for start in range(len(words)):
+            found = self.understanding.matcher.find(" ".join(words[start:]))
+            here = found is not None and found.location == place and found.start == 0
+            if found is not None and here and (best is None or found.score > best[0]):
+                best = (found.score, start, start + len(found.matched.split()))
+        if best is None:
             return []
-        span = range(place.start, place.start + len(place.matched.split()))
-        found, said = [], ""
+        span = range(best[1], best[2])
+        indices, said = [], ""
         for i, piece in enumerate(pieces):
             said += piece
-            spells = re.search(r"[a-z0-9]", piece.lower())  # punctuation and spaces: no word of it
-            if spells and len(normalise(clean(said)).split()) - 1 in span:
-                found.append(i)
-        return found
+            word = len(normalise(said).split()) - 1
+            if word >= span.stop:
+                break
+            if word in span and re.search(r"[a-z0-9]", piece.lower()):  # not punctuation or spaces
+                indices.append(i)
+        return indices
 
     def _rival(
         self, understood: Understood, likelihood: float, others: list[tuple[str, float, float]]
