@@ -613,12 +613,9 @@ def child(engine: str, cache: Path, out: Path, options: dict[str, str]) -> None:
     load_seconds = time.perf_counter() - started
     published: list[str] = []
     unsure: list[str] = []  # texts the ears doubted the place of: the robot asks "Did you mean ...?"
-    transport.node("listener").subscribe(
-        topics.TEXT_FROM_SPEECH, String, lambda m, i: published.append(m.data)
-    )
-    transport.node("listener").subscribe(
-        topics.SPEECH_UNSURE, String, lambda m, i: unsure.append(json.loads(m.data)["text"])
-    )
+    listener = transport.node("listener")
+    listener.subscribe(topics.TEXT_FROM_SPEECH, String, lambda m, i: published.append(m.data))
+    listener.subscribe(topics.SPEECH_UNSURE, String, lambda m, i: unsure.append(json.loads(m.data)["text"]))
     understanding = recogniser.understanding if recogniser_name == "whisper" else None  # type: ignore[attr-defined]
     if understanding is None:
         from cyborg.hearing.understanding import Understanding
