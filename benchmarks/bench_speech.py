@@ -11,18 +11,22 @@ own), one after the other. Engines: ``whisper`` (Whisper tiny.en, Silero VAD: th
 ``whisper+endpointer`` (pocketsphinx's end-pointer instead of Silero), ``pocketsphinx`` (the
 present pocketsphinx pipeline) and ``pocketsphinx+silero``.
 
-Five sets of sentences: the tuning set (pocketsphinx's language-model weights were chosen on
+Six sets of sentences: the tuning set (pocketsphinx's language-model weights were chosen on
 it), the held-out set, a set of new phrasings of the same requests written for issue 34 (read in
 its first round: a development set since), a fresh set written before its second round and
 scored only in that round's final run (its misses were read: a development set since), and an
 untouched set written before the third round changed anything, scored only in that round's final
-run. ``--sets tuning,new`` keeps the others held out while
+run (read since), and an unseen set written before the fourth round changed anything, scored only in
+its final run. ``--sets tuning,new`` keeps the others held out while
 choosing; ``--settings window=10,beam=1`` tries other speech_input settings; ``--text`` scores the
 understanding of the sentences' own text. Each in-scope sentence is labelled with what the robot should do (event and
 place); it counts when some text is published and the robot's understanding of each gives that
-event and place ("yep, show me" may come as two utterances, both yes). Out-of-scope sentences count when nothing is published. A misdirection is
-a published text that sends the robot (or a person) to a place other than the one said, without
-asking first. Latency: from the end-pointer closing an utterance to its text on the topic; the
+event and place ("yep, show me" may come as two utterances, both yes). A request whose place the
+ears doubt goes to ``/cyborg_speech/unsure`` instead of ``/text_from_speech``: the robot asks "Did
+you mean the <place>?" first; it counts as published, not certain (intended when the place is the
+one said). Out-of-scope sentences count when nothing is published (asking about them is not
+rejecting them). A misdirection is a published text that sends the robot (or a person) to a place
+other than the one said, without asking first. Latency: from the end-pointer closing an utterance to its text on the topic; the
 audio is handed over faster than it was spoken, except while an early decode runs (from a tenth
 of a second into a pause), when it comes at the pace it was spoken, as from a microphone.
 Targets on every set: >= 95 % intended at the quiet noise level and >= 90 % at the loud one,
@@ -396,12 +400,111 @@ UNTOUCHED_OUT = [
     "you're very slow",
     "where can i park my bike",
 ]
+UNSEEN_IN = {  # issue 34, fourth round: written 2026-11-26 12:32 UTC before any change or run of the round; scored only in its final run
+    "where's the canteen please": f"{NAV_INFO}:cafeteria",
+    "could you tell me where the lift is": f"{NAV_INFO}:elevator",
+    "i am looking for the information desk": f"{NAV_INFO}:information desk",
+    "how do i get over to el6": f"{NAV_INFO}:el6",
+    "where can i find entrance 2 please": f"{NAV_INFO}:entrance 2",
+    "excuse me, is el5 far": f"{NAV_INFO}:el5",
+    "what's the way to the lift from here": f"{NAV_INFO}:elevator",
+    "do you know how to get to the cafeteria": f"{NAV_INFO}:cafeteria",
+    "where would i go for the main entrance": f"{NAV_INFO}:entrance",
+    "which way should i go for the info desk": f"{NAV_INFO}:information desk",
+    "can you help me find the waiting area": f"{NAV_INFO}:waiting area",
+    "is el6 upstairs": f"{NAV_INFO}:el6",
+    "where is the elevator located": f"{NAV_INFO}:elevator",
+    "how would i get to entrance 2": f"{NAV_INFO}:entrance 2",
+    "i need directions to the canteen": f"{NAV_INFO}:cafeteria",
+    "please tell me where the information desk is": f"{NAV_INFO}:information desk",
+    "is the main entrance this way": f"{NAV_INFO}:entrance",
+    "whereabouts is the waiting area": f"{NAV_INFO}:waiting area",
+    "robot, where is el5": f"{NAV_INFO}:el5",
+    "how do i reach the lift": f"{NAV_INFO}:elevator",
+    "can you point me to the cafeteria": f"{NAV_INFO}:cafeteria",
+    "take me to the lift please": f"{NAV_CMD}:elevator",
+    "bring me over to the cafeteria": f"{NAV_CMD}:cafeteria",
+    "could you lead me to the information desk": f"{NAV_CMD}:information desk",
+    "i'd like to go to the waiting area": f"{NAV_CMD}:waiting area",
+    "please guide me to entrance 2": f"{NAV_CMD}:entrance 2",
+    "go to el6 now": f"{NAV_CMD}:el6",
+    "walk with me to el5": f"{NAV_CMD}:el5",
+    "can you escort me to the main entrance": f"{NAV_CMD}:entrance",
+    "let's go over to the canteen": f"{NAV_CMD}:cafeteria",
+    "drive me to the elevator": f"{NAV_CMD}:elevator",
+    "head over to the info desk please": f"{NAV_CMD}:information desk",
+    "would you guide me to the waiting area": f"{NAV_CMD}:waiting area",
+    "take me over to entrance 2": f"{NAV_CMD}:entrance 2",
+    "robot, move to el6": f"{NAV_CMD}:el6",
+    "could you accompany me to the lift": f"{NAV_CMD}:elevator",
+    "show me the way to the canteen please": f"{NAV_CMD}:cafeteria",
+    "i want you to take me to the main entrance": f"{NAV_CMD}:entrance",
+    "go over to el5 please": f"{NAV_CMD}:el5",
+    "what do you think about the canteen": f"{NAV_FEEDBACK}:cafeteria",
+    "do you like el6": f"{NAV_FEEDBACK}:el6",
+    "how do you like the information desk": f"{NAV_FEEDBACK}:information desk",
+    "what's your opinion of the lift": f"{NAV_FEEDBACK}:elevator",
+    "tell me what you think of the waiting area": f"{NAV_FEEDBACK}:waiting area",
+    "do you enjoy being at the main entrance": f"{NAV_FEEDBACK}:entrance",
+    "what are your thoughts about entrance 2": f"{NAV_FEEDBACK}:entrance 2",
+    "how do you feel about the cafeteria": f"{NAV_FEEDBACK}:cafeteria",
+    "is el5 a nice place": f"{NAV_FEEDBACK}:el5",
+    "what's your view of the elevator": f"{NAV_FEEDBACK}:elevator",
+    "hello cyborg": GREETING,
+    "hi, how are you": GREETING,
+    "good morning everyone": GREETING,
+    "hey robot, how's it going": GREETING,
+    "hey hey": GREETING,
+    "good evening robot": GREETING,
+    "yes please, go ahead": "yes",
+    "yeah sure": "yes",
+    "okay, thanks": "yes",
+    "yes, that would be nice": "yes",
+    "alright, lead the way": "yes",
+    "of course": "yes",
+    "no thanks, i'm fine": "no",
+    "nah, not now": "no",
+    "no, maybe later": "no",
+    "not now, thank you": "no",
+    "no, i don't need it": "no",
+}
+UNSEEN_OUT = [
+    "where is the swimming pool",
+    "take me to the car park",
+    "where is entrance 5",
+    "go to el8",
+    "where's the reception",
+    "how do i get to the station",
+    "where is the lecture hall",
+    "bring me to the printer",
+    "is the shop open",
+    "where is room 101",
+    "the lift is out of order",
+    "i had coffee in the canteen",
+    "we met at the information desk",
+    "el6 is where i work",
+    "don't go to the elevator",
+    "can you sing",
+    "what's your battery level",
+    "are you lost",
+    "i'm late for class",
+    "do you have a name",
+    "how is the weather outside",
+    "tell me something funny",
+    "what year is it",
+    "stop following me",
+    "where do you live",
+    "can you hear me",
+    "that's a cool robot",
+    "i like your voice",
+]
 SETS = {
     "tuning": (TUNING_IN, TUNING_OUT),
     "held-out": (HELD_OUT_IN, HELD_OUT_OUT),
     "new": (NEW_IN, NEW_OUT),
     "fresh": (FRESH_IN, FRESH_OUT),
     "untouched": (UNTOUCHED_IN, UNTOUCHED_OUT),
+    "unseen": (UNSEEN_IN, UNSEEN_OUT),
 }
 NOISES = (30.0, 400.0)  # standard deviation of white noise, of 32768: quiet, loud
 ENGINES = ("whisper", "whisper+endpointer", "pocketsphinx", "pocketsphinx+silero")
@@ -509,9 +612,10 @@ def child(engine: str, cache: Path, out: Path, options: dict[str, str]) -> None:
     )
     load_seconds = time.perf_counter() - started
     published: list[str] = []
-    transport.node("listener").subscribe(
-        topics.TEXT_FROM_SPEECH, String, lambda m, i: published.append(m.data)
-    )
+    unsure: list[str] = []  # texts the ears doubted the place of: the robot asks "Did you mean ...?"
+    listener = transport.node("listener")
+    listener.subscribe(topics.TEXT_FROM_SPEECH, String, lambda m, i: published.append(m.data))
+    listener.subscribe(topics.SPEECH_UNSURE, String, lambda m, i: unsure.append(json.loads(m.data)["text"]))
     understanding = recogniser.understanding if recogniser_name == "whisper" else None  # type: ignore[attr-defined]
     if understanding is None:
         from cyborg.hearing.understanding import Understanding
@@ -528,20 +632,23 @@ def child(engine: str, cache: Path, out: Path, options: dict[str, str]) -> None:
                 floors.append(floor_work() * 1000)
                 loads.append(os.getloadavg()[0])
             published.clear()
+            unsure.clear()
             before, cpu = len(ears.latencies), time.process_time()
             heard = await ears.listen_to(u["audio"], live=live)
             cpu = time.process_time() - cpu
             await clock.sleep(0)
             understood = [understanding.of(text) for text in published]
+            doubted = [understanding.of(text) for text in unsure]  # asked about first, never certain
             results.append(
                 {
                     **{k: v for k, v in u.items() if k != "audio"},
-                    "published": list(published),
+                    "published": [*published, *unsure],
+                    "unsure": list(unsure),
                     "did": [
                         f"{x.event}:{x.place}" if x and x.place else (x.event if x else None)
-                        for x in understood
+                        for x in understood + doubted
                     ],
-                    "certain": [bool(x and x.certain) for x in understood],
+                    "certain": [bool(x and x.certain) for x in understood] + [False] * len(doubted),
                     "heard": [f"{h.raw or '-'} ({h.reason or 'accepted'})" for h in heard],
                     "latencies": [s * 1000 for s in list(ears.latencies)[before:]],
                     "decode": [h.seconds * 1000 for h in heard],
@@ -650,6 +757,7 @@ def score(results: list[dict[str, object]]) -> dict[str, dict[str, float]]:
             "out": share(outside, lambda r: not r["published"]),
             "misdirections": sum(1 for r in chosen if misdirected(r)),
             "asked": sum(1 for r in chosen if not all(r["certain"])),  # type: ignore[arg-type]
+            "doubted": sum(1 for r in chosen if r.get("unsure")),
             "n_in": len(inside),
             "n_out": len(outside),
         }
@@ -816,7 +924,7 @@ def main() -> None:
             reports.append(run_engine(engine, cache, folder, args, loads))
     print(f"load average (1 min) during the run: {min(loads):.1f}-{max(loads):.1f}")
     print(
-        "engine | set | intended % (quiet / loud) | rejected % | misdirections | asked first | "
+        "engine | set | intended % (quiet / loud) | rejected % | misdirections | asked first (of them for the ears' doubt) | "
         "latency p50 / p95 ms (floor: fixed work's p50 / p95 ms, same run) | CPU ms per utterance | "
         "peak RSS MB | load s | load average in the run (min / median / max)"
     )
@@ -829,7 +937,7 @@ def main() -> None:
             print(
                 f"{report['engine']} | {name} ({row['n_in']:.0f} + {row['n_out']:.0f}) | {row['in']:.1f} "
                 f"({row['quiet']:.1f} / {row['loud']:.1f}) | {row['out']:.1f} | {row['misdirections']:.0f} | "
-                f"{row['asked']:.0f} | "
+                f"{row['asked']:.0f} ({row['doubted']:.0f}) | "
                 + (
                     f"{percentile(latencies, 50):.0f} / {percentile(latencies, 95):.0f} "
                     f"(floor {percentile(report['floors'], 50):.0f} / {percentile(report['floors'], 95):.0f}) | "

@@ -68,6 +68,7 @@ def test_the_wire_table_names_every_topic_a_module_meets() -> None:
         topics.EMOTIONAL_STATE,
         topics.GET_EMOTIONAL_STATE,
         topics.TEXT_FROM_SPEECH,
+        topics.SPEECH_UNSURE,
         topics.TEXT_TO_SPEECH,
         topics.STATE_RESOURCES_PARAM,
         topics.TRANSITIONS_PARAM,

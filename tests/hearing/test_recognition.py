@@ -1,5 +1,6 @@
 """What users say in the thesis's chapter 10 scenarios, synthesised by espeak-ng and flite, is heard as
-text that gives the same event; speech outside the grammar is rejected; a missing microphone is a clear error."""
+text that gives the same event (a place asked about first: pocketsphinx's posteriors cannot tell a
+misheard place); speech outside the grammar is rejected; a missing microphone is a clear error."""
 
 from __future__ import annotations
 
@@ -69,8 +70,13 @@ def test_every_scenario_line_gives_the_same_event_as_typed(
 ) -> None:
     for line in SCENARIO_LINES:
         heard = recogniser.decode(synthesise(line, voice))  # type: ignore[arg-type]
-        assert heard.accepted, f"{line!r} rejected: heard {heard.raw!r} ({heard.reason})"
-        assert event_of(heard.text, db) == event_of(line, db), f"{line!r} heard as {heard.text!r}"
+        expected = event_of(line, db)
+        request = detect_navigation(line, db.matcher())
+        place = request.location if request is not None else None
+        # A place pocketsphinx hears is always asked about ("Did you mean the el6?"): never believed.
+        assert heard.accepted == (place is None), f"{line!r}: heard {heard.raw!r} ({heard.reason})"
+        assert heard.ask == place, f"{line!r} heard as {heard.text!r}, asks about {heard.ask}"
+        assert event_of(heard.text, db) == expected, f"{line!r} heard as {heard.text!r}"
 
 
 def test_speech_outside_the_grammar_is_rejected(recogniser: Recogniser) -> None:

@@ -22,7 +22,7 @@ def test_believed_and_rejected_sentences_become_records(tmp_path: Path, listenin
     ears = SpeechInput(
         transport.node("ears"),
         NavigationDatabase(tmp_path / "nav.db"),
-        recogniser=Recogniser(min_confidence=0.0),
+        recogniser=Recogniser(min_confidence=0.0, place_doubt=0.0),  # a place believed, not asked about
         listening=listening,
     )
 

@@ -4,6 +4,7 @@ pocketsphinx; nothing imports av (FFmpeg with GPL codecs) or downloads anything.
 
 from __future__ import annotations
 
+import json
 import logging
 import subprocess
 import sys
@@ -19,7 +20,13 @@ from cyborg.hearing.recogniser import Recogniser
 from cyborg.hearing.synth import VOICES, synthesise
 from cyborg.hearing.understanding import Understanding
 from cyborg.hearing.vad import SileroUtterances
-from cyborg.hearing.whisper import DOUBT_MARGIN, WhisperRecogniser, collapse_repeats, prompt_of
+from cyborg.hearing.whisper import (
+    DOUBT_MARGIN,
+    PLACE_ODDS,
+    WhisperRecogniser,
+    collapse_repeats,
+    prompt_of,
+)
 from cyborg.modules.kind import Listening
 from cyborg.navigation.database import NavigationDatabase
 from cyborg.transport import topics
@@ -214,3 +221,60 @@ def test_the_prompt_can_also_hold_the_other_phrasings_within_whispers_budget(lis
     places_last = "Where is the canteen? Go to the cafeteria. What do you think of the elevator?"
     assert plain.endswith(places_last) and varied.endswith(places_last)  # the places are kept
     assert round(1.4 * len(varied.split())) <= 223  # Whisper keeps no more of its prompt
+
+
+def test_a_place_whisper_found_unlikely_is_in_doubt_whatever_the_words_around_it(
+    listening: Listening,
+) -> None:
+    ears = WhisperRecogniser.__new__(WhisperRecogniser)
+    ears.understanding = Understanding(
+        [("entrance", []), ("entrance 2", []), ("el6", ["e16"])], listening.phrases, listening.place_phrases
+    )
+    sure = [(" Where", 0.9), (" is", 0.95), (" the", 0.2), (" entrance", 0.97), ("?", 0.1)]
+    assert ears.place_odds(sure, "entrance") == 0.97  # "the" and "?" are no place
+    gym = [(" Where", 0.9), (" is", 0.95), (" the", 0.9), (" entrance", 0.31), ("?", 0.9)]
+    assert ears.place_odds(gym, "entrance") == 0.31
+    six = [(" Where", 0.9), (" is", 0.9), (" el", 0.95), ("6", 0.4), (".", 0.9)]
+    assert ears.place_odds(six, "el6") == 0.4  # el5 or el6: the digit decides
+    looped = [*sure[:4], ("?", 0.9), (" Where", 0.9), (" is", 0.9), (" the", 0.9), (" entrance", 0.01)]
+    assert ears.place_odds(looped, "entrance") == 0.97  # the first time it is said
+    two = [(" Go", 0.9), (" to", 0.9), (" entrance", 0.9), (" number", 0.3), (" two", 0.6), (".", 0.9)]
+    assert ears.place_odds(two, "entrance 2") == 0.3  # entrance 2, said "entrance number two"
+    assert ears.place_odds([(" Hello", 0.2), (" there", 0.1)], "el6") == 1.0  # no place
+
+
+def test_a_doubted_place_goes_to_the_unsure_topic_and_never_to_the_text(
+    whisper: WhisperRecogniser, listening: Listening, tmp_path: Path
+) -> None:
+    whisper.place_doubt = 1.01  # every place in doubt
+    clock = RealClock()
+    transport = EmbeddedTransport(clock)
+    text: list[str] = []
+    unsure: list[dict[str, object]] = []
+    listener = transport.node("listener")
+    listener.subscribe(topics.TEXT_FROM_SPEECH, String, lambda m, i: text.append(m.data))
+    listener.subscribe(topics.SPEECH_UNSURE, String, lambda m, i: unsure.append(json.loads(m.data)))
+    ears = SpeechInput(
+        transport.node("ears"),
+        NavigationDatabase(tmp_path / "navigation.db"),
+        recogniser=whisper,
+        listening=listening,
+        utterances=SileroUtterances(),
+    )
+    quiet = bytes(2 * 16_000)
+
+    async def main() -> None:
+        for said in ("where is the elevator", "yes"):
+            await ears.listen_to(quiet + synthesise(said, VOICES[3]) + quiet)
+        await clock.sleep(0)
+
+    try:
+        clock.run(main())
+    finally:
+        whisper.place_doubt = PLACE_ODDS
+        ears.close()
+        clock.close()
+    assert text == ["yes"]  # an answer names no place: believed
+    [doubt] = unsure
+    assert doubt["text"] == "where is the elevator" and doubt["place"] == "elevator"
+    assert str(doubt["reason"]).startswith("unsure of the place: elevator")

@@ -2,16 +2,21 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from cyborg.errors import ConfigError
 from cyborg.navigation.keywords import (
+    PHRASINGS_FILE,
     Intent,
     LocationMatcher,
     detect,
     detect_answer,
     detect_navigation,
+    load_phrasings,
     normalise,
 )
 
@@ -38,6 +43,8 @@ CMD, INFO, FEEDBACK = Intent.NAVIGATION_COMMAND, Intent.NAVIGATION_INFORMATION, 
         ("go to entrance 2", CMD, "entrance 2"),
         ("Where is el6 ?", INFO, "el6"),
         ("where is the e16", INFO, "el6"),
+        ("where is entrance number 2", INFO, "entrance 2"),  # not the entrance
+        ("travel to entrance 2", CMD, "entrance 2"),
         # case, punctuation, filler words
         ("GO TO THE CAFETERIA!!!", CMD, "cafeteria"),
         ("Could you please move to the waiting area, robot?", CMD, "waiting area"),
@@ -79,6 +86,8 @@ def test_navigation_requests_are_detected(text: str, intent: Intent, location: s
         "where is my dog",
         "I think of nothing",
         "cafeteria",  # a place but no request
+        "i saw you near the cafeteria",  # a statement about the past
+        "where is entrance number 3",
         "go to the",
         "",
         "?!.",
@@ -157,6 +166,8 @@ def test_navigation_takes_precedence_over_yes() -> None:
         ("e sixteen", "e 16"),
         ("go to the ... cafeteria", "go to the cafeteria"),
         ("Glassgården", "glassgården"),
+        ("entrance number two", "entrance 2"),
+        ("my number is 5", "my number is 5"),
     ],
 )
 def test_normalise(text: str, expected: str) -> None:
@@ -304,3 +315,25 @@ def test_a_number_heard_as_a_word_is_not_certain_even_before_polite_words() -> N
         assert found is not None and found.location == "entrance 2" and not found.certain, text
     plain = detect_navigation("go to the entrance please", MATCHER)
     assert plain is not None and plain.location == "entrance" and plain.certain
+
+
+def test_the_phrasings_are_content_and_a_broken_file_names_the_entry_and_the_fix(tmp_path: Path) -> None:
+    shipped = PHRASINGS_FILE.read_text(encoding="utf-8")
+    added = tmp_path / "phrasings.yaml"
+    added.write_text(
+        shipped.replace("    - go to\n", "    - go to\n    - zoom over to\n", 1), encoding="utf-8"
+    )
+    assert "zoom over to" in load_phrasings(added).requests[CMD]
+    broken = tmp_path / "broken.yaml"
+    broken.write_text(
+        shipped.replace("    - go to\n", "    - Go to!\n", 1).replace(
+            "requests:\n", "requests:\n  navigation_dance: [x]\n", 1
+        ),
+        encoding="utf-8",
+    )
+    with pytest.raises(ConfigError) as raised:
+        load_phrasings(broken)
+    message = str(raised.value)
+    assert "requests.navigation_dance: no such request; fix: use one of navigation_command" in message
+    assert "'Go to!' is not as the robot reads speech; fix: write 'go to'" in message
+    assert "plain: 'go to' is no request or answer of the file" in message  # it was renamed above

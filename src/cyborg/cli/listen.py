@@ -93,7 +93,11 @@ def listen(
     def show(message: String, info: object) -> None:
         heard = json.loads(message.data)
         understood = ears.understanding.of(heard["text"]) if ears.understanding and heard["text"] else None
-        if not heard["accepted"]:
+        if not heard["accepted"] and heard.get("ask"):
+            outcome = (
+                f"-> unsure, asks first: did you mean the {heard['ask']}? ({heard.get('reason')}; not sent)"
+            )
+        elif not heard["accepted"]:
             outcome = f"rejected: {heard.get('reason') or 'not understood'}"
         else:
             outcome = f"-> {understood.describe()}" if understood else "-> (a sentence of the grammar)"

@@ -5,7 +5,11 @@ It listens to the microphone (``source: microphone``) or to audio handed to it
 utterances where the speaker pauses, decodes each against the grammar of what the robot
 understands and publishes the accepted text exactly as typed text is published. Every
 utterance, rejected ones too, goes to ``/cyborg_speech/heard`` as JSON (text, confidence,
-accepted) for the dashboard. The grammar holds the navigation database's places and aliases
+accepted) for the dashboard. A request whose place the ears are unsure of (Whisper's other
+hypotheses name another place, or the place's words were unlikely) is not published as text: it
+goes to ``/cyborg_speech/unsure`` (JSON: text, place, confidence, reason) so that the navigation
+module asks "Did you mean the <place>?" before it acts, while a module that reads only
+``/text_from_speech`` never acts on it. The grammar holds the navigation database's places and aliases
 (read again every ``reload_interval`` seconds, so a place added with ``cyborg db`` is heard)
 after the phrases modules say a place follows, what every module of the robot's configuration
 listens for (``ModuleSettings.listens_for``, handed over by the composition root as
@@ -59,6 +63,7 @@ from cyborg.transport.messages import String
 __all__ = [
     "HEARD_TOPIC",
     "KIND",
+    "UNSURE_TOPIC",
     "SpeechInput",
     "SpeechInputSettings",
     "cutter",
@@ -69,6 +74,7 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 HEARD_TOPIC = topics.SPEECH_HEARD
+UNSURE_TOPIC = topics.SPEECH_UNSURE
 HEARD_KEPT = 1000
 
 
@@ -128,6 +134,7 @@ class SpeechInput:
         """Seconds from the end of each utterance to its text on the topic (wall clock)."""
         self._text = node.publisher(topics.TEXT_FROM_SPEECH, String)
         self._records = node.publisher(HEARD_TOPIC, String)
+        self._unsure = node.publisher(UNSURE_TOPIC, String)
         self._utterances: Cutter = utterances or Utterances()
         self._known: list[PlaceWords] | None = None
         self.understanding: Understanding | None = None
@@ -258,6 +265,9 @@ class SpeechInput:
         if heard.accepted:
             log.info("heard: %s (confidence %.2f)", heard.text, heard.confidence)
             self._text.publish(String(data=heard.text))
+        elif heard.ask is not None:  # a place in doubt: never on /text_from_speech, asked about instead
+            log.info("unsure of the place in %r: asks about %s (%s)", heard.text, heard.ask, heard.reason)
+            self._unsure.publish(String(data=json.dumps(heard.unsure_json())))
         self._records.publish(String(data=json.dumps(heard.as_json())))
         self.latencies.append(time.perf_counter() - ended)
         return heard

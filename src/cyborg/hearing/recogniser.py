@@ -18,6 +18,7 @@ from __future__ import annotations
 import functools
 import io
 import logging
+import math
 import os
 import re
 import tempfile
@@ -28,7 +29,15 @@ from typing import Any, Protocol
 
 from cyborg.hearing.grammar import Grammar
 
-__all__ = ["SAMPLE_RATE", "Heard", "Recogniser", "SpeechRecogniser", "Utterances", "known_word_of"]
+__all__ = [
+    "PLACE_DOUBT",
+    "SAMPLE_RATE",
+    "Heard",
+    "Recogniser",
+    "SpeechRecogniser",
+    "Utterances",
+    "known_word_of",
+]
 
 log = logging.getLogger(__name__)
 
@@ -37,6 +46,12 @@ SAMPLE_RATE = 16000
 DEFAULT_MIN_CONFIDENCE = 0.0
 """The whole-sentence test does the rejecting; a posterior threshold on top cost right sentences
 more than it saved (docs/benchmarks-history.md, "Speech recognition")."""
+PLACE_DOUBT = math.inf
+"""Below this confidence (the sentence's posterior) a request that names a place is asked about
+("Did you mean the cafeteria?") rather than believed. By default every one is: a grammar decoder
+maps an unknown or misheard place onto the nearest sentence with a place, and its posteriors of
+right and misheard places overlap (right 0.00-0.22, misheard up to 0.16 on the development sets,
+issue 34's fourth round: docs/benchmarks-history.md)."""
 BACKGROUND_WORDS = 1000
 """How many common English words compete with the grammar (the rejection's "anything else")."""
 GRAMMAR_WEIGHT = 1000
@@ -58,6 +73,9 @@ class Heard:
     """How long decoding took."""
     reason: str = ""
     """Why it was rejected ("" when accepted)."""
+    ask: str | None = None
+    """The place a request named when the ears are unsure of it (the text is then not accepted):
+    a module may ask "Did you mean the <place>?" (``/cyborg_speech/unsure``)."""
 
     def as_json(self) -> dict[str, object]:
         """The record the dashboard shows."""
@@ -66,6 +84,16 @@ class Heard:
             "confidence": round(self.confidence, 3),
             "accepted": self.accepted,
             "raw": self.raw,
+            "reason": self.reason,
+            "ask": self.ask,
+        }
+
+    def unsure_json(self) -> dict[str, object]:
+        """The message of ``/cyborg_speech/unsure`` (only for a text with a place to ask about)."""
+        return {
+            "text": self.text,
+            "place": self.ask,
+            "confidence": round(self.confidence, 3),
             "reason": self.reason,
         }
 
@@ -174,8 +202,12 @@ class Recogniser:
 
     name = "pocketsphinx"
 
-    def __init__(self, *, min_confidence: float = DEFAULT_MIN_CONFIDENCE) -> None:
+    def __init__(
+        self, *, min_confidence: float = DEFAULT_MIN_CONFIDENCE, place_doubt: float = PLACE_DOUBT
+    ) -> None:
         self.min_confidence = min_confidence
+        self.place_doubt = place_doubt
+        """A request naming a place heard at a lower confidence is asked about, not believed (:data:`PLACE_DOUBT`)."""
         self.known_word = known_word
         self.grammar: Grammar | None = None
         self._decoder: Any = None
@@ -225,10 +257,20 @@ class Recogniser:
         else:
             reason = ""
         text = grammar.canonical(raw) if raw else ""
-        heard = Heard(text, confidence, not reason, raw, time.perf_counter() - started, reason)
+        ask = None
+        if not reason and confidence < self.place_doubt and (place := _place_in(raw, grammar)):
+            reason, ask = f"unsure of the place: {place} at confidence {confidence:.2f}", place
+        heard = Heard(text, confidence, not reason, raw, time.perf_counter() - started, reason, ask)
         if reason:
             log.info("rejected speech %r (confidence %.2f): %s", raw, confidence, reason)
         return heard
+
+
+def _place_in(raw: str, grammar: Grammar) -> str | None:
+    """The place a sentence of ``grammar`` names (its longest spoken form in ``raw``), or None."""
+    said = f" {raw} "
+    forms = [form for form in grammar.place_forms if f" {form} " in said]
+    return grammar.place_forms[max(forms, key=len)] if forms else None
 
 
 class Utterances:

@@ -16,7 +16,10 @@ would act on it.
 Never a wrong place: the beam search's other hypotheses come for free, and a transcript that
 names a place is believed only when every hypothesis nearly as likely (:data:`DOUBT_MARGIN`) names
 the same place, however it words the rest ("where is the gym", heard as "where is the entrance"
-and, nearly as likely, "where is the june", is not passed on: the person is heard again).
+and, nearly as likely, "where is the june", is not passed on as text), nor a place whose words
+Whisper itself found unlikely (:data:`PLACE_ODDS`: the least likely token of the place). Such a
+request goes to ``/cyborg_speech/unsure`` with its place, and the navigation module asks "Did you
+mean the entrance?" before it acts (``Heard.ask``).
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ import logging
 import re
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -38,13 +42,14 @@ from cyborg.hearing.grammar import ALWAYS_HEARD, Grammar
 from cyborg.hearing.recogniser import SAMPLE_RATE, Heard
 from cyborg.hearing.understanding import Understanding, Understood
 from cyborg.modules.conversation import is_greeting
-from cyborg.navigation.keywords import CUE_STOP_WORDS, detect_answer
+from cyborg.navigation.keywords import CUE_STOP_WORDS, detect_answer, normalise
 
 __all__ = [
     "DEFAULT_BEAM",
     "DEFAULT_THREADS",
     "DEFAULT_WINDOW",
     "DOUBT_MARGIN",
+    "PLACE_ODDS",
     "WhisperRecogniser",
     "collapse_repeats",
     "default_model_path",
@@ -60,12 +65,27 @@ DEFAULT_WINDOW = 10.0
 """Seconds of audio the encoder reads; shorter utterances are padded to it, longer ones cut."""
 MAX_TOKENS = 40
 """A command is a few words; a cap keeps a looping decode from running on."""
+PLACE_ODDS = 0.5
+"""A place whose least likely token Whisper gave less than this probability is in doubt: asked about
+(chosen on the development sets' decodes: docs/benchmarks-history.md, issue 34's fourth round)."""
 DOUBT_MARGIN = 2.0
 """Natural-log units of a whole transcript's probability: a hypothesis within this of the best that
 names another place (or none) makes the place doubtful (e^2: about 7 times less likely)."""
 PROMPT_TOKENS = 223
 """Whisper keeps at most this many tokens of previous text (half its text context, minus one)."""
 FRAMES_PER_SECOND = 100
+Token = tuple[str, float]
+"""A token of a transcript and the probability Whisper gave it."""
+
+
+@dataclass(frozen=True)
+class _Searched:
+    """A beam search's encoder output, prompt and best transcript's tokens (to score them again)."""
+
+    encoded: Any
+    prompt: list[int]
+    best: list[int]
+
 
 NO_MODEL = (
     "the Whisper model is not installed ({detail}); fix: run scripts/setup (it installs "
@@ -232,8 +252,11 @@ class WhisperRecogniser:
         phrasings: bool = False,
         min_confidence: float = 0.0,
         understanding: Callable[[Grammar], Understanding] | None = None,
+        place_doubt: float = PLACE_ODDS,
     ) -> None:
         self.model_path = model or default_model_path()
+        self.place_doubt = place_doubt
+        """A place whose least likely token had a lower probability is asked about (:data:`PLACE_ODDS`)."""
         self.beam = beam
         self.window = window
         self.extra_prompt = prompt
@@ -307,6 +330,10 @@ class WhisperRecogniser:
     def hypotheses(self, audio: bytes) -> list[tuple[str, float, float]]:
         """The beam's transcripts of one utterance, best first: text, confidence (the mean token
         probability, 0-1) and the whole transcript's log probability."""
+        return self._search(audio)[0]
+
+    def _search(self, audio: bytes) -> tuple[list[tuple[str, float, float]], _Searched]:
+        """:meth:`hypotheses`, and what :meth:`_token_odds` needs to score the best one."""
         import ctranslate2
 
         samples = np.frombuffer(audio, dtype="<i2").astype(np.float32) / 32768.0
@@ -316,9 +343,10 @@ class WhisperRecogniser:
         if features.shape[1] < frames:  # as faster-whisper pads a segment: zeros after the speech
             features = np.pad(features, ((0, 0), (0, frames - features.shape[1])))
         batch = ctranslate2.StorageView.from_array(np.ascontiguousarray(features[None], dtype=np.float32))
+        encoded = self._model.encode(batch, to_cpu=False)  # once: the place's check decodes it again
         prompt = self._prompt + self._start
         [result] = self._model.generate(
-            batch,
+            encoded,
             [prompt],
             beam_size=self.beam,
             num_hypotheses=self.beam,
@@ -330,7 +358,40 @@ class WhisperRecogniser:
             (self._tokenizer.decode(ids), float(np.exp(min(0.0, score))), score * (len(ids) + 1))
             for ids, score in zip(result.sequences_ids, result.scores, strict=False)
         ]  # a score is the mean log probability of the tokens and the end
-        return found or [("", float(np.exp(-10.0)), -100.0)]
+        best = list(result.sequences_ids[0]) if result.sequences_ids else []
+        return found or [("", float(np.exp(-10.0)), -100.0)], _Searched(encoded, prompt, best)
+
+    def _token_odds(self, searched: _Searched, end: int) -> list[Token]:
+        """The first ``end`` tokens of the best transcript, each with the probability Whisper gave it
+        where it stands.
+
+        CTranslate2 returns a step's probabilities only from a greedy decode, so those tokens are
+        decoded once more, greedily, as a forced prefix (on the encoder's output already computed):
+        the decoder's distribution at every forced position comes back with it (20-40 ms of CPU).
+        """
+        ids = searched.best[:end]
+        if not ids:
+            return []
+        [forced] = self._model.generate(
+            searched.encoded,
+            [searched.prompt + ids],
+            beam_size=1,
+            max_length=len(searched.prompt) + len(ids) + 1,
+            return_logits_vocab=True,
+            suppress_blank=True,
+        )
+        tokens: list[Token] = []
+        for step, token in zip(forced.logits[0], ids, strict=False):
+            logits = np.asarray(step, dtype=np.float64)  # softmax of the token, without overflow:
+            tokens.append(
+                (self._tokenizer.decode([token]), float(1.0 / np.exp(logits - logits[token]).sum()))
+            )
+        return tokens
+
+    def _place_doubt(self, searched: _Searched, place: str) -> float:
+        """:meth:`place_odds` of ``place`` in the best transcript, scoring its tokens up to the place's last."""
+        spelt = self._place_tokens([self._tokenizer.decode([token]) for token in searched.best], place)
+        return self.place_odds(self._token_odds(searched, max(spelt) + 1), place) if spelt else 1.0
 
     def decode(self, audio: bytes) -> Heard:
         """Decode one utterance (16-bit little-endian mono samples at :data:`SAMPLE_RATE`)."""
@@ -338,23 +399,61 @@ class WhisperRecogniser:
         if understanding is None:
             raise HearingError("the recogniser has no grammar yet; fix: call use(grammar) first")
         started = time.perf_counter()
-        [(raw, confidence, likelihood), *others] = self.hypotheses(audio)
+        [(raw, confidence, likelihood), *others], searched = self._search(audio)
         text = clean(raw)
         understood = understanding.of(text) if text else None
+        ask = None
         if not text:
             reason = "nothing heard"
         elif understood is None:
             reason = "not understood"
         elif understood.place is not None and (rival := self._rival(understood, likelihood, others)):
-            reason = f"unsure of the place: {understood.place} or {rival}"
+            reason, ask = f"unsure of the place: {understood.place} or {rival}", understood.place
+        elif (
+            understood.place is not None
+            and (odds := self._place_doubt(searched, understood.place)) < self.place_doubt
+        ):
+            reason, ask = (
+                f"unsure of the place: {understood.place} heard at odds {odds:.2f}",
+                understood.place,
+            )
         elif confidence < self.min_confidence:
             reason = f"confidence {confidence:.2f} < {self.min_confidence:.2f}"
         else:
             reason = ""
-        heard = Heard(text, confidence, not reason, raw.strip(), time.perf_counter() - started, reason)
+        heard = Heard(text, confidence, not reason, raw.strip(), time.perf_counter() - started, reason, ask)
         if reason:
             log.info("rejected speech %r (confidence %.2f): %s", raw.strip(), confidence, reason)
         return heard
+
+    def place_odds(self, tokens: list[Token], place: str) -> float:
+        """The probability Whisper gave the least likely token of the words that name ``place`` in
+        the transcript ``tokens`` spell (which may stop after them); 1.0 when they do not name it."""
+        return min((tokens[i][1] for i in self._place_tokens([t for t, _ in tokens], place)), default=1.0)
+
+    def _place_tokens(self, pieces: list[str], place: str) -> list[int]:
+        """The indices of the tokens (``pieces``, a transcript's) that spell ``place``: the words
+        nearest its name (the best match), the first of equals (a looping decode says it twice)."""
+        assert self.understanding is not None
+        words = normalise("".join(pieces)).split()
+        best: tuple[float, int, int] | None = None
+        for start in range(len(words)):
+            found = self.understanding.matcher.find(" ".join(words[start:]))
+            here = found is not None and found.location == place and found.start == 0
+            if found is not None and here and (best is None or found.score > best[0]):
+                best = (found.score, start, start + len(found.matched.split()))
+        if best is None:
+            return []
+        span = range(best[1], best[2])
+        indices, said = [], ""
+        for i, piece in enumerate(pieces):
+            said += piece
+            word = len(normalise(said).split()) - 1
+            if word >= span.stop:
+                break
+            if word in span and re.search(r"[a-z0-9]", piece.lower()):  # not punctuation or spaces
+                indices.append(i)
+        return indices
 
     def _rival(
         self, understood: Understood, likelihood: float, others: list[tuple[str, float, float]]

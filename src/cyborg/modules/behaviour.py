@@ -280,6 +280,29 @@ class BehaviourModule:
 
         self.node.subscribe(topics.TEXT_FROM_SPEECH, String, on_text)
 
+    def on_unsure_speech(self, callback: Callable[[str, str, MessageInfo], None]) -> None:
+        """Call ``callback(text, place, info)`` for every sentence the ears heard but are unsure of
+        the place in (``/cyborg_speech/unsure``: it never comes on ``/text_from_speech``). A module
+        may ask "Did you mean the <place>?" before acting; one that cannot ask should ignore it.
+        A message that is not that shape, or over the API's text limit, is left out."""
+        limit = TextLimit(topics.SPEECH_UNSURE)
+
+        def on_message(message: String, info: MessageInfo) -> None:
+            if not limit.accepts(message.data, info.sender):
+                return
+            try:
+                body = json.loads(message.data)
+                text, place = body["text"], body["place"]
+            except (ValueError, KeyError, TypeError):
+                log.warning(
+                    "%s: %s is no unsure sentence: %.80r", self.node.name, topics.SPEECH_UNSURE, message.data
+                )
+                return
+            if isinstance(text, str) and isinstance(place, str) and text and place:
+                callback(text, place, info)
+
+        self.node.subscribe(topics.SPEECH_UNSURE, String, on_message)
+
     def on_muted(self, callback: Callable[[frozenset[str]], None]) -> None:
         """Call ``callback(resources)`` whenever the resources this node is muted on change.
 

@@ -97,6 +97,7 @@ class ConversationModule(BehaviourModule):
         self._asking_until = -1.0
         self.serve(action, self.converse)
         self.on_speech_text(self._on_text)
+        self.on_unsure_speech(lambda text, place, info: self._on_text(text, info))  # spoken to, all the same
         node.subscribe(topics.STATE_CHANGE, SystemState, self._on_state_change, queue_size=100)
 
     def _on_state_change(self, message: SystemState, info: MessageInfo) -> None:

@@ -4,7 +4,8 @@ Part of the navigation module's pure logic layer (no I/O). The module listens to
 the text the STT publishes and turns it into one of a few intents: a command to
 go somewhere ("go to" / "move to"), a question where a place is ("where is"), a
 request for the robot's opinion of a place ("think of") or a yes/no answer, each in the many
-ways people say it ("can you point me to", "I need to find", "how can I reach").
+ways people say it ("can you point me to", "I need to find", "how can I reach"). The phrasings
+are content, in ``navigation/data/phrasings.yaml`` (read and checked once, at import).
 
 Place names are matched tolerantly with rapidfuzz, because STT mishears: small
 typos ("cafetria"), split or joined words ("el 6", "entrance2") and numbers spoken
@@ -20,11 +21,15 @@ import itertools
 import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
+from importlib import resources
+from pathlib import Path
 
 import snowballstemmer
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from rapidfuzz import fuzz
 
-from cyborg.errors import NavigationError
+from cyborg.configfile import describe_errors, load_yaml, read_text_file
+from cyborg.errors import ConfigError, NavigationError
 
 DEFAULT_THRESHOLD = 80.0
 """Lowest rapidfuzz ratio (0-100) at which a span of text counts as a place name."""
@@ -87,108 +92,119 @@ class Intent(enum.Enum):
     NO = "no"
 
 
-TRIGGERS: dict[Intent, tuple[str, ...]] = {
-    Intent.NAVIGATION_COMMAND: (
-        "go to",
-        "goto",
-        "move to",
-        "drive to",
-        "go over to",
-        "head to",
-        "head over to",
-        "navigate to",
-        "roll to",
-        "walk to",
-        "get over to",
-        "take me to",
-        "bring me to",
-        "lead me to",
-        "lead the way to",
-        "guide me to",
-        "walk me to",
-        "escort me to",
-        "accompany me to",
-        "follow you to",
-        "show me the way to",
-        "lets go to",
-        "get me to",
-    ),
-    Intent.NAVIGATION_INFORMATION: (
-        "where is",
-        "wheres",
-        "where are",
-        "where can i find",
-        "where do i find",
-        "where would i find",
-        "where might i find",
-        "where will i find",
-        "where could i find",
-        "how do i get to",
-        "how can i get to",
-        "how would i get to",
-        "how to get to",
-        "how do i go to",
-        "how can i go to",
-        "how do i reach",
-        "how can i reach",
-        "how do i find",
-        "how can i find",
-        "show me where",
-        "how to find",
-        "how far is",
-        "which way is",
-        "which way to",
-        "the way to",
-        "directions to",
-        "direction of",
-        "point me to",
-        "point me towards",
-        "direct me to",
-        "looking for",
-        "searching for",
-        "trying to find",
-        "need to find",
-        "want to find",
-        "help me find",
-        "cant find",
-        "tell me where",
-        "know where",
-        "is there a",
-        "is there an",
-        "find the",
-        "locate the",
-    ),
-    Intent.NAVIGATION_FEEDBACK: (
-        "think of",
-        "think about",
-        "think on",
-        "feel about",
-        "thoughts on",
-        "thoughts about",
-        "opinion of",
-        "opinion on",
-        "opinion about",
-        "view on",
-        "views on",
-        "your take on",
-        "how do you like",
-        "do you like",
-        "how would you rate",
-        "how do you find",
-        "make of",
-        "impression of",
-        "fond of",
-        "fan of",
-        "reckon about",
-        "reckon of",
-        "say about",
-        "feelings about",
-        "like about",
-        "describe",
-        "enjoy",
-    ),
-}
-"""Phrases (normalised) that start a navigation request; the place must come after them.
+NUMBER_LEADS = frozenset({"number", "nr"})
+"""Words before a number that say only that a number comes ("entrance number 2" is entrance 2)."""
+
+
+def normalise(text: str) -> str:
+    """Lower-case, drop punctuation and apostrophes, spell numbers as digits, single spaces; "number"
+    before a number is left out.
+
+    >>> normalise("Where's  Entrance-Two?")
+    'wheres entrance 2'
+    >>> normalise("where is entrance number two")
+    'where is entrance 2'
+    """
+    text = text.casefold().replace("'", "").replace("\u2019", "")
+    kept: list[str] = []
+    for word in reversed(re.sub(r"[\W_]+", " ", text).split()):  # from the end: "number number 2" is 2
+        if not (word in NUMBER_LEADS and kept and kept[-1].isdigit()):
+            kept.append(NUMBER_WORDS.get(word, word))
+    return " ".join(reversed(kept))
+
+
+PHRASINGS_FILE = Path(str(resources.files("cyborg") / "navigation" / "data" / "phrasings.yaml"))
+"""How people ask for a place and answer the robot's questions: content, edited there."""
+_NAVIGATION = (Intent.NAVIGATION_COMMAND, Intent.NAVIGATION_INFORMATION, Intent.NAVIGATION_FEEDBACK)
+
+
+class _PhrasingsFile(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True)
+
+    requests: dict[str, list[str]]
+    cue_words: dict[str, list[str]] = Field(default_factory=dict)
+    statement_words: list[str] = Field(default_factory=list)
+    yes_answers: list[str]
+    no_answers: list[str]
+    plain: list[str] = Field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class Phrasings:
+    """The phrasings of ``phrasings.yaml``, checked."""
+
+    requests: dict[Intent, tuple[str, ...]]
+    cue_words: dict[Intent, tuple[str, ...]]
+    statement_words: tuple[str, ...]
+    yes_answers: tuple[str, ...]
+    no_answers: tuple[str, ...]
+    plain: tuple[str, ...]
+
+
+def load_phrasings(path: Path = PHRASINGS_FILE) -> Phrasings:
+    """Read and check a phrasings file; a broken one raises :class:`~cyborg.errors.ConfigError`
+    naming the entry and the fix."""
+    try:
+        data = load_yaml(read_text_file(path), str(path))
+        raw = _PhrasingsFile.model_validate(data)
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"cannot read it ({exc}); fix: reinstall cyborg", source=str(path)) from exc
+    except ValidationError as exc:
+        raise ConfigError(
+            describe_errors(exc, _PhrasingsFile, where="", doc="the comment at the top of the shipped file"),
+            source=str(path),
+        ) from exc
+    kinds = ", ".join(i.value for i in _NAVIGATION)
+    problems: list[str] = []
+
+    def by_intent(section: str, rows: dict[str, list[str]]) -> dict[Intent, tuple[str, ...]]:
+        found: dict[Intent, tuple[str, ...]] = {}
+        for key, phrases in rows.items():
+            intent = next((i for i in _NAVIGATION if i.value == key), None)
+            if intent is None:
+                problems.append(f"{section}.{key}: no such request; fix: use one of {kinds}")
+                continue
+            found[intent] = tuple(phrases)
+        return found
+
+    requests = by_intent("requests", raw.requests)
+    cue_words = by_intent("cue_words", raw.cue_words)
+    sections = {
+        **{f"requests.{i.value}": p for i, p in requests.items()},
+        **{f"cue_words.{i.value}": p for i, p in cue_words.items()},
+        "statement_words": tuple(raw.statement_words),
+        "yes_answers": tuple(raw.yes_answers),
+        "no_answers": tuple(raw.no_answers),
+        "plain": tuple(raw.plain),
+    }
+    for section, phrases in sections.items():
+        for phrase in phrases:
+            if normalise(phrase) != phrase or not phrase:
+                problems.append(
+                    f"{section}: {phrase!r} is not as the robot reads speech; fix: write {normalise(phrase)!r}"
+                )
+    known = {p for section, ps in sections.items() if section not in ("plain", "statement_words") for p in ps}
+    problems += [
+        f"plain: {p!r} is no request or answer of the file; fix: add it to one, or leave it out"
+        for p in raw.plain
+        if p not in known
+    ]
+    if problems:
+        raise ConfigError(problems, source=str(path))
+    return Phrasings(
+        {i: requests.get(i, ()) for i in _NAVIGATION},
+        cue_words,
+        tuple(raw.statement_words),
+        tuple(raw.yes_answers),
+        tuple(raw.no_answers),
+        tuple(raw.plain),
+    )
+
+
+_PHRASINGS = load_phrasings()
+
+TRIGGERS: dict[Intent, tuple[str, ...]] = _PHRASINGS.requests
+"""Phrases (normalised; ``phrasings.yaml``) that start a navigation request; the place must come after them.
 
 The ways people ask, beyond the thesis's "go to", "where is" and "think of": a request to be
 taken somewhere is a command, a question about the way is a request for information."""
@@ -200,15 +216,7 @@ ALL_TRIGGERS: tuple[str, ...] = tuple(
 )
 """Every trigger, the intents taking turns, the most common phrasings first."""
 
-PLAIN_PHRASES = frozenset(
-    {
-        *("go to", "goto", "move to", "drive to", "where is", "wheres", "where can i find"),
-        *("think of", "think about", "feel about"),
-        *("yes", "yeah", "yea", "yep", "yup", "sure", "ok", "okay", "alright", "all right", "of course"),
-        *("please", "why not", "go ahead", "definitely", "absolutely", "certainly"),
-        *("no", "nope", "nah", "not really", "no thanks", "never", "dont", "do not", "not now"),
-    }
-)
+PLAIN_PHRASES = frozenset(_PHRASINGS.plain)
 """The requests and answers of the thesis and a few more: what a recogniser that can only hear
 whole sentences of a grammar (pocketsphinx) listens for; the many other phrasings cost it more in
 confusions than they gain (docs/benchmarks-history.md, issue 34)."""
@@ -232,80 +240,10 @@ ANSWER_COMPANIONS = frozenset(
 NEGATIONS = frozenset({"dont", "not", "never", "cant", "wont", "shouldnt", "stop"})
 """Words that turn a command round ("don't go to the cafeteria"): a command right after one is no command."""
 
-YES_PHRASES = (
-    "yes",
-    "yeah",
-    "yea",
-    "yep",
-    "yup",
-    "yes please",
-    "sure",
-    "sure thing",
-    "ok",
-    "okay",
-    "alright",
-    "all right",
-    "of course",
-    "please",
-    "please do",
-    "why not",
-    "go ahead",
-    "definitely",
-    "absolutely",
-    "certainly",
-    "indeed",
-    "correct",
-    "right",
-    "thats right",
-    "that would be great",
-    "that would be nice",
-    "i would like that",
-    "id like that",
-    "id love that",
-    "i would love that",
-    "lets go",
-    "lets do it",
-    "lead the way",
-    "no problem",
-    "sounds good",
-    "sounds great",
-    "yes i do",
-    "yes you may",
-    "affirmative",
-    "gladly",
-)
-NO_PHRASES = (
-    "no",
-    "nope",
-    "nah",
-    "not really",
-    "no thanks",
-    "no thank you",
-    "never",
-    "dont",
-    "do not",
-    "not now",
-    "not today",
-    "maybe later",
-    "another time",
-    "some other time",
-    "i am fine",
-    "im fine",
-    "im good",
-    "never mind",
-    "nevermind",
-    "negative",
-    "wrong",
-    "thats wrong",
-    "thats not it",
-    "not that one",
-    "i dont think so",
-    "no need",
-    "not necessary",
-    "rather not",
-    "no way",
-    "not interested",
-)
+YES_PHRASES: tuple[str, ...] = _PHRASINGS.yes_answers
+"""Answers that say yes (``phrasings.yaml``)."""
+NO_PHRASES: tuple[str, ...] = _PHRASINGS.no_answers
+"""Answers that say no (``phrasings.yaml``)."""
 
 
 @dataclass(frozen=True)
@@ -337,17 +275,6 @@ class Detection:
     def certain(self) -> bool:
         """False when the place was heard only roughly ("where is the a16" for the e16): ask first."""
         return self.score >= CERTAIN_SCORE
-
-
-def normalise(text: str) -> str:
-    """Lower-case, drop punctuation and apostrophes, spell numbers as digits, single spaces.
-
-    >>> normalise("Where's  Entrance-Two?")
-    'wheres entrance 2'
-    """
-    text = text.casefold().replace("'", "").replace("\u2019", "")
-    words = re.sub(r"[\W_]+", " ", text).split()
-    return " ".join(NUMBER_WORDS.get(word, word) for word in words)
 
 
 def _compact(words: Sequence[str]) -> str:
@@ -493,6 +420,9 @@ STATEMENT_OPENERS = frozenset(
 )
 """First words of a sentence about something rather than a request ("my friend is looking at the
 lift", "the lift smells funny"): without a trigger phrase, no request."""
+STATEMENT_WORDS = frozenset(_PHRASINGS.statement_words)
+"""Words (``phrasings.yaml``) that make a sentence without a trigger phrase a statement about the
+past ("i saw you near the cafeteria"): no request."""
 FUZZY_TRIGGER_SCORE = 85.0
 """Lowest rapidfuzz ratio at which the words before a place count as a misheard trigger phrase
 ("show me the wait on" for "show me the way to")."""
@@ -520,17 +450,8 @@ def _cue_shares() -> dict[str, dict[Intent, float]]:
     }
 
 
-CUE_WORDS: dict[Intent, tuple[str, ...]] = {
-    Intent.NAVIGATION_INFORMATION: (
-        *("nearby", "near", "close", "far", "located", "location", "whereabouts", "floor"),
-        *("route", "path", "directions", "around", "somewhere", "way"),
-    ),
-    Intent.NAVIGATION_FEEDBACK: (
-        *("like", "love", "hate", "enjoy", "fond", "fan", "favourite", "favorite", "impression"),
-        *("reckon", "describe", "opinion", "nice", "good", "pleasant", "cozy", "cosy", "rate"),
-    ),
-}
-"""Words that lean a sentence to an intent without being a trigger phrase's, wherever the place
+CUE_WORDS: dict[Intent, tuple[str, ...]] = _PHRASINGS.cue_words
+"""Words (``phrasings.yaml``) that lean a sentence to an intent without being a trigger phrase's, wherever the place
 stands ("is the canteen nearby", "are you fond of el6"): nearness and the way are questions of
 where; liking is a question of opinion."""
 
@@ -559,7 +480,7 @@ def classify_request(words: Sequence[str], place: LocationMatch) -> Intent | Non
     :data:`CUE_SCORE` and a clear lead over the next; a negated command and a statement ("the
     lift is ...") are none.
     """
-    if not words or words[0] in STATEMENT_OPENERS:
+    if not words or words[0] in STATEMENT_OPENERS or any(w in STATEMENT_WORDS for w in words):
         return None
     span = range(place.start, place.start + len(place.matched.split()))
     lead = words[: place.start]

@@ -136,6 +136,7 @@ class NavigationModule(BehaviourModule):
         node.subscribe(topics.AMCL_POSE, PoseWithCovarianceStamped, self._on_pose, queue_size=10)
         node.subscribe(topics.STATE_CHANGE, SystemState, self._on_state_change)
         self.on_speech_text(self._on_text)
+        self.on_unsure_speech(self._on_unsure)
         self.on_emotion_change(self._on_emotion_change)
         self.serve(PLANNING_ACTION, self.planning)
         self.serve(MOVING_ACTION, self.moving)
@@ -201,12 +202,19 @@ class NavigationModule(BehaviourModule):
         self.emotion_since = self.node.clock.monotonic()
 
     def _on_text(self, text: str, info: MessageInfo) -> None:
+        self._heard(text, unsure=False)
+
+    def _on_unsure(self, text: str, place: str, info: MessageInfo) -> None:
+        """The ears heard a request but are unsure of its place (``/cyborg_speech/unsure``): ask first."""
+        self._heard(text, unsure=True)
+
+    def _heard(self, text: str, *, unsure: bool) -> None:
         # Places on the loaded map first: on Glassgården "waiting area" is the map's "waitingarea".
         # Then the others, so that asking for one gets "not on this map" rather than silence.
         found = (
             detect_navigation(text, self.db.matcher(on_map=True))
             or detect_navigation(text, self.db.matcher())
-            or detect_answer(text)
+            or (None if unsure else detect_answer(text))
         )
         if found is None or (found.intent in (Intent.YES, Intent.NO) and self._inbox is None):
             self.spoken_to_at = self.node.clock.monotonic()  # not for us: a wander stops to listen
@@ -218,11 +226,11 @@ class NavigationModule(BehaviourModule):
         location = self.db.find_location(found.location) if found.location else None
         if location is None:
             return
-        log.info("heard %s about %s in %r", found.intent.value, location.name, text)
-        # A place heard only roughly ("where is the a16"): never guess, ask "Did you mean the el6?"
-        # before offering the way (a command's own question, "Shall I go to the el6?", names it).
-        unsure = not found.certain and found.intent is Intent.NAVIGATION_INFORMATION
-        self.ask(Request(found.intent, location, ResponseType.DID_YOU_MEAN if unsure else None))
+        log.info("heard %s about %s in %r%s", found.intent.value, location.name, text, " (unsure)" * unsure)
+        # A place heard only roughly ("where is the a16") or that the ears doubt: never guess, ask
+        # "Did you mean the el6?" first (a command's own question, "Shall I go to the el6?", names it).
+        doubt = (unsure or not found.certain) and found.intent is not Intent.NAVIGATION_COMMAND
+        self.ask(Request(found.intent, location, ResponseType.DID_YOU_MEAN if doubt else None))
 
     def ask(self, request: Request) -> None:
         """Hand ``request`` to the talking state: the one running, or the next (by the request's event).

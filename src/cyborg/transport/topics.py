@@ -46,6 +46,10 @@ SPEECH_INPUT_TOPIC = "/cyborg_tts/say"
 SPOKEN_TOPIC = "/cyborg_tts/spoken"
 # Ours: every utterance the speech input decoded, as JSON {text, confidence, accepted, raw} (std_msgs/String).
 SPEECH_HEARD = "/cyborg_speech/heard"
+# Ours: a sentence the speech input heard but is unsure of the place in, as JSON {text, place,
+# confidence, reason} (std_msgs/String). It is NOT on /text_from_speech (a module that reads only
+# that never acts on a doubtful place); a module that can ask ("Did you mean the elevator?") may.
+SPEECH_UNSURE = "/cyborg_speech/unsure"
 
 MOVE_BASE = "/rosarnl_node/move_base"
 WANDER = "/rosarnl_node/wander"
