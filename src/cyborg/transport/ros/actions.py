@@ -33,6 +33,7 @@ from cyborg.transport.base import (
 )
 from cyborg.transport.ledger import Channel
 from cyborg.transport.messages import ActionType, Message
+from cyborg.transport.ros import reads
 from cyborg.transport.ros.convert import from_ros, ros_class, sender, to_ros
 from cyborg.transport.ros.master import UNREACHABLE, WATCH
 
@@ -160,6 +161,7 @@ class RosActionServer(ActionServer[G, R, F]):
             name, _action_classes(action_type), self._goal_cb, self._cancel_cb, auto_start=False
         )
         self._server.arrived = self._arrived
+        reads.mark(self._server, transport.clock)  # its goal and cancel subscribers read on the loop
         self._server.start()
 
     def _arrived(self, leg: str) -> None:  # rospy thread: actionlib took a goal or cancel message
@@ -330,6 +332,7 @@ class RosActionClient(ActionClient[G, R, F]):
         if self._client is not None:
             return True
         client = _WatchedActionClient.__new__(_WatchedActionClient)
+        reads.mark(client, self.transport.clock)  # its status, result and feedback read on the loop
         try:
             actionlib.ActionClient.__init__(client, self.name, self._classes)
         except UNREACHABLE as exc:
