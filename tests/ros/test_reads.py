@@ -57,8 +57,8 @@ def test_a_plain_rospy_subscriber_beside_ours_blocks_only_itself_and_both_get_ev
 
     async def main() -> int:
         loop_thread = threading.get_ident()
+        publisher = node.publisher(topic, String)  # first: rospy connects the subscriber at once
         subscription = node.subscribe(topic, String, on_ours)
-        publisher = node.publisher(topic, String)
         await _until(lambda: publisher.subscriber_count() >= 1, "our subscriber's connection")
         for i in range(3):
             publisher.publish(String(f"a{i}"))

@@ -27,6 +27,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import select
 import socket
 import threading
 from collections.abc import Callable
@@ -83,6 +84,13 @@ def _loop_of(msgs_callback: Callable[..., None]) -> asyncio.AbstractEventLoop | 
 def _receive_loop(connection: Any, msgs_callback: Callable[..., None]) -> None:  # rospy's thread
     assert _original_receive_loop is not None
     loop = _loop_of(msgs_callback)
+    impl = getattr(msgs_callback, "__self__", None)
+    if loop is None and isinstance(impl, _SubscriberImpl) and not impl.callbacks:
+        # rospy connects a new subscriber to the publishers it knows before it adds the callback:
+        # decide once something arrives (by then the callback is there)
+        with contextlib.suppress(Exception):  # closed meanwhile: rospy's loop ends the connection
+            select.select([connection.socket], [], [])
+        loop = _loop_of(msgs_callback)
     if loop is not None:
         reader = connection._cyborg_reader = _LoopReader(connection, msgs_callback, loop)
         try:
