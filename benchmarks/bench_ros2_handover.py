@@ -382,7 +382,7 @@ def bench(args: argparse.Namespace) -> dict[str, Any]:
     env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     os.environ.update({k: env[k] for k in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE")})
     import rclpy
-    from rclpy.executors import MultiThreadedExecutor
+    from rclpy.executors import SingleThreadedExecutor
     from rclpy.node import Node
 
     children: list[subprocess.Popen[str]] = []
@@ -392,7 +392,10 @@ def bench(args: argparse.Namespace) -> dict[str, Any]:
             children.append(spawn(role, env))
         rclpy.init()
         node = Node("bench_sender")
-        executor = MultiThreadedExecutor(num_threads=4)
+        # One thread: its callbacks only note what arrives. rclpy's MultiThreadedExecutor spins
+        # while a message waits for a thread of its pool (src/cyborg/transport/ros2/executor.py)
+        # and held this process at 80 % of a core: a quiet run then crawled for ten minutes.
+        executor = SingleThreadedExecutor()
         executor.add_node(node)
         threading.Thread(target=executor.spin, daemon=True).start()
         contenders: list[Any] = [Ours(node), Floor(node)]

@@ -400,8 +400,16 @@ def ros_graph() -> Iterator[dict[str, str]]:
         shutil.rmtree(ros_home, ignore_errors=True)
 
 
+SRC = str(Path(__file__).resolve().parents[1] / "src")
+
+
 def spawn(role: str, env: dict[str, str]) -> subprocess.Popen[bytes]:
-    return subprocess.Popen([sys.executable, __file__, "--role", role], env=env, start_new_session=True)
+    # This checkout's code: without it the processes run whatever copy the venv has installed
+    # (from another worktree, the main one's).
+    path = os.pathsep.join(p for p in (SRC, env.get("PYTHONPATH", "")) if p)
+    return subprocess.Popen(
+        [sys.executable, __file__, "--role", role], env={**env, "PYTHONPATH": path}, start_new_session=True
+    )
 
 
 class Reports(StampQueue):
