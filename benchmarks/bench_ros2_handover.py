@@ -264,11 +264,15 @@ class Ours:
     waiting_for = "the controller to hear events"
 
     def __init__(self, node: Any, events: str = REGISTER_EVENT, reports: str = OURS_REPORT) -> None:
+        from rclpy.event_handler import PublisherEventCallbacks
         from std_msgs.msg import String
 
         self.String = String
         self.reports = Reports(node, reports)
-        self.pub = node.create_publisher(String, events, 100)
+        # Our subscription's transient-local half does not take a volatile publisher, by design
+        # (docs/ros2.md): rclpy would warn about it, as the module template's publishers do not.
+        quiet = PublisherEventCallbacks(incompatible_qos=lambda event: None)
+        self.pub = node.create_publisher(String, events, 100, event_callbacks=quiet)
         self.count = 0
 
     def ready(self) -> None:
