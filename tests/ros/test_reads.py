@@ -85,3 +85,25 @@ def test_a_plain_rospy_subscriber_beside_ours_blocks_only_itself_and_both_get_ev
     assert plain == ["b0", "b1", "b2"]
     assert {thread for _, thread in ours} == {loop_thread}
     assert released == [True], "a plain rospy callback ran on the loop and held it up"
+
+
+def test_a_latched_message_reaches_a_later_subscription_with_nothing_published_after_it(
+    ros: RosSession,
+) -> None:
+    number = next(_names)
+    topic = f"/reads_test{number}/latched"
+    node = ros.transport.node(f"reads_test{number}")
+    got: list[str] = []
+
+    async def main() -> None:
+        publisher = node.publisher(topic, String, latch=True)
+        publisher.publish(String("kept"))
+        # rospy sends the kept message right after the connection's header: it may be read with it
+        subscription = node.subscribe(topic, String, lambda message, info: got.append(message.data))
+        try:
+            await _until(lambda: got == ["kept"], "the latched message")
+        finally:
+            subscription.unsubscribe()
+            publisher.unregister()
+
+    ros.clock.run(main())

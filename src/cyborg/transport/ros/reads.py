@@ -27,9 +27,9 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-import select
 import socket
 import threading
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -45,6 +45,7 @@ log = logging.getLogger(__name__)
 
 LOOP_ATTRIBUTE = "_cyborg_loop"
 """Set on an object whose bound methods are rospy subscriber callbacks that may run on this loop."""
+CALLBACK_WAIT = 0.5  # seconds a connection made before its subscriber's callback waits for it
 DETACH_WAIT = 1.0  # seconds a close from another thread waits for the loop to let go of the socket
 
 _original_receive_loop: Callable[..., None] | None = None
@@ -86,10 +87,11 @@ def _receive_loop(connection: Any, msgs_callback: Callable[..., None]) -> None: 
     loop = _loop_of(msgs_callback)
     impl = getattr(msgs_callback, "__self__", None)
     if loop is None and isinstance(impl, _SubscriberImpl) and not impl.callbacks:
-        # rospy connects a new subscriber to the publishers it knows before it adds the callback:
-        # decide once something arrives (by then the callback is there)
-        with contextlib.suppress(Exception):  # closed meanwhile: rospy's loop ends the connection
-            select.select([connection.socket], [], [])
+        # rospy connects a new subscriber to the publishers it knows before it adds the callback
+        # (a latched message may be read with the header already): wait for the callback a moment
+        deadline = time.monotonic() + CALLBACK_WAIT
+        while not impl.callbacks and not connection.done and time.monotonic() < deadline:
+            time.sleep(0.001)
         loop = _loop_of(msgs_callback)
     if loop is not None:
         reader = connection._cyborg_reader = _LoopReader(connection, msgs_callback, loop)
