@@ -107,3 +107,37 @@ def test_a_latched_message_reaches_a_later_subscription_with_nothing_published_a
             publisher.unregister()
 
     ros.clock.run(main())
+
+
+def test_an_action_server_still_counts_as_there_right_after_the_loop_was_busy_a_while(
+    ros: RosSession,
+) -> None:
+    """Its status messages wait unread while the loop is busy; a goal sent right after must not
+    end LOST because the server looked silent (rospy's threads used to read them meanwhile)."""
+    from cyborg.transport.base import GoalStatus, ServerGoalHandle
+    from cyborg.transport.messages import StateMachineAction, StateMachineGoal
+
+    number = next(_names)
+    action = f"/reads_test{number}/act"
+    node = ros.transport.node(f"reads_test{number}")
+
+    def on_goal(handle: ServerGoalHandle[Any, Any, Any]) -> None:
+        handle.accept()
+
+    async def main() -> GoalStatus:
+        server = node.action_server(action, StateMachineAction, on_goal, lambda handle: handle.canceled())
+        client = node.action_client(action, StateMachineAction)
+        try:
+            assert await client.wait_for_server(PATIENCE)
+            time.sleep(1.5)  # the loop is busy (a module's slow callback): longer than the silence limit
+            goal = client.send_goal(StateMachineGoal(event="go"))
+            await _until(lambda: goal.status is not GoalStatus.PENDING, "the goal's answer")
+            status = goal.status
+            goal.cancel()
+            await asyncio.wait_for(goal.wait(), PATIENCE)
+            return status
+        finally:
+            client.close()
+            server.shutdown()
+
+    assert ros.clock.run(main()) is GoalStatus.ACTIVE

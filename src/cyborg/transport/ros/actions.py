@@ -296,6 +296,9 @@ class _WatchedActionClient(actionlib.ActionClient):  # type: ignore[misc]
         limit = SERVER_SILENCE_LIMIT if clock is None else LOCKSTEP_SILENCE_LIMIT
         if time.monotonic() - self.last_status_time <= limit:
             return False
+        reads.read_waiting(self.status_sub)  # the loop was busy: a status may wait unread
+        if time.monotonic() - self.last_status_time <= limit:
+            return False
         return clock is None or clock.monotonic() - self.last_status_virtual > SERVER_SILENCE_LIMIT
 
 
@@ -377,6 +380,8 @@ class RosActionClient(ActionClient[G, R, F]):
         if not self._make_client():
             return False
         client = self._client
+        if client.last_status_msg is None:
+            reads.read_waiting(client.status_sub)  # (the loop may not have read it yet)
         last = client.last_status_msg
         if last is None or client.silent():
             return False

@@ -39,7 +39,7 @@ from rospy.topics import _SubscriberImpl  # type: ignore[import-not-found]
 
 from cyborg.transport.clock import Clock
 
-__all__ = ["LOOP_ATTRIBUTE", "install", "mark"]
+__all__ = ["LOOP_ATTRIBUTE", "install", "mark", "read_waiting"]
 
 log = logging.getLogger(__name__)
 
@@ -68,6 +68,17 @@ def install() -> None:
     _original_close = TCPROSTransport.close
     TCPROSTransport.receive_loop = _receive_loop
     TCPROSTransport.close = _close
+
+
+def read_waiting(subscriber: Any) -> None:
+    """Deliver now what waits unread on ``subscriber``'s connections that this loop reads (called
+    on the loop: after the loop was busy a while, what rospy's threads would have delivered
+    meanwhile, such as an action server's status, still counts before a decision is taken)."""
+    running = asyncio._get_running_loop()
+    for connection in list(getattr(getattr(subscriber, "impl", None), "connections", ())):
+        reader: _LoopReader | None = getattr(connection, "_cyborg_reader", None)
+        if reader is not None and reader.loop is running:
+            reader.read_all()
 
 
 def _loop_of(msgs_callback: Callable[..., None]) -> asyncio.AbstractEventLoop | None:
@@ -140,19 +151,26 @@ class _LoopReader:
         if connection.read_buff.tell() >= 4:  # rospy's thread had read ahead
             self._deliver(b"")
 
-    def _readable(self) -> None:  # loop
-        assert self._sock is not None
+    def _readable(self) -> bool:  # loop; False once nothing more waits (or the connection went back)
+        if self._sock is None:
+            return False
         try:
             data = self._sock.recv(self.connection.protocol.buff_size)
         except (BlockingIOError, InterruptedError):
-            return
+            return False
         except Exception:  # an error, or closed under us: rospy's thread meets it again
             self.give_back()
-            return
+            return False
         if not data:  # end of stream: rospy's thread reads it too and ends the connection
             self.give_back()
-            return
+            return False
         self._deliver(data)
+        return True
+
+    def read_all(self) -> None:  # loop
+        """Read and deliver everything the socket holds now."""
+        while self._fd is not None and self._readable():
+            pass
 
     def _deliver(self, data: bytes) -> None:  # loop
         connection = self.connection
