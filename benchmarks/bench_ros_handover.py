@@ -140,12 +140,20 @@ def machine_yaml(resources: bool) -> str:
 
 def keep_writer_threads() -> None:
     """``--writer-threads``: undo the transport's write-at-once (rospy's writer thread per
-    connection, as before 2026-11-26), to compare; called right after the transport is made."""
+    connection, as before 2026-11-26); ``--thread-reads``: undo its reads on the loop (rospy's
+    reading thread per connection hands each message to the loop, as before 2026-11-26 13:00 UTC);
+    to compare. Called right after the transport is made."""
     if os.environ.get("BENCH_WRITER_THREADS") == "1":
         import rospy.impl.tcpros_pubsub
         import rospy.topics
 
         rospy.topics.QueuedConnection = rospy.impl.tcpros_pubsub.QueuedConnection
+    if os.environ.get("BENCH_THREAD_READS") == "1":
+        from rospy.impl.tcpros_base import TCPROSTransport
+
+        from cyborg.transport.ros import reads
+
+        TCPROSTransport.receive_loop = reads._original_receive_loop
 
 
 def role_controller() -> None:
@@ -176,18 +184,23 @@ def trace_controller() -> None:
     wrap(
         RosSubscription,
         "_on_ros",
-        "c1 event received (rospy thread)",
+        "c1 event read",
         when=lambda sub, *_: sub.topic == REGISTER_EVENT,
     )
-    wrap(Controller, "_on_event_message", "c2 event on the loop")
+    wrap(Controller, "_on_event_message", "c2 event to the controller")
     wrap(_RosClientGoalHandle, "_request_cancel", "c3 cancel: publish", "c4 cancel: published")
     wrap(
         Transport,
         "arrive",
-        "c5 result received (rospy thread)",
+        "c5 result read",
         when=lambda _t, channel, *_a, **_k: channel.endswith("#result"),
     )
-    wrap(ClientGoal, "update_status", "c6 result on the loop", when=lambda _h, status, *_: status.is_terminal)
+    wrap(
+        ClientGoal,
+        "update_status",
+        "c6 result to the controller",
+        when=lambda _h, status, *_: status.is_terminal,
+    )
     wrap(Controller, "_announce", "c7 next state entered (resources set)", "c8 state change published")
     wrap(RosActionClient, "send_goal", "c9 goal: send", "c10 goal: published")
 
@@ -215,16 +228,16 @@ def role_modules() -> None:
     if _trace.enabled():
         from cyborg.transport.ros.actions import RosActionServer
 
-        _trace.wrap(RosActionServer, "_cancel_cb", "m1 cancel received (rospy thread)")
-        _trace.wrap(RosActionServer, "_goal_cb", "m3 goal received (rospy thread)")
+        _trace.wrap(RosActionServer, "_cancel_cb", "m1 cancel read")
+        _trace.wrap(RosActionServer, "_goal_cb", "m3 goal read")
         on_cancel_traced, on_goal_traced = on_cancel, on_goal
 
         def on_cancel(handle: ServerGoalHandle[Any, Any, Any]) -> None:
-            _trace.mark("m2 cancel on the loop")
+            _trace.mark("m2 cancel to the module")
             on_cancel_traced(handle)
 
         def on_goal(handle: ServerGoalHandle[Any, Any, Any]) -> None:
-            _trace.mark("m4 goal on the loop")
+            _trace.mark("m4 goal to the module")
             on_goal_traced(handle)
 
     for name, action in zip(("mod_a", "mod_b"), OUR_ACTIONS, strict=True):
@@ -387,8 +400,16 @@ def ros_graph() -> Iterator[dict[str, str]]:
         shutil.rmtree(ros_home, ignore_errors=True)
 
 
+SRC = str(Path(__file__).resolve().parents[1] / "src")
+
+
 def spawn(role: str, env: dict[str, str]) -> subprocess.Popen[bytes]:
-    return subprocess.Popen([sys.executable, __file__, "--role", role], env=env, start_new_session=True)
+    # This checkout's code: without it the processes run whatever copy the venv has installed
+    # (from another worktree, the main one's).
+    path = os.pathsep.join(p for p in (SRC, env.get("PYTHONPATH", "")) if p)
+    return subprocess.Popen(
+        [sys.executable, __file__, "--role", role], env={**env, "PYTHONPATH": path}, start_new_session=True
+    )
 
 
 class Reports(StampQueue):
@@ -524,20 +545,20 @@ class Direct:
 
 
 OURS_STEPS = (
-    "c1 event received (rospy thread)",
-    "c2 event on the loop",
+    "c1 event read",
+    "c2 event to the controller",
     "c3 cancel: publish",
     "c4 cancel: published",
-    "m1 cancel received (rospy thread)",
-    "m2 cancel on the loop",
-    "c5 result received (rospy thread)",
-    "c6 result on the loop",
+    "m1 cancel read",
+    "m2 cancel to the module",
+    "c5 result read",
+    "c6 result to the controller",
     "c7 next state entered (resources set)",
     "c8 state change published",
     "c9 goal: send",
     "c10 goal: published",
-    "m3 goal received (rospy thread)",
-    "m4 goal on the loop",
+    "m3 goal read",
+    "m4 goal to the module",
 )
 FLOOR_STEPS = (
     "f1 event received (rospy thread)",
@@ -560,6 +581,7 @@ def bench(args: argparse.Namespace) -> dict[str, Any]:
         env["BENCH_RESOURCES"] = "1" if args.resources else "0"
         env["BENCH_TRACE"] = trace_dir
         env["BENCH_WRITER_THREADS"] = "1" if args.writer_threads else "0"
+        env["BENCH_THREAD_READS"] = "1" if args.thread_reads else "0"
         os.environ.update(env)  # rospy in this process reads them at init time
         import xmlrpc.client
 
@@ -640,6 +662,11 @@ def main() -> None:
         help="our processes keep rospy's writer thread per connection (no write at once), to compare",
     )
     parser.add_argument(
+        "--thread-reads",
+        action="store_true",
+        help="our processes read every subscriber connection on rospy's thread, not on the loop, to compare",
+    )
+    parser.add_argument(
         "--status-list-timeout",
         type=float,
         default=STATUS_LIST_TIMEOUT,
@@ -676,6 +703,7 @@ def main() -> None:
         f"status_list_timeout {args.status_list_timeout:g} s on all six servers; /state_resources "
         + ("changes on every handover" if args.resources else "stays the same")
         + ("; our processes keep rospy's writer threads" if args.writer_threads else "")
+        + ("; our processes read on rospy's threads" if args.thread_reads else "")
     )
     print(f"wall time of the back-to-back blocks: {result['b2b_elapsed']:.1f} s")
     cpu = result["cpu"]

@@ -31,6 +31,7 @@ and the fix.
 
 from __future__ import annotations
 
+import asyncio
 import enum
 import logging
 from abc import ABC, abstractmethod
@@ -604,9 +605,12 @@ class Transport(ABC):
 
     def to_loop(self, callback: Callable[..., object], *args: Any) -> None:
         """Run ``callback(*args)`` through :attr:`run_callback` on the loop, from any thread: how a
-        middleware's own threads deliver. Once the loop is closed, it is dropped."""
+        middleware's own threads deliver (or the loop itself, when it reads the middleware: on a later
+        turn, without waking it). Once the loop is closed, it is dropped."""
         loop = self.clock.loop
-        if not loop.is_closed():
+        if asyncio._get_running_loop() is loop:
+            loop.call_soon(self.run_callback, callback, *args)
+        elif not loop.is_closed():
             loop.call_soon_threadsafe(self.run_callback, callback, *args)
 
     def arrive(

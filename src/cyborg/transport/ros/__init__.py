@@ -7,7 +7,9 @@ controller, emotion system and motivator form the one node ``cyborg_controller``
 
 rospy calls back on its own threads; every callback is handed to the clock's
 event loop with ``call_soon_threadsafe``, so components still run one callback
-at a time. Messages are converted field by field between our dataclasses and
+at a time. In real time the subscriptions of our components (and actionlib's inside
+our action clients and servers) are read on the loop itself, so a message wakes one
+thread, not two (:mod:`.reads`). Messages are converted field by field between our dataclasses and
 the generated ROS classes (the names are the same by design).
 
 Its modules, one idea each:
@@ -21,7 +23,7 @@ Its modules, one idea each:
   :mod:`.graph`: the graph as the master lists it, each node asked whether it answers;
 * :mod:`.patches`: rospy's behaviour changed, installed when a RosTransport is made
   (importing changes nothing); :mod:`.writes`: publishers writing at once when the socket
-  takes it (one of those changes).
+  takes it, :mod:`.reads`: subscriber connections read on the event loop (two of those changes).
 
 The subscription queue, the client's goal handle and the message walk are the ones every
 transport shares (:mod:`cyborg.transport._queue`, :mod:`cyborg.transport._goals`,

@@ -9,7 +9,9 @@ transport) changes nothing; :func:`install` patches rospy's classes for the whol
   answers, leaving the rest to :data:`~cyborg.transport.ros.master.WATCH`;
 * a publisher with a queue (ours, actionlib's) writes a message in the publishing thread when the
   socket takes it without blocking, instead of always through a writer thread
-  (:mod:`.writes`).
+  (:mod:`.writes`);
+* a subscriber connection whose callbacks all belong to one event loop's components is read on
+  that loop instead of on a thread per connection (:mod:`.reads`).
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from typing import Any
 
 import rospy  # type: ignore[import-not-found]
 
+from cyborg.transport.ros import reads
 from cyborg.transport.ros.master import UNREACHABLE, WATCH, answer, master_proxy
 
 __all__ = ["install"]
@@ -28,6 +31,7 @@ def install() -> None:
     _ask_for_tcp_nodelay()
     _register_once()
     _write_at_once()
+    reads.install()
 
 
 def _write_at_once() -> None:

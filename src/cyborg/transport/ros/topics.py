@@ -23,6 +23,7 @@ from cyborg.transport._host import Host
 from cyborg.transport._queue import SubscriptionQueue
 from cyborg.transport.base import M, MessageInfo, Publisher, Subscription
 from cyborg.transport.messages import Message
+from cyborg.transport.ros import reads
 from cyborg.transport.ros.convert import from_ros, ros_class, sender, to_ros
 from cyborg.transport.ros.master import listed_subscribers
 
@@ -145,6 +146,7 @@ class RosSubscription(Subscription[M]):
         self._ledger = transport.clock.ledger
         if self._ledger is not None:
             self._ledger.listen(topic)
+        reads.mark(self, transport.clock)  # read on the loop (in real time)
         self._sub = rospy.Subscriber(topic, ros_class(msg_type.ros_type), self._on_ros, queue_size=None)
 
     @property
@@ -152,7 +154,7 @@ class RosSubscription(Subscription[M]):
         """Messages dropped because the bounded queue was full."""
         return self._queue.dropped
 
-    def _on_ros(self, ros_message: Any) -> None:  # rospy thread
+    def _on_ros(self, ros_message: Any) -> None:  # rospy's thread, or the loop (reads.py)
         info = MessageInfo(sender=sender(ros_message), stamp=time.time())
         message = from_ros(ros_message, self._type)
         self._transport.arrive(self.topic, info.sender, self._queue.put, message, info, counted=(self.topic,))

@@ -4,7 +4,8 @@ Part of :mod:`cyborg.transport.ros`. Making a RosTransport installs the rospy pa
 (:mod:`.patches`); its first node initialises this process's one rospy node and starts the
 master watch (:mod:`.master`). A :class:`RosNode` hands out the topics (:mod:`.topics`),
 services (:mod:`.services`) and actions (:mod:`.actions`) of the ROS 1 transport. Callbacks
-arrive on rospy's threads and run on the clock's event loop (:meth:`RosTransport.to_loop`).
+arrive on rospy's threads, or on the loop that reads the subscriptions (:mod:`.reads`), and run
+on the clock's event loop (:meth:`RosTransport.to_loop`).
 """
 
 from __future__ import annotations
