@@ -268,7 +268,7 @@ class Processes:
         command = [sys.executable, "-m", "cyborg.cli", "node", name, "--config", str(config)]
         return self.start(name, [*prefix, *command, "--db", str(db), *extra], f"node {name} running", env=env)
 
-    def wait_ready(self, *nodes: NodeProcess, timeout: float = 30.0) -> None:
+    def wait_ready(self, *nodes: NodeProcess, timeout: float = 90.0) -> None:
         deadline = time.monotonic() + timeout
         for node in nodes:
             while not node.is_ready():
