@@ -302,6 +302,7 @@ def _frequency_parameter_set(namespace: str) -> bool:
 
 
 _NEVER = rospy.Time()  # a goal's destruction time while it runs
+_UNANSWERED = frozenset({GoalStatus.PENDING, GoalStatus.RECALLING})  # the server has not answered yet
 
 
 def _nothing() -> None:
@@ -472,8 +473,10 @@ class RosActionClient(ActionClient[G, R, F]):
             elif status.is_terminal:
                 return  # wait for DONE to carry the result
             # Lockstep time counts the goal's first answer (accepted, or ended at once) and its result.
+            # A goal cancelled before its acceptance reached us shows no ACTIVE (actionlib skips it
+            # while it waits for the cancel's answer): PREEMPTING says the server accepted it.
             counted = []
-            if not answered and (status is GoalStatus.ACTIVE or done):
+            if not answered and (done or status not in _UNANSWERED):
                 answered = True
                 counted.append(f"{self.name}#accept")
             if done:
