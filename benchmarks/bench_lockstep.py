@@ -6,7 +6,10 @@ hours, RUNS times each, interleaved so that a change in the machine's load falls
 The run in one process is the floor of the same run. Reports wall-time medians, the ratio to the
 floor, the grants and delta cycles of the last ROS run, and whether the state, say, heard and
 emotion records were those of the run in one process.
+`--scenarios a,b,c,d` runs those scenarios instead of A; `--hogs 3` keeps three CPU-bound
+processes busy beside the runs (issue 26: the same records with three hogs beside).
 Run: .venv/bin/python benchmarks/bench_lockstep.py [--hours 1] [--runs 3] [--only a|day]
+     .venv/bin/python benchmarks/bench_lockstep.py --only a --scenarios a,b,c,d --runs 5 --hogs 3
 """
 
 from __future__ import annotations
@@ -25,7 +28,8 @@ from pathlib import Path
 from _machine import machine_line
 
 ROOT = Path(__file__).resolve().parents[1]
-SCENARIO_A = ROOT / "tests" / "scenarios" / "scenario_a.yaml"
+SCENARIOS = ROOT / "tests" / "scenarios"
+HOG = "while True: pass"
 TRANSPORTS = {"one process": [], "ROS 1": ["--ros"], "ROS 2": ["--ros2"]}
 SHARED = ("state", "say", "heard", "emotion")
 
@@ -78,9 +82,20 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--hours", type=float, default=1.0, help="virtual hours of the empty day")
     parser.add_argument("--runs", type=int, default=3)
-    parser.add_argument("--only", choices=("a", "day"), help="only scenario A or only the day")
+    parser.add_argument("--only", choices=("a", "day"), help="only the scenarios or only the day")
+    parser.add_argument("--scenarios", default="a", help="which scenarios, comma-separated (a,b,c,d)")
+    parser.add_argument("--hogs", type=int, default=0, help="CPU-bound processes beside the runs")
     args = parser.parse_args()
-    print(f"machine: {machine_line()}, load average at start {os.getloadavg()[0]:.1f}")
+    hogs = [subprocess.Popen([sys.executable, "-c", HOG]) for _ in range(args.hogs)]
+    try:
+        report(args)
+    finally:
+        for hog in hogs:
+            hog.kill()
+
+
+def report(args: argparse.Namespace) -> None:
+    print(f"machine: {machine_line()}, load average at start {os.getloadavg()[0]:.1f}, {args.hogs} hogs")
     print(
         "| script | transport | wall (median; runs) | x one process | grants, last ROS run | same records | runs with write-offs |"
     )
@@ -88,7 +103,11 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="cyborg-bench-lockstep-") as folder:
         scratch = Path(folder)
         if args.only != "day":
-            measure("scenario A", SCENARIO_A, args.runs, scratch)
+            for letter in args.scenarios.split(","):
+                script = SCENARIOS / f"scenario_{letter.strip().lower()}.yaml"
+                if not script.is_file():
+                    raise SystemExit(f"--scenarios: no {script}; choose among a, b, c, d")
+                measure(f"scenario {letter.strip().upper()}", script, args.runs, scratch)
         if args.only != "a":
             day = scratch / "day.yaml"
             day.write_text(f"start: 2026-11-23T08:00:00\nuntil: {int(args.hours * 3600)}\n", encoding="utf-8")
