@@ -13,6 +13,7 @@ transports asks which ROS it is.
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import logging
 import os
 import shutil
@@ -64,15 +65,27 @@ __all__ = [
 ]
 
 
+_NO_ROS1 = (
+    "ROS 1 is not available in this environment; fix: run scripts/install-ros, then "
+    "`source .venv/bin/activate`"
+)
+_ROS1_PACKAGES = ("rospy", "actionlib", "cyborg_controller")
+
+
 def require_ros() -> None:
     """Raise a :class:`CyborgError` that says how to install ROS 1 unless rospy imports here."""
     try:
         import cyborg.transport.ros  # noqa: F401  (imports rospy and actionlib)
     except ImportError:
-        raise CyborgError(
-            "ROS 1 is not available in this environment; fix: run scripts/install-ros, then "
-            "`source .venv/bin/activate`"
-        ) from None
+        raise CyborgError(_NO_ROS1) from None
+
+
+def _require_ros_installed() -> None:
+    """:func:`require_ros` for a process that joins no graph (the launcher): the packages are
+    found, not imported. rospy brings actionlib, genpy and numpy, some 20 MiB the launcher would
+    carry as long as the robot runs; a node that cannot import them says so itself."""
+    if any(importlib.util.find_spec(name) is None for name in _ROS1_PACKAGES):
+        raise CyborgError(_NO_ROS1)
 
 
 def require_ros2() -> None:
@@ -345,7 +358,7 @@ class _Ros1Graph(LaunchGraph):
         self._touched_sim_time = False
 
     def open(self, speed: float | None, *, lockstep: bool = False) -> tuple[Rendezvous | None, str | None]:
-        require_ros()
+        _require_ros_installed()
         self.speed = speed
         self.lockstep = lockstep
         if not master_running():

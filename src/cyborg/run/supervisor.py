@@ -53,6 +53,9 @@ RESPAWN_DELAY = 1.0  # seconds before a stopped node is started again
 RESPAWN_STEADY = 10.0  # a node that ran this long before it stopped is started again after RESPAWN_DELAY
 RESPAWN_MAX_DELAY = 30.0  # a node stopping again and again waits at most this long
 REFUSAL_GRACE = 5.0  # seconds a refused node's launch waits for the controller's own reason
+IDLE_LOOK = 1.0
+"""Seconds between two looks at the nodes while the zygote tells their ends (a master the launch
+started that stops is seen within this, as is the end of a --duration)."""
 THIN_KINDS = frozenset({"conversation", "event_script", "idle", "music", "placeholder", "question", "tts"})
 """Built-in module kinds that only wait, talk and publish: they may share one process. Other kinds
 (the navigation, the simulated base, speech input, every plug-in's) keep a process of their own."""
@@ -334,7 +337,25 @@ class Launch:
                 self.check_alive(ignore=[until] if until else [])
             if deadline is not None and time.monotonic() > deadline:
                 return None
+            self._pause(deadline)
+
+    def _pause(self, deadline: float | None) -> None:
+        """Until the next look at the nodes: 0.1 s, or up to IDLE_LOOK s while every node is the
+        zygote's, which tells each one's end at once (10 looks a second were the idle launcher's
+        whole work)."""
+        zygote = self.zygote
+        if (
+            zygote is None
+            or not zygote.alive
+            or self._time_server is not None
+            or self._respawn_at
+            or not all(isinstance(process, ForkedNode) for process in self.processes.values())
+        ):
             time.sleep(0.1)
+            return
+        wait = IDLE_LOOK if deadline is None else max(0.0, min(IDLE_LOOK, deadline - time.monotonic()))
+        zygote.ended.wait(wait)
+        zygote.ended.clear()  # (before the next look: an end told meanwhile is seen by it)
 
     def stop_all(self) -> None:
         """SIGINT every node (killed after 10 s), then put the graph back as it was."""

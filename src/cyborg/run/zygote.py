@@ -71,8 +71,34 @@ ROS1_PRELOAD = (
     "std_msgs.msg",
     "cyborg.transport.ros",
     *_COMMON,
+    # what every rospy node imports as it joins the graph (its logging set-up, its address)
+    "configparser",
+    "logging.config",
+    "logging.handlers",
+    "netifaces",
+    "encodings.idna",
+    "stringprep",
+    "rosgraph.roslogging",
+    "cyborg.transport.ros.connections",
+    "cyborg.transport.ros.writes",
+    "cyborg.run.datadir",
+    # what two or more of the bigger nodes import: the base, navigation, API and recorder speak
+    # geometry and move_base messages; the controller, API and recorder build the robot's view,
+    # its map and its stores
+    "geometry_msgs.msg",
+    "move_base_msgs.msg",
+    "std_srvs.srv",
+    "sqlite3",
+    "cyborg.maps",
+    "cyborg.app.view",
+    "cyborg.app.robot",
+    "cyborg.controller.runtime",
+    "cyborg.emotion.system",
+    "cyborg.motivator.component",
+    "cyborg.observe.records",
 )
-"""What every ROS 1 node imports (the thin modules' kinds too: most nodes are thin)."""
+"""What every ROS 1 node imports (the thin modules' kinds too: most nodes are thin), and what
+several of the bigger ones do (a module two nodes import is held once instead of twice)."""
 ROS2_PRELOAD = ("rclpy", "rclpy.action", "cyborg_controller.msg", "cyborg.transport.ros2", *_COMMON)
 """The same for ROS 2 (rclpy is imported, not initialised: no DDS participant before the fork)."""
 PRELOAD = {"ros1": ROS1_PRELOAD, "ros2": ROS2_PRELOAD}
@@ -145,6 +171,8 @@ class Zygote:
         self._forked: list[int] = []
         self._answer = threading.Condition()
         self._lock = threading.Lock()
+        self.ended = threading.Event()
+        """Set when a node ends (or the zygote does): the launch waits on it instead of polling."""
         self._reader = threading.Thread(target=self._read, name="zygote control", daemon=True)
         self._reader.start()
 
@@ -185,6 +213,8 @@ class Zygote:
                     pid = int(message["exited"])
                     node = self._nodes.setdefault(pid, ForkedNode(pid, self))
                     node._exited(int(message["code"]))
+                    self.ended.set()
+        self.ended.set()  # the zygote is gone
 
     def close(self, *, at_once: bool = False) -> None:
         """End the zygote (its nodes are stopped already); ``at_once``: kill it (it forked none)."""
@@ -210,6 +240,8 @@ def _serve(control: IO[str], preload: Sequence[str]) -> None:
             importlib.import_module(name)
         except Exception as exc:  # a missing piece only costs its node the import
             print(f"zygote: could not preload {name}: {exc}", file=sys.stderr, flush=True)
+    if preload is ROS1_PRELOAD:
+        _find_ros_log_config()
     gc.collect()
     gc.freeze()  # what the nodes inherit stays out of their collections: its pages stay shared
     wake_read, wake_write = os.pipe()
@@ -238,6 +270,29 @@ def _serve(control: IO[str], preload: Sequence[str]) -> None:
                     _child(argv, control)
                 control.write(json.dumps({"forked": pid}) + "\n")
                 control.flush()
+
+
+def _find_ros_log_config() -> None:
+    """Find rospy's logging configuration once, as each node would at ``init_node``, and hand it
+    to them all (``ROS_PYTHON_LOG_CONFIG_FILE``, unless it is set): rospy looks for it in
+    ``$ROS_HOME/config``, ``/etc/ros`` and the ``rosgraph`` package, which it finds by crawling
+    ``ROS_PACKAGE_PATH``, in every node (a third of a megabyte of each forked node's own memory)."""
+    if os.environ.get("ROS_PYTHON_LOG_CONFIG_FILE"):
+        return
+    try:
+        import rospkg  # type: ignore[import-not-found]
+
+        folders = [os.path.join(rospkg.get_ros_home(), "config"), rospkg.get_etc_ros_dir()]
+        with contextlib.suppress(rospkg.common.ResourceNotFound):
+            folders.append(os.path.join(rospkg.RosPack().get_path("rosgraph"), "conf"))
+    except Exception:  # no rospkg, or a broken one: each node looks for itself
+        return
+    for folder in folders:
+        for extension in ("conf", "yaml"):
+            path = os.path.join(folder, f"python_logging.{extension}")
+            if os.path.isfile(path):
+                os.environ["ROS_PYTHON_LOG_CONFIG_FILE"] = path
+                return
 
 
 def _reap(control: IO[str]) -> None:

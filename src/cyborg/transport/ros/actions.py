@@ -70,7 +70,10 @@ LOCKSTEP_SILENCE_LIMIT = 5.0
 """Real seconds of silence in lockstep time: the server's status timer thread runs only when the
 machine gives it the CPU, and the granted time may race ahead meanwhile (3 CPU hogs beside a
 lockstep run starved it for over a second and a live server's goal ended LOST)."""
-WATCHDOG_PERIOD = 0.2
+WATCHDOG_PERIOD = 0.5
+"""Seconds between two looks of an action client at its server while one of its goals runs: a
+server that died (its connections closed) ends the goal LOST within this. (0.2 s woke the
+controller and the navigation module five times a second each while the robot wandered.)"""
 LOCKSTEP_WATCHDOG_PERIOD = 2.0  # lockstep time: a look every 0.2 s would be most of a run's time steps
 
 # The published cyborg_controller package (scripts/install-ros --flavour public) has a fourth goal

@@ -9,9 +9,11 @@ the parameters it set on the master while the master goes away and comes back.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import http.client
 import logging
+import os
 import select
 import threading
 import time
@@ -138,6 +140,7 @@ class MasterWatch:
         self._pid: int | None = None
         self.away = False
         self.comebacks = 0
+        self._wake_read, self._wake_write = -1, -1
 
     def start(self, transport: ParamHolder) -> None:
         self._transports.add(transport)
@@ -147,8 +150,18 @@ class MasterWatch:
             self._pid = int(answer(master_proxy().getPid(rospy.get_name()), "give its pid"))
         except UNREACHABLE:
             self._out_of_sync.set()
+        self._wake_read, self._wake_write = os.pipe()
+        os.set_blocking(self._wake_read, False)
+        os.set_blocking(self._wake_write, False)
+        rospy.core.add_shutdown_hook(lambda reason: self._wake())
         self._thread = threading.Thread(target=self._run, name="ROS master watch", daemon=True)
         self._thread.start()
+
+    def _wake(self) -> None:
+        """Have the thread look now (rospy shuts down, or something could not reach the master)."""
+        if self._wake_write >= 0:
+            with contextlib.suppress(OSError):  # (full: a wake-up is pending anyway)
+                os.write(self._wake_write, b"!")
 
     @property
     def running(self) -> bool:
@@ -182,6 +195,7 @@ class MasterWatch:
     def missed(self, what: str, exc: BaseException) -> None:
         """Something could not reach the master: it is sent when the master is back."""
         self._out_of_sync.set()
+        self._wake()
         if self._went_away():
             rospy.logwarn(
                 "could not %s: the ROS master at %s does not answer (%s); this node carries on with "
@@ -200,9 +214,13 @@ class MasterWatch:
             steady = not self.away and not self._out_of_sync.is_set()
             if steady:
                 # Waiting on the kept-open line costs the master nothing: no call every half second
-                # from every node (the idle robot's master was busiest with these).
-                closed = line.wait_closed(MASTER_CHECK_PERIOD)
+                # from every node (the idle robot's master was busiest with these). Nor this
+                # process: the thread sleeps until the next look, the master closing the line, or
+                # a wake-up (rospy shutting down, a call that missed the master).
+                left = MASTER_RECHECK_PERIOD - (time.monotonic() - last_look)
+                closed = left > 0 and line.wait_closed(left, wake=self._wake_read)
                 if not closed and time.monotonic() - last_look < MASTER_RECHECK_PERIOD:
+                    self._drain_wake()
                     if rospy.core.is_shutdown():
                         line.close()
                         return
@@ -219,6 +237,11 @@ class MasterWatch:
                 log.exception(
                     "looking at the ROS master failed; looking again in %.1f s", MASTER_CHECK_PERIOD
                 )
+
+    def _drain_wake(self) -> None:
+        if self._wake_read >= 0:
+            with contextlib.suppress(OSError):  # (BlockingIOError: nothing to drain)
+                os.read(self._wake_read, 512)
 
     def _check(self, line: MasterLine) -> None:
         uri = rosgraph.get_master_uri()
@@ -320,17 +343,22 @@ class MasterLine:
             self._connection = connection
         return int(answer(reply, "give its pid"))
 
-    def wait_closed(self, timeout: float) -> bool:
-        """Wait up to ``timeout`` seconds for the master to close the line; True when it did."""
+    def wait_closed(self, timeout: float, wake: int = -1) -> bool:
+        """Wait up to ``timeout`` seconds for the master to close the line; True when it did.
+        ``wake``: a file descriptor whose turning readable ends the wait early (False)."""
         sock = self._connection.sock if self._connection is not None else None
+        waits: list[Any] = [wake] if wake >= 0 else []
         if sock is None:  # a master that closes each connection: only the slow look is left
-            time.sleep(timeout)
+            if waits:
+                select.select(waits, [], [], timeout)
+            else:
+                time.sleep(timeout)
             return False
         try:
-            readable, _, _ = select.select([sock], [], [], timeout)
+            readable, _, _ = select.select([sock, *waits], [], [], timeout)
         except (OSError, ValueError):
             readable = [sock]
-        if readable:
+        if sock in readable:
             self.close()
             return True
         return False
