@@ -78,6 +78,13 @@ NUMBER_SOUNDS = {"to": "2", "too": "2", "for": "4", "won": "1", "ate": "8"}
 TRAILING_WORDS = frozenset({"please", "now", "thanks", "thank", "you"})
 """Polite words people put after a place ("go to the entrance 2 please")."""
 
+SUFFIX_WORDS = frozenset(
+    {*"bcdefghijklmnopqrstuvwxyz", "ii", "iii", "iv", "vi", "vii", "viii", "ix", "xi", "xii"}
+)
+"""Words that, last in a sentence right after a place's name, may be the rest of another place's
+name ("where is the entrance i" for "entrance 5", "room b"): the place is asked about first.
+Not "a", which ends sentences in its own right."""
+
 FILLER_WORDS = frozenset({"the", "a", "an", "my", "this", "that", "to", "at", "of", "is"})
 """Words a place-name match may not start or end with (unless the name itself does)."""
 
@@ -322,7 +329,8 @@ class LocationMatcher:
         A sentence that ends in a word that sounds like a number ("where is the entrance to",
         speech-to-text's "entrance 2"; polite words after it count as its end: "entrance to
         please") is also read with the number; a place found only that way is not certain, and
-        neither is the place without the number.
+        neither is the place without the number. Nor is a place followed, last, by a letter or a
+        roman numeral (:data:`SUFFIX_WORDS`): it may be another place's name misheard ("entrance i").
         """
         words = normalise(text).split()
         found = self._find(words)
@@ -333,6 +341,10 @@ class LocationMatcher:
             with_number = self._find([*words[: end - 1], NUMBER_SOUNDS[words[end - 1]]])
             if with_number is not None and (found is None or with_number.location != found.location):
                 return replace(with_number, score=min(with_number.score, CERTAIN_SCORE - 1))
+        if found is not None and found.start + len(found.matched.split()) == end - 1:
+            suffix = words[end - 1]
+            if suffix in SUFFIX_WORDS and not normalise(found.matched).endswith(f" {suffix}"):
+                return replace(found, score=min(found.score, CERTAIN_SCORE - 1))
         return found
 
     def _find(self, words: list[str]) -> LocationMatch | None:
