@@ -50,13 +50,13 @@ from cyborg.modules.conversation import is_greeting
 from cyborg.navigation.keywords import CUE_STOP_WORDS, detect_answer, normalise
 
 __all__ = [
+    "ANSWER_MARGIN",
     "DEFAULT_BEAM",
     "DEFAULT_THREADS",
-    "ANSWER_MARGIN",
     "DEFAULT_WINDOW",
     "DOUBT_MARGIN",
-    "REQUEST_MARGIN",
     "PLACE_ODDS",
+    "REQUEST_MARGIN",
     "WhisperRecogniser",
     "collapse_repeats",
     "default_model_path",
