@@ -305,6 +305,12 @@ def test_a_place_heard_roughly_is_found_but_not_certain() -> None:
     assert detect("where is the a17", MATCHER) is None  # other digits: never that place
 
 
+def test_a_phrase_heard_with_another_determiner_is_still_the_phrase() -> None:
+    for text in ("show me that way to the cafeteria", "show me my way to the cafeteria please"):
+        found = detect_navigation(text, MATCHER)
+        assert found is not None and (found.intent, found.location) == (CMD, "cafeteria"), text
+
+
 def test_a_place_followed_by_a_letter_or_numeral_is_asked_about_not_taken() -> None:
     for text in ("where is the entrance i", "where is the entrance b please", "go to the cafeteria iv"):
         found = detect_navigation(text, MATCHER)  # another place's name misheard ("entrance 5")?

@@ -420,7 +420,7 @@ class WhisperRecogniser:
         ask = None
         if not text:
             reason = "nothing heard"
-        elif understood is None and (close := self._understood_rival(likelihood, others)) is not None:
+        elif understood is None and (close := self._understood_rival(text, likelihood, others)) is not None:
             text, understood = close
             if understood.place is not None:
                 reason = f"not understood; a close hypothesis asks for {understood.place}: {text!r}"
@@ -478,11 +478,14 @@ class WhisperRecogniser:
         return indices
 
     def _understood_rival(
-        self, likelihood: float, others: list[tuple[str, float, float]]
+        self, best: str, likelihood: float, others: list[tuple[str, float, float]]
     ) -> tuple[str, Understood] | None:
         """The likeliest of the beam's other hypotheses that the robot understands, within
-        :data:`REQUEST_MARGIN` of the best (:data:`ANSWER_MARGIN` without a place), with its text."""
+        :data:`REQUEST_MARGIN` of the best transcript (``best``, as cleaned; :data:`ANSWER_MARGIN`
+        without a place), with its text. A request must keep the best transcript's numbers: "where
+        is the entrance 4" (no place the robot knows) is not "where is the entrance or"."""
         assert self.understanding is not None
+        numbers = re.findall(r"\d+", normalise(best))
         for raw, _, other in others:
             if likelihood - other > max(REQUEST_MARGIN, ANSWER_MARGIN):
                 continue
@@ -492,7 +495,9 @@ class WhisperRecogniser:
                 continue
             if understood.place is None and likelihood - other > ANSWER_MARGIN:
                 continue
-            if understood.place is not None and likelihood - other > REQUEST_MARGIN:
+            if understood.place is not None and (
+                likelihood - other > REQUEST_MARGIN or re.findall(r"\d+", normalise(text)) != numbers
+            ):
                 continue
             return text, understood
         return None

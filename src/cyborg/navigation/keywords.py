@@ -99,6 +99,9 @@ class Intent(enum.Enum):
     NO = "no"
 
 
+DETERMINERS = frozenset({"the", "a", "an", "my", "this", "that"})
+"""Words a trigger phrase's own determiner may be heard as ("show me that way to")."""
+
 NUMBER_LEADS = frozenset({"number", "nr"})
 """Words before a number that say only that a number comes ("entrance number 2" is entrance 2)."""
 
@@ -391,14 +394,15 @@ def _same_code(heard: str, name: str) -> bool:
 
 def _find_phrase(words: list[str], phrase: str) -> int | None:
     """Index just after the first occurrence of ``phrase`` (normalised words) in ``words``; one other
-    word may stand between two of its words ("where exactly is", "drive over to")."""
+    word may stand between two of its words ("where exactly is", "drive over to"), and another
+    determiner for one of its own ("show me that way to", "show me my way to")."""
     target = phrase.split()
     for i in range(len(words) - len(target) + 1):
         if words[i] != target[0]:
             continue
         at = i + 1
         for word in target[1:]:
-            if at < len(words) and words[at] == word:
+            if at < len(words) and (words[at] == word or (word in DETERMINERS and words[at] in DETERMINERS)):
                 at += 1
             elif at + 1 < len(words) and words[at + 1] == word and words[at] not in FILLER_WORDS:
                 at += 2
