@@ -311,6 +311,12 @@ def test_a_phrase_heard_with_another_determiner_is_still_the_phrase() -> None:
         assert found is not None and (found.intent, found.location) == (CMD, "cafeteria"), text
 
 
+def test_a_question_of_the_floor_is_asked_about_and_a_statement_about_a_place_is_none() -> None:
+    found = detect_navigation("is el6 upstairs", MATCHER)
+    assert found is not None and (found.intent, found.location, found.certain) == (INFO, "el6", False)
+    assert detect_navigation("el6 is where i work", MATCHER) is None
+
+
 def test_a_place_followed_by_a_letter_or_numeral_is_asked_about_not_taken() -> None:
     for text in ("where is the entrance i", "where is the entrance b please", "go to the cafeteria iv"):
         found = detect_navigation(text, MATCHER)  # another place's name misheard ("entrance 5")?

@@ -439,6 +439,9 @@ lift", "the lift smells funny"): without a trigger phrase, no request."""
 STATEMENT_WORDS = frozenset(_PHRASINGS.statement_words)
 """Words (``phrasings.yaml``) that make a sentence without a trigger phrase a statement about the
 past ("i saw you near the cafeteria"): no request."""
+SUBJECT_VERBS = frozenset({"is", "was", "has", "had", "isnt", "wasnt"})
+"""Words after a place that opens a sentence which make it a statement about the place ("el6 is
+where i work"), not a request."""
 FUZZY_TRIGGER_SCORE = 85.0
 """Lowest rapidfuzz ratio at which the words before a place count as a misheard trigger phrase
 ("show me the wait on" for "show me the way to")."""
@@ -494,10 +497,16 @@ def classify_request(words: Sequence[str], place: LocationMatch) -> Intent | Non
     before the place ("drive me to", "come with me to") make it a command, and so do words close
     to a trigger phrase there (a misheard "show me the wait on"). The leading intent needs
     :data:`CUE_SCORE` and a clear lead over the next; a negated command and a statement ("the
-    lift is ...") are none.
+    lift is ...", "el6 is where i work") are none.
     """
     if not words or words[0] in STATEMENT_OPENERS or any(w in STATEMENT_WORDS for w in words):
         return None
+    after = place.start + len(place.matched.split())
+    if place.start == 0 and words[after : after + 1] and words[after] in SUBJECT_VERBS:
+        if words[after + 1 : after + 2] not in (["it"], ["that"], ["this"], ["there"]):
+            return (
+                None  # the place is what the sentence is about: "el6 is where i work", not "el5, is it near"
+            )
     span = range(place.start, place.start + len(place.matched.split()))
     lead = words[: place.start]
     if lead and lead[-1] == "the":
