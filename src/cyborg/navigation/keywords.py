@@ -502,11 +502,9 @@ def classify_request(words: Sequence[str], place: LocationMatch) -> Intent | Non
     if not words or words[0] in STATEMENT_OPENERS or any(w in STATEMENT_WORDS for w in words):
         return None
     after = place.start + len(place.matched.split())
-    if place.start == 0 and words[after : after + 1] and words[after] in SUBJECT_VERBS:
-        if words[after + 1 : after + 2] not in (["it"], ["that"], ["this"], ["there"]):
-            return (
-                None  # the place is what the sentence is about: "el6 is where i work", not "el5, is it near"
-            )
+    said_of_place = place.start == 0 and words[after : after + 1] and words[after] in SUBJECT_VERBS
+    if said_of_place and words[after + 1 : after + 2] not in (["it"], ["that"], ["this"], ["there"]):
+        return None  # what the place is ("el6 is where i work"); "el5, is it near" asks
     span = range(place.start, place.start + len(place.matched.split()))
     lead = words[: place.start]
     if lead and lead[-1] == "the":
