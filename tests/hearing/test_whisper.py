@@ -4,6 +4,7 @@ pocketsphinx; nothing imports av (FFmpeg with GPL codecs) or downloads anything.
 
 from __future__ import annotations
 
+import functools
 import json
 import logging
 import subprocess
@@ -21,8 +22,10 @@ from cyborg.hearing.synth import VOICES, synthesise
 from cyborg.hearing.understanding import Understanding
 from cyborg.hearing.vad import SileroUtterances
 from cyborg.hearing.whisper import (
+    ANSWER_MARGIN,
     DOUBT_MARGIN,
     PLACE_ODDS,
+    REQUEST_MARGIN,
     WhisperRecogniser,
     collapse_repeats,
     prompt_of,
@@ -163,6 +166,25 @@ def test_a_place_is_believed_only_when_the_hypotheses_nearly_as_likely_name_it_t
     assert whisper._rival(heard, -2.0, [("Where is the canteen?", 0.6, near)]) == "cafeteria"
     assert whisper._rival(heard, -2.0, [("Where is the June?", 0.6, far)]) is None  # far less likely
     assert whisper._rival(heard, -2.0, [("Where's the main entrance, then?", 0.6, near)]) is None
+
+
+def test_a_misheard_answer_is_taken_from_a_hypothesis_nearly_as_likely_and_a_place_from_one_is_asked(
+    whisper: WhisperRecogniser,
+) -> None:
+    rival = functools.partial(whisper._understood_rival, "short thing")
+    near = -2.0 - ANSWER_MARGIN / 2
+    assert rival(-2.0, [("Short thing.", 0.6, -2.1), ("Sure thing.", 0.6, near)]) == (
+        "sure thing",
+        whisper.understanding.of("sure thing") if whisper.understanding else None,
+    )
+    assert rival(-2.0, [("Sure thing.", 0.6, -2.0 - 2 * ANSWER_MARGIN)]) is None  # far less likely
+    found = rival(-2.0, [("Hand it on the elevator.", 0.6, -2.1), ("Head to the elevator.", 0.6, -3.5)])
+    assert found is not None and found[0] == "head to the elevator"
+    assert (found[1].event, found[1].place) == ("navigation_command", "elevator")
+    assert rival(-2.0, [("Head to the elevator.", 0.6, -2.0 - 2 * REQUEST_MARGIN)]) is None
+    assert rival(-2.0, [("I like turtles.", 0.6, -2.1)]) is None  # nothing understood
+    four = [("Where is the entrance or?", 0.6, -2.1)]  # entrance 4 is no place the robot knows
+    assert whisper._understood_rival("where is the entrance 4", -2.0, four) is None
 
 
 def test_a_missing_model_names_the_fix_and_the_ears_fall_back_to_pocketsphinx(

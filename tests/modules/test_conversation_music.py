@@ -31,6 +31,8 @@ from cyborg.transport.messages import StateMachineAction, StateMachineGoal
         ("hi there", True),
         ("Good morning, Cyborg", True),
         ("hey", True),
+        ("Nice to see you.", True),  # a greeting whose "hey" the ears lost
+        ("it was nice to see you", False),
         ("where is the cafeteria?", False),
         ("this is a hit", False),
         ("", False),

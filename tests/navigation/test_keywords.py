@@ -305,6 +305,27 @@ def test_a_place_heard_roughly_is_found_but_not_certain() -> None:
     assert detect("where is the a17", MATCHER) is None  # other digits: never that place
 
 
+def test_a_phrase_heard_with_another_determiner_is_still_the_phrase() -> None:
+    for text in ("show me that way to the cafeteria", "show me my way to the cafeteria please"):
+        found = detect_navigation(text, MATCHER)
+        assert found is not None and (found.intent, found.location) == (CMD, "cafeteria"), text
+
+
+def test_a_question_of_the_floor_is_asked_about_and_a_statement_about_a_place_is_none() -> None:
+    found = detect_navigation("is el6 upstairs", MATCHER)
+    assert found is not None and (found.intent, found.location, found.certain) == (INFO, "el6", False)
+    assert detect_navigation("el6 is where i work", MATCHER) is None
+
+
+def test_a_place_followed_by_a_letter_or_numeral_is_asked_about_not_taken() -> None:
+    for text in ("where is the entrance i", "where is the entrance b please", "go to the cafeteria iv"):
+        found = detect_navigation(text, MATCHER)  # another place's name misheard ("entrance 5")?
+        assert found is not None and not found.certain, text
+    assert detect_navigation("where is the entrance 5", MATCHER) is None  # a number: not the entrance
+    said = detect_navigation("where is the entrance i need to go", MATCHER)
+    assert said is not None and said.location == "entrance" and said.certain  # a pronoun, not a suffix
+
+
 def test_a_number_heard_as_a_word_is_not_certain_even_before_polite_words() -> None:
     for text in (
         "where is the entrance to",

@@ -20,6 +20,11 @@ and, nearly as likely, "where is the june", is not passed on as text), nor a pla
 Whisper itself found unlikely (:data:`PLACE_ODDS`: the least likely token of the place). Such a
 request goes to ``/cyborg_speech/unsure`` with its place, and the navigation module asks "Did you
 mean the entrance?" before it acts (``Heard.ask``).
+
+A misheard word need not lose the request: when the best transcript is not understood ("Short
+thing."), a hypothesis nearly as likely that is ("Sure thing.") is believed in its place, a short
+answer or greeting only when it is very nearly as likely (:data:`ANSWER_MARGIN`), a request for a
+place (:data:`REQUEST_MARGIN`) always asked about first, since it is not what Whisper found likeliest.
 """
 
 from __future__ import annotations
@@ -45,11 +50,13 @@ from cyborg.modules.conversation import is_greeting
 from cyborg.navigation.keywords import CUE_STOP_WORDS, detect_answer, normalise
 
 __all__ = [
+    "ANSWER_MARGIN",
     "DEFAULT_BEAM",
     "DEFAULT_THREADS",
     "DEFAULT_WINDOW",
     "DOUBT_MARGIN",
     "PLACE_ODDS",
+    "REQUEST_MARGIN",
     "WhisperRecogniser",
     "collapse_repeats",
     "default_model_path",
@@ -71,6 +78,14 @@ PLACE_ODDS = 0.5
 DOUBT_MARGIN = 2.0
 """Natural-log units of a whole transcript's probability: a hypothesis within this of the best that
 names another place (or none) makes the place doubtful (e^2: about 7 times less likely)."""
+REQUEST_MARGIN = 2.0
+"""Natural-log units below the best transcript (not understood) within which a hypothesis that asks
+for a place is taken instead, and asked about (chosen on the development sets' decodes: issue 34's
+fifth round in docs/benchmarks-history.md)."""
+ANSWER_MARGIN = 1.0
+"""As :data:`REQUEST_MARGIN`, for a hypothesis without a place (an answer, a greeting, a phrase),
+which is acted on without asking: a closer margin, since out-of-scope sentences have such rivals
+("the bus leaves at noon", "No.")."""
 PROMPT_TOKENS = 223
 """Whisper keeps at most this many tokens of previous text (half its text context, minus one)."""
 FRAMES_PER_SECOND = 100
@@ -405,6 +420,13 @@ class WhisperRecogniser:
         ask = None
         if not text:
             reason = "nothing heard"
+        elif understood is None and (close := self._understood_rival(text, likelihood, others)) is not None:
+            text, understood = close
+            if understood.place is not None:
+                reason = f"not understood; a close hypothesis asks for {understood.place}: {text!r}"
+                ask = understood.place
+            else:
+                reason = ""
         elif understood is None:
             reason = "not understood"
         elif understood.place is not None and (rival := self._rival(understood, likelihood, others)):
@@ -454,6 +476,31 @@ class WhisperRecogniser:
             if word in span and re.search(r"[a-z0-9]", piece.lower()):  # not punctuation or spaces
                 indices.append(i)
         return indices
+
+    def _understood_rival(
+        self, best: str, likelihood: float, others: list[tuple[str, float, float]]
+    ) -> tuple[str, Understood] | None:
+        """The likeliest of the beam's other hypotheses that the robot understands, within
+        :data:`REQUEST_MARGIN` of the best transcript (``best``, as cleaned; :data:`ANSWER_MARGIN`
+        without a place), with its text. A request must keep the best transcript's numbers: "where
+        is the entrance 4" (no place the robot knows) is not "where is the entrance or"."""
+        assert self.understanding is not None
+        numbers = re.findall(r"\d+", normalise(best))
+        for raw, _, other in others:
+            if likelihood - other > max(REQUEST_MARGIN, ANSWER_MARGIN):
+                continue
+            text = clean(raw)
+            understood = self.understanding.of(text) if text else None
+            if understood is None:
+                continue
+            if understood.place is None and likelihood - other > ANSWER_MARGIN:
+                continue
+            if understood.place is not None and (
+                likelihood - other > REQUEST_MARGIN or re.findall(r"\d+", normalise(text)) != numbers
+            ):
+                continue
+            return text, understood
+        return None
 
     def _rival(
         self, understood: Understood, likelihood: float, others: list[tuple[str, float, float]]

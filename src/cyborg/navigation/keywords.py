@@ -78,6 +78,13 @@ NUMBER_SOUNDS = {"to": "2", "too": "2", "for": "4", "won": "1", "ate": "8"}
 TRAILING_WORDS = frozenset({"please", "now", "thanks", "thank", "you"})
 """Polite words people put after a place ("go to the entrance 2 please")."""
 
+SUFFIX_WORDS = frozenset(
+    {*"bcdefghijklmnopqrstuvwxyz", "ii", "iii", "iv", "vi", "vii", "viii", "ix", "xi", "xii"}
+)
+"""Words that, last in a sentence right after a place's name, may be the rest of another place's
+name ("where is the entrance i" for "entrance 5", "room b"): the place is asked about first.
+Not "a", which ends sentences in its own right."""
+
 FILLER_WORDS = frozenset({"the", "a", "an", "my", "this", "that", "to", "at", "of", "is"})
 """Words a place-name match may not start or end with (unless the name itself does)."""
 
@@ -91,6 +98,9 @@ class Intent(enum.Enum):
     YES = "yes"
     NO = "no"
 
+
+DETERMINERS = frozenset({"the", "a", "an", "my", "this", "that"})
+"""Words a trigger phrase's own determiner may be heard as ("show me that way to")."""
 
 NUMBER_LEADS = frozenset({"number", "nr"})
 """Words before a number that say only that a number comes ("entrance number 2" is entrance 2)."""
@@ -322,7 +332,8 @@ class LocationMatcher:
         A sentence that ends in a word that sounds like a number ("where is the entrance to",
         speech-to-text's "entrance 2"; polite words after it count as its end: "entrance to
         please") is also read with the number; a place found only that way is not certain, and
-        neither is the place without the number.
+        neither is the place without the number. Nor is a place followed, last, by a letter or a
+        roman numeral (:data:`SUFFIX_WORDS`): it may be another place's name misheard ("entrance i").
         """
         words = normalise(text).split()
         found = self._find(words)
@@ -333,6 +344,10 @@ class LocationMatcher:
             with_number = self._find([*words[: end - 1], NUMBER_SOUNDS[words[end - 1]]])
             if with_number is not None and (found is None or with_number.location != found.location):
                 return replace(with_number, score=min(with_number.score, CERTAIN_SCORE - 1))
+        if found is not None and found.start + len(found.matched.split()) == end - 1:
+            suffix = words[end - 1]
+            if suffix in SUFFIX_WORDS and not normalise(found.matched).endswith(f" {suffix}"):
+                return replace(found, score=min(found.score, CERTAIN_SCORE - 1))
         return found
 
     def _find(self, words: list[str]) -> LocationMatch | None:
@@ -379,14 +394,15 @@ def _same_code(heard: str, name: str) -> bool:
 
 def _find_phrase(words: list[str], phrase: str) -> int | None:
     """Index just after the first occurrence of ``phrase`` (normalised words) in ``words``; one other
-    word may stand between two of its words ("where exactly is", "drive over to")."""
+    word may stand between two of its words ("where exactly is", "drive over to"), and another
+    determiner for one of its own ("show me that way to", "show me my way to")."""
     target = phrase.split()
     for i in range(len(words) - len(target) + 1):
         if words[i] != target[0]:
             continue
         at = i + 1
         for word in target[1:]:
-            if at < len(words) and words[at] == word:
+            if at < len(words) and (words[at] == word or (word in DETERMINERS and words[at] in DETERMINERS)):
                 at += 1
             elif at + 1 < len(words) and words[at + 1] == word and words[at] not in FILLER_WORDS:
                 at += 2
@@ -423,6 +439,9 @@ lift", "the lift smells funny"): without a trigger phrase, no request."""
 STATEMENT_WORDS = frozenset(_PHRASINGS.statement_words)
 """Words (``phrasings.yaml``) that make a sentence without a trigger phrase a statement about the
 past ("i saw you near the cafeteria"): no request."""
+SUBJECT_VERBS = frozenset({"is", "was", "has", "had", "isnt", "wasnt"})
+"""Words after a place that opens a sentence which make it a statement about the place ("el6 is
+where i work"), not a request."""
 FUZZY_TRIGGER_SCORE = 85.0
 """Lowest rapidfuzz ratio at which the words before a place count as a misheard trigger phrase
 ("show me the wait on" for "show me the way to")."""
@@ -478,10 +497,14 @@ def classify_request(words: Sequence[str], place: LocationMatch) -> Intent | Non
     before the place ("drive me to", "come with me to") make it a command, and so do words close
     to a trigger phrase there (a misheard "show me the wait on"). The leading intent needs
     :data:`CUE_SCORE` and a clear lead over the next; a negated command and a statement ("the
-    lift is ...") are none.
+    lift is ...", "el6 is where i work") are none.
     """
     if not words or words[0] in STATEMENT_OPENERS or any(w in STATEMENT_WORDS for w in words):
         return None
+    after = place.start + len(place.matched.split())
+    said_of_place = place.start == 0 and words[after : after + 1] and words[after] in SUBJECT_VERBS
+    if said_of_place and words[after + 1 : after + 2] not in (["it"], ["that"], ["this"], ["there"]):
+        return None  # what the place is ("el6 is where i work"); "el5, is it near" asks
     span = range(place.start, place.start + len(place.matched.split()))
     lead = words[: place.start]
     if lead and lead[-1] == "the":
