@@ -23,11 +23,13 @@ its line) shows each node by its name (the first 15 characters).
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import gc
 import importlib
 import json
 import logging
 import os
+import re
 import runpy
 import select
 import signal
@@ -210,6 +212,7 @@ def _serve(control: IO[str], preload: Sequence[str]) -> None:
             importlib.import_module(name)
         except Exception as exc:  # a missing piece only costs its node the import
             print(f"zygote: could not preload {name}: {exc}", file=sys.stderr, flush=True)
+    _fork_safely()
     gc.collect()
     gc.freeze()  # what the nodes inherit stays out of their collections: its pages stay shared
     wake_read, wake_write = os.pipe()
@@ -238,6 +241,43 @@ def _serve(control: IO[str], preload: Sequence[str]) -> None:
                     _child(argv, control)
                 control.write(json.dumps({"forked": pid}) + "\n")
                 control.flush()
+
+
+_LTTNG_UST = re.compile(r"/liblttng-ust(-[0-9a-f]+)?\.so[.0-9]*$")
+_SIGSET_BYTES = 128  # sizeof(sigset_t) on Linux
+
+
+def _fork_safely() -> None:
+    """Fork as LTTng-UST asks of a process it traces, when the imports loaded it.
+
+    ROS 2's wheels (rcl's and rmw's tracepoints) load liblttng-ust, whose constructor starts two
+    listener threads: the zygote is not single-threaded below Python. LTTng-UST's fork protocol
+    (what its ``liblttng-ust-fork.so`` wraps ``fork()`` with) takes its locks before the fork, so
+    that no thread holds them in the copy, and in the child resets its state and starts its
+    listeners again, as in a freshly started process.
+    """
+    path = next(
+        (line.split()[-1] for line in _maps() if _LTTNG_UST.search(line.split()[-1])),
+        None,
+    )
+    if path is None:
+        return
+    lib = ctypes.CDLL(path)
+    prefix = "lttng_ust_" if hasattr(lib, "lttng_ust_before_fork") else "ust_"  # 2.13 / 2.12
+    before, parent, child = (
+        getattr(lib, f"{prefix}{step}") for step in ("before_fork", "after_fork_parent", "after_fork_child")
+    )
+    saved = ctypes.create_string_buffer(_SIGSET_BYTES)  # the signal mask, blocked meanwhile
+    os.register_at_fork(
+        before=lambda: before(saved),
+        after_in_parent=lambda: parent(saved),
+        after_in_child=lambda: child(saved),
+    )
+
+
+def _maps() -> list[str]:
+    with open(f"/proc/{os.getpid()}/maps", encoding="utf-8", errors="replace") as maps:
+        return [line for line in maps if "/" in line]
 
 
 def _reap(control: IO[str]) -> None:
