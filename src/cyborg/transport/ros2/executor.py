@@ -74,13 +74,16 @@ class HandOffExecutor(MultiThreadedExecutor):  # type: ignore[misc]
     """A multi-threaded executor whose pool holds each task once, and that lets the pool take a
     ready entity's message before it waits again."""
 
+    _guard: Any  # rclpy's: what wakes its wait (replaced by an _InlineGuard)
+
     def __init__(self, num_threads: int, *, context: Context) -> None:
         super().__init__(num_threads=num_threads, context=context)
         self._queued: set[Task[Any]] = set()  # handed to the pool, not begun yet
         self._entity_tasks = 0  # of those, the ones that take a ready entity's message
         self._begun = threading.Condition()
         self._guard.destroy()
-        self._inline_guard = self._guard = _InlineGuard(context)
+        self._inline_guard = _InlineGuard(context)
+        self._guard = self._inline_guard
 
     def _spin_once_impl(
         self, timeout_sec: float | None = None, wait_condition: Callable[[], bool] = lambda: False
