@@ -35,6 +35,7 @@ from collections.abc import Callable
 from typing import Any
 
 from rclpy.action import ActionClient
+from rclpy.action import ActionServer as RclActionServer
 from rclpy.context import Context
 from rclpy.executors import (
     ConditionReachedException,
@@ -53,6 +54,14 @@ SHUTDOWN_CHECK = 0.1  # seconds between looks at a shutdown while a hand-off is 
 
 _QUICK = (Subscription, ActionClient)
 """Entities whose callbacks (ours) only take what came and hand it to the event loop."""
+
+
+def _answers_only(entity: object) -> bool:
+    """An action server whose ready work is only cancel or result requests (or goals to expire):
+    our callbacks for those hand a cancel to the event loop and answer at once. A goal request
+    waits for the module's decision on the event loop: the pool."""
+    return isinstance(entity, RclActionServer) and not getattr(entity, "_is_goal_request_ready", True)
+
 
 _IDLE = (ConditionReachedException, ExternalShutdownException, ShutdownException, TimeoutException)
 
@@ -95,11 +104,12 @@ class HandOffExecutor(MultiThreadedExecutor):  # type: ignore[misc]
             task, entity, _ = self.wait_for_ready_callbacks(timeout_sec, None, wait_condition)
         except _IDLE:
             return
-        if isinstance(entity, _QUICK) and not task.executing():
+        if (isinstance(entity, _QUICK) or _answers_only(entity)) and not task.executing():
             # A message to a topic, or an action client's answer, feedback or result: taking it and
             # handing it to the event loop is quick, so it runs here; a thread of the pool would
             # cost two thread switches a message (most of the CPU of a node that hears 10 poses a
-            # second). An action server's or a service's callback may wait for the loop: the pool.
+            # second); so are an action server's cancel and result requests. Its goal request and a
+            # service's callback wait for the loop: the pool.
             self._inline_guard.muted_on = threading.get_ident()
             try:
                 task()
