@@ -58,3 +58,55 @@ def test_a_name_seen_during_discovery_is_taken_unless_it_vanishes_as_a_killed_pr
         "cyborg_music"
     }
     assert wait_for_graph(lambda: {"other"}, {"cyborg_music"}, settle=0.1) == set()
+
+
+class _FakeTime:
+    """A clock that moves only when the census sleeps."""
+
+    def __init__(self) -> None:
+        self.now = 0.0
+
+    def sleep(self, seconds: float) -> None:
+        self.now += seconds
+
+
+def test_the_look_at_the_graph_ends_soon_once_discovery_shows_another_process() -> None:
+    time = _FakeTime()
+
+    def graph() -> set[
+        str
+    ]:  # this process's probe at once; a sibling at 0.2 s; the other robot's music at 0.4 s
+        return (
+            {"_probe"}
+            | ({"cyborg_api"} if time.now >= 0.2 else set())
+            | ({"cyborg_music"} if time.now >= 0.4 else set())
+        )
+
+    taken = wait_for_graph(
+        graph, {"cyborg_music"}, settle=1.5, own={"_probe"}, clock=lambda: time.now, sleep=time.sleep
+    )
+    assert taken == {"cyborg_music"}  # seen within the look after the first other node
+    assert time.now < 1.5 + census.GHOST_WAIT  # it did not wait the whole settle first
+
+    time.now = 0.0
+    assert (
+        wait_for_graph(
+            graph, {"cyborg_idle"}, settle=1.5, own={"_probe"}, clock=lambda: time.now, sleep=time.sleep
+        )
+        == set()
+    )
+    assert 0.2 + census.SETTLE_AFTER_OTHERS <= time.now < 0.2 + census.SETTLE_AFTER_OTHERS + 0.1
+
+    time.now = 0.0  # a graph with nobody else: the whole settle, in case discovery is slow
+    assert (
+        wait_for_graph(
+            lambda: {"_probe"},
+            {"cyborg_idle"},
+            settle=1.5,
+            own={"_probe"},
+            clock=lambda: time.now,
+            sleep=time.sleep,
+        )
+        == set()
+    )
+    assert time.now >= 1.5

@@ -7,9 +7,13 @@ break that name's topics and actions. So before a node joins with its name:
 - ROS 1: the master knows every node; a node of the name whose own XML-RPC server still
   answers is alive (rospy would shut it down silently and take its place). A dead one (killed,
   being started again by a launch) is replaced as usual.
-- ROS 2: there is no master; the node looks at the graph for DISCOVERY_SETTLE seconds (discovery
-  is not instant), and a node of its name that is still there after PARTICIPANT_LEASE (a process
-  just killed lingers that long) is alive.
+- ROS 2: there is no master; the node looks at the graph until discovery has shown what runs
+  there (it is not instant), and a node of its name that is still there after PARTICIPANT_LEASE (a
+  process just killed lingers that long) is alive. Discovery shows the nodes of a process that
+  was running already about as soon as those of one started beside this one: so the look ends
+  SETTLE_AFTER_OTHERS seconds after the graph first shows a node of another process (a launch's
+  nodes see each other within a few tenths of a second), and after DISCOVERY_SETTLE seconds on a
+  graph that shows none.
 
 Either refuses with :class:`NameTaken`, naming the node and the fix; ``cyborg node`` ends with
 exit code NAME_TAKEN_EXIT, which tells ``cyborg launch`` to stop the whole robot with that
@@ -33,6 +37,7 @@ from cyborg.errors import CyborgError
 __all__ = [
     "DISCOVERY_SETTLE",
     "NAME_TAKEN_EXIT",
+    "SETTLE_AFTER_OTHERS",
     "NameTaken",
     "graph_name",
     "robot_taken_message",
@@ -44,7 +49,8 @@ __all__ = [
 
 NAME_TAKEN_EXIT = 76
 """Exit code of ``cyborg node`` refusing a name in use (the launch stops instead of retrying)."""
-DISCOVERY_SETTLE = 1.5  # seconds a ROS 2 node looks at the graph before it takes its name (best effort: discovery under heavy load can take longer)
+DISCOVERY_SETTLE = 1.5  # seconds a ROS 2 node looks at an empty graph before it takes its name (best effort: discovery under heavy load can take longer)
+SETTLE_AFTER_OTHERS = 0.5  # seconds it looks on once the graph shows another process's node (discovery works)
 GHOST_WAIT = 2.0  # seconds a ROS 2 name seen may take to vanish (a just-killed process's lease)
 PING_TIMEOUT = 1.0  # seconds a ROS 1 node's XML-RPC server has to answer
 ROS2_DEFAULT_RANGE = "SUBNET"  # ROS_AUTOMATIC_DISCOVERY_RANGE when it is not set (ROS 2 Jazzy and later)
@@ -121,24 +127,35 @@ def robot_taken_message(name: str, graph: str, where: str = "") -> str:
 
 
 def wait_for_graph(
-    names_now: Callable[[], set[str]], wanted: Iterable[str], *, settle: float = DISCOVERY_SETTLE
+    names_now: Callable[[], set[str]],
+    wanted: Iterable[str],
+    *,
+    settle: float = DISCOVERY_SETTLE,
+    own: Iterable[str] = (),
+    clock: Callable[[], float] = time.monotonic,
+    sleep: Callable[[float], None] = time.sleep,
 ) -> set[str]:
     """Which of ``wanted`` are on a ROS 2 graph and stay there (see the module's doc).
 
-    ``names_now()`` lists the node names the graph shows now (discovery fills it over time).
+    ``names_now()`` lists the node names the graph shows now (discovery fills it over time);
+    ``own``: this process's own (hidden) nodes, which say nothing about discovery.
     """
     wanted = set(wanted)
-    deadline = time.monotonic() + settle
+    own = set(own)
+    deadline = clock() + settle
     seen: set[str] = set()
-    while time.monotonic() < deadline:
-        seen |= names_now() & wanted
-        time.sleep(0.05)
+    while clock() < deadline:
+        names = names_now()
+        seen |= names & wanted
+        if names - own:  # discovery has shown another process: what ran already shows as soon
+            deadline = min(deadline, clock() + SETTLE_AFTER_OTHERS)
+        sleep(0.05)
     if not seen:
         return set()
-    deadline = time.monotonic() + GHOST_WAIT
-    while seen and time.monotonic() < deadline:
+    deadline = clock() + GHOST_WAIT
+    while seen and clock() < deadline:
         seen &= names_now()
-        time.sleep(0.1)
+        sleep(0.1)
     return seen
 
 

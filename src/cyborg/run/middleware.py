@@ -293,7 +293,7 @@ class Ros2(Middleware):
         wanted = {node_name, *also}
         if node_name == CONTROLLER_NODE:
             wanted.add(PARAM_HOME)
-        taken = wait_for_graph(transport.graph_node_names, wanted)
+        taken = wait_for_graph(transport.graph_node_names, wanted, own=transport.own_node_names())
         if taken:
             transport.close()
             name = min(taken - {PARAM_HOME}) if taken - {PARAM_HOME} else PARAM_HOME

@@ -198,6 +198,8 @@ class Launch:
             self.zygote = start_zygote(self.middleware, echo=self.echo)
         for name in self.parts:
             self._spawn(name, fresh=True)
+        if self.zygote is not None:
+            self.zygote.slim()  # its preloaded copy is memory only it uses now (:mod:`cyborg.run.zygote`)
         nodes = len(self.processes) + sum(len(self.hosts.get(name, [])) for name in self.processes)
         shared = f" in {len(self.processes)} processes" if nodes > len(self.processes) else ""
         self.say(

@@ -16,18 +16,27 @@ side; :class:`ForkedNode` stands for one child as a :class:`subprocess.Popen` do
 ``wait``, ``send_signal``, ``kill``). Ctrl-C reaches the nodes as before (one process group); the
 zygote ignores it and ends when the launch closes its stdin.
 
-Run as ``python -m cyborg.run.zygote CONTROL_FD ros1|ros2``. ``ps -e`` (the command's name, not
+Once the launch has started every node it asks the zygote to slim down (:meth:`Zygote.slim`): its
+children have written to most of the pages they shared with it (Python counts references in its
+objects), so its copy of the imports was memory only it used (22 MiB of a ROS 2 launch's PSS).
+It then runs again as a small process (``exec``: the same pid, the same children, whose exits it
+still reports) that starts a node it is asked for afresh, ``python -m cyborg.cli ARGV``: a node
+the launch starts again after it stopped takes its imports' time again.
+
+Run as ``python -m cyborg.run.zygote CONTROL_FD ros1|ros2|fresh``. ``ps -e`` (the command's name, not
 its line) shows each node by its name (the first 15 characters).
 """
 
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import gc
 import importlib
 import json
 import logging
 import os
+import re
 import runpy
 import select
 import signal
@@ -101,7 +110,9 @@ ROS1_PRELOAD = (
 several of the bigger ones do (a module two nodes import is held once instead of twice)."""
 ROS2_PRELOAD = ("rclpy", "rclpy.action", "cyborg_controller.msg", "cyborg.transport.ros2", *_COMMON)
 """The same for ROS 2 (rclpy is imported, not initialised: no DDS participant before the fork)."""
-PRELOAD = {"ros1": ROS1_PRELOAD, "ros2": ROS2_PRELOAD}
+FRESH = "fresh"
+"""The slim zygote's mode: nothing preloaded, each node started afresh (exec)."""
+PRELOAD = {"ros1": ROS1_PRELOAD, "ros2": ROS2_PRELOAD, FRESH: ()}
 START_TIMEOUT = 60.0  # seconds the zygote may take to import and answer its first request
 
 
@@ -199,6 +210,14 @@ class Zygote:
                 node = self._nodes.setdefault(pid, ForkedNode(pid, self))
             return node
 
+    def slim(self) -> None:
+        """Have the zygote drop its preloaded modules: nodes it starts from now on start afresh."""
+        with self._lock:
+            assert self._process.stdin is not None
+            with contextlib.suppress(BrokenPipeError, ValueError):
+                self._process.stdin.write(json.dumps({"slim": True}).encode() + b"\n")
+                self._process.stdin.flush()
+
     def _read(self) -> None:
         for line in self._control:
             try:
@@ -233,8 +252,9 @@ class Zygote:
 # --- the zygote process -------------------------------------------------------------------------
 
 
-def _serve(control: IO[str], preload: Sequence[str]) -> None:
+def _serve(control: IO[str], preload: Sequence[str], pending: bytes = b"") -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the nodes stop on Ctrl-C; the zygote on end of stdin
+    fresh = not preload
     for name in preload:
         try:
             importlib.import_module(name)
@@ -242,6 +262,7 @@ def _serve(control: IO[str], preload: Sequence[str]) -> None:
             print(f"zygote: could not preload {name}: {exc}", file=sys.stderr, flush=True)
     if preload is ROS1_PRELOAD:
         _find_ros_log_config()
+    _fork_safely()
     gc.collect()
     gc.freeze()  # what the nodes inherit stays out of their collections: its pages stay shared
     wake_read, wake_write = os.pipe()
@@ -249,27 +270,78 @@ def _serve(control: IO[str], preload: Sequence[str]) -> None:
     signal.set_wakeup_fd(wake_write)
     signal.signal(signal.SIGCHLD, lambda *_: None)
     stdin = sys.stdin.buffer
-    pending = b""
     while True:
+        _reap(control)  # (first: children that ended before this program began, when slim)
+        while b"\n" in pending:
+            line, pending = pending.split(b"\n", 1)
+            request = json.loads(line)
+            if request.get("slim"):
+                if not fresh:
+                    control.flush()
+                    os.execv(
+                        sys.executable,
+                        [
+                            sys.executable,
+                            "-m",
+                            "cyborg.run.zygote",
+                            str(control.fileno()),
+                            FRESH,
+                            pending.decode(),
+                        ],
+                    )
+                continue
+            pid = os.fork()
+            if pid == 0:
+                os.close(wake_read)
+                os.close(wake_write)
+                _child(request["argv"], control, fresh=fresh)
+            control.write(json.dumps({"forked": pid}) + "\n")
+            control.flush()
         ready, _, _ = select.select([stdin, wake_read], [], [])
         if wake_read in ready:
             os.read(wake_read, 512)
-        _reap(control)
         if stdin in ready:
             chunk = os.read(stdin.fileno(), 65536)
             if not chunk:
                 return
             pending += chunk
-            while b"\n" in pending:
-                line, pending = pending.split(b"\n", 1)
-                argv = json.loads(line)["argv"]
-                pid = os.fork()
-                if pid == 0:
-                    os.close(wake_read)
-                    os.close(wake_write)
-                    _child(argv, control)
-                control.write(json.dumps({"forked": pid}) + "\n")
-                control.flush()
+
+
+_LTTNG_UST = re.compile(r"/liblttng-ust(-[0-9a-f]+)?\.so[.0-9]*$")
+_SIGSET_BYTES = 128  # sizeof(sigset_t) on Linux
+
+
+def _fork_safely() -> None:
+    """Fork as LTTng-UST asks of a process it traces, when the imports loaded it.
+
+    ROS 2's wheels (rcl's and rmw's tracepoints) load liblttng-ust, whose constructor starts two
+    listener threads: the zygote is not single-threaded below Python. LTTng-UST's fork protocol
+    (what its ``liblttng-ust-fork.so`` wraps ``fork()`` with) takes its locks before the fork, so
+    that no thread holds them in the copy, and in the child resets its state and starts its
+    listeners again, as in a freshly started process.
+    """
+    path = next(
+        (line.split()[-1] for line in _maps() if _LTTNG_UST.search(line.split()[-1])),
+        None,
+    )
+    if path is None:
+        return
+    lib = ctypes.CDLL(path)
+    prefix = "lttng_ust_" if hasattr(lib, "lttng_ust_before_fork") else "ust_"  # 2.13 / 2.12
+    before, parent, child = (
+        getattr(lib, f"{prefix}{step}") for step in ("before_fork", "after_fork_parent", "after_fork_child")
+    )
+    saved = ctypes.create_string_buffer(_SIGSET_BYTES)  # the signal mask, blocked meanwhile
+    os.register_at_fork(
+        before=lambda: before(saved),
+        after_in_parent=lambda: parent(saved),
+        after_in_child=lambda: child(saved),
+    )
+
+
+def _maps() -> list[str]:
+    with open(f"/proc/{os.getpid()}/maps", encoding="utf-8", errors="replace") as maps:
+        return [line for line in maps if "/" in line]
 
 
 def _find_ros_log_config() -> None:
@@ -307,9 +379,10 @@ def _reap(control: IO[str]) -> None:
         control.flush()
 
 
-def _child(argv: list[str], control: IO[str]) -> None:
-    """In the forked child: become ``cyborg ARGV``. Never returns: click ends the command with
-    SystemExit, which ends this process as it ends a freshly started one (atexit, threads)."""
+def _child(argv: list[str], control: IO[str], *, fresh: bool = False) -> None:
+    """In the forked child: become ``cyborg ARGV`` (``fresh``: a new ``python -m cyborg.cli``).
+    Never returns: click ends the command with SystemExit, which ends this process as it ends a
+    freshly started one (atexit, threads)."""
     signal.set_wakeup_fd(-1)
     signal.signal(signal.SIGCHLD, signal.SIG_DFL)
     signal.signal(signal.SIGINT, signal.default_int_handler)
@@ -318,6 +391,8 @@ def _child(argv: list[str], control: IO[str]) -> None:
     devnull = os.open(os.devnull, os.O_RDONLY)
     os.dup2(devnull, 0)
     os.close(devnull)
+    if fresh:
+        os.execv(sys.executable, [sys.executable, "-m", "cyborg.cli", *argv])
     sys.argv = ["cyborg", *argv]
     runpy.run_module("cyborg.cli", run_name="__main__", alter_sys=True)  # as `python -m cyborg.cli` does
     raise SystemExit(0)
@@ -330,9 +405,9 @@ def _name_process(name: str) -> None:
 
 
 def main() -> None:
-    control_fd, preload = sys.argv[1:]
+    control_fd, preload, *pending = sys.argv[1:]
     control = os.fdopen(int(control_fd), "w", encoding="utf-8")
-    _serve(control, PRELOAD[preload])
+    _serve(control, PRELOAD[preload], "".join(pending).encode())
 
 
 if __name__ == "__main__":

@@ -18,7 +18,11 @@ late, now and then):
 waits (the GIL released) until a pool thread has begun it before it waits for new work. A
 subscription's message and an action client's answers are taken on the executor's own thread
 instead (our callbacks for them only convert what came and hand it to the event loop): no pool
-thread, no hand-over. Nothing
+thread, no hand-over. rclpy's handler of such a message triggers the executor's guard condition
+twice (the entity may be waited for again, its callback group is free), which made the next
+wait return at once and the wait set be built twice per message, in Python; on the executor's
+own thread those triggers are left out (:class:`_InlineGuard`): it builds the wait set anew
+after the callback anyway. Nothing
 is lost by waiting: the pool begins its tasks in order, so no later task could run sooner, and
 our callbacks that hold a pool thread (an action server's goal decision and execution, a
 service request) wait for the event loop, never for this executor. A shutdown ends the wait.
@@ -31,6 +35,7 @@ from collections.abc import Callable
 from typing import Any
 
 from rclpy.action import ActionClient
+from rclpy.action import ActionServer as RclActionServer
 from rclpy.context import Context
 from rclpy.executors import (
     ConditionReachedException,
@@ -39,6 +44,7 @@ from rclpy.executors import (
     ShutdownException,
     TimeoutException,
 )
+from rclpy.guard_condition import GuardCondition
 from rclpy.subscription import Subscription
 from rclpy.task import Task
 
@@ -49,18 +55,44 @@ SHUTDOWN_CHECK = 0.1  # seconds between looks at a shutdown while a hand-off is 
 _QUICK = (Subscription, ActionClient)
 """Entities whose callbacks (ours) only take what came and hand it to the event loop."""
 
+
+def _answers_only(entity: object) -> bool:
+    """An action server whose ready work is only cancel or result requests (or goals to expire):
+    our callbacks for those hand a cancel to the event loop and answer at once. A goal request
+    waits for the module's decision on the event loop: the pool."""
+    return isinstance(entity, RclActionServer) and not getattr(entity, "_is_goal_request_ready", True)
+
+
 _IDLE = (ConditionReachedException, ExternalShutdownException, ShutdownException, TimeoutException)
+
+
+class _InlineGuard(GuardCondition):  # type: ignore[misc]
+    """The executor's guard condition, not triggered by a callback that runs on the executor's own
+    thread (:attr:`muted_on`): its wake-up would only make the executor build the same wait set again."""
+
+    def __init__(self, context: Context) -> None:
+        super().__init__(callback=None, callback_group=None, context=context)
+        self.muted_on: int | None = None
+
+    def trigger(self) -> None:
+        if self.muted_on != threading.get_ident():
+            super().trigger()
 
 
 class HandOffExecutor(MultiThreadedExecutor):  # type: ignore[misc]
     """A multi-threaded executor whose pool holds each task once, and that lets the pool take a
     ready entity's message before it waits again."""
 
+    _guard: Any  # rclpy's: what wakes its wait (replaced by an _InlineGuard)
+
     def __init__(self, num_threads: int, *, context: Context) -> None:
         super().__init__(num_threads=num_threads, context=context)
         self._queued: set[Task[Any]] = set()  # handed to the pool, not begun yet
         self._entity_tasks = 0  # of those, the ones that take a ready entity's message
         self._begun = threading.Condition()
+        self._guard.destroy()
+        self._inline_guard = _InlineGuard(context)
+        self._guard = self._inline_guard
 
     def _spin_once_impl(
         self, timeout_sec: float | None = None, wait_condition: Callable[[], bool] = lambda: False
@@ -72,12 +104,17 @@ class HandOffExecutor(MultiThreadedExecutor):  # type: ignore[misc]
             task, entity, _ = self.wait_for_ready_callbacks(timeout_sec, None, wait_condition)
         except _IDLE:
             return
-        if isinstance(entity, _QUICK) and not task.executing():
+        if (isinstance(entity, _QUICK) or _answers_only(entity)) and not task.executing():
             # A message to a topic, or an action client's answer, feedback or result: taking it and
             # handing it to the event loop is quick, so it runs here; a thread of the pool would
             # cost two thread switches a message (most of the CPU of a node that hears 10 poses a
-            # second). An action server's or a service's callback may wait for the loop: the pool.
-            task()
+            # second); so are an action server's cancel and result requests. Its goal request and a
+            # service's callback wait for the loop: the pool.
+            self._inline_guard.muted_on = threading.get_ident()
+            try:
+                task()
+            finally:
+                self._inline_guard.muted_on = None
             if task.done():
                 task.result()  # raise what the callback raised, as rclpy's executor does
             return

@@ -284,6 +284,13 @@ class Ros2Transport(Transport):
         probe = self._graph_probe()
         return {name for name, namespace in probe.get_node_names_and_namespaces() if namespace == "/"}
 
+    def own_node_names(self) -> set[str]:
+        """The names of this process's nodes, its hidden ones included."""
+        hidden = [self._probe, self._home, self._param_node]
+        return {rcl.get_name() for rcl in hidden if rcl is not None} | {
+            node.rcl.get_name() for node in self._ros2_nodes()
+        }
+
     @staticmethod
     def _count_nodes(probe: RclNode, name: str, namespace: str) -> int:
         return sum(1 for n, ns in probe.get_node_names_and_namespaces() if (n, ns) == (name, namespace))
