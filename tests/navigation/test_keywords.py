@@ -326,6 +326,14 @@ def test_a_place_followed_by_a_letter_or_numeral_is_asked_about_not_taken() -> N
     assert said is not None and said.location == "entrance" and said.certain  # a pronoun, not a suffix
 
 
+def test_a_place_followed_by_a_word_not_of_its_name_is_asked_about_unless_it_ends_the_request() -> None:
+    found = detect_navigation("where is the cafeteria shop", MATCHER)  # "the gift shop", misheard?
+    assert found is not None and found.location == "cafeteria" and not found.certain
+    for text in ("where is the cafeteria located", "take me to the cafeteria again please"):
+        found = detect_navigation(text, MATCHER)
+        assert found is not None and found.location == "cafeteria" and found.certain, text
+
+
 def test_a_number_heard_as_a_word_is_not_certain_even_before_polite_words() -> None:
     for text in (
         "where is the entrance to",

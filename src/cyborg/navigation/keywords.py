@@ -85,6 +85,13 @@ SUFFIX_WORDS = frozenset(
 name ("where is the entrance i" for "entrance 5", "room b"): the place is asked about first.
 Not "a", which ends sentences in its own right."""
 
+CLOSING_WORDS = frozenset(
+    {"located", "situated", "again", "here", "there", "then", "today", "too", "first", "quickly", "ok", "okay"}
+)
+"""Words that end a request right after a place's name ("where is the cafeteria located"). Any
+other word there may be the rest of another place's name ("where is the lift shop", the gift
+shop misheard): the place is asked about first."""
+
 FILLER_WORDS = frozenset({"the", "a", "an", "my", "this", "that", "to", "at", "of", "is"})
 """Words a place-name match may not start or end with (unless the name itself does)."""
 
@@ -332,8 +339,10 @@ class LocationMatcher:
         A sentence that ends in a word that sounds like a number ("where is the entrance to",
         speech-to-text's "entrance 2"; polite words after it count as its end: "entrance to
         please") is also read with the number; a place found only that way is not certain, and
-        neither is the place without the number. Nor is a place followed, last, by a letter or a
-        roman numeral (:data:`SUFFIX_WORDS`): it may be another place's name misheard ("entrance i").
+        neither is the place without the number. Nor is a place followed, last, by one more word
+        that is not part of its name, unless it is a word that ends such requests
+        (:data:`CLOSING_WORDS`): it may be another place's name misheard ("entrance i" for
+        entrance 5, "the lift shop" for the gift shop).
         """
         words = normalise(text).split()
         found = self._find(words)
@@ -346,7 +355,8 @@ class LocationMatcher:
                 return replace(with_number, score=min(with_number.score, CERTAIN_SCORE - 1))
         if found is not None and found.start + len(found.matched.split()) == end - 1:
             suffix = words[end - 1]
-            if suffix in SUFFIX_WORDS and not normalise(found.matched).endswith(f" {suffix}"):
+            unknown = suffix not in CLOSING_WORDS and not suffix.isdigit()
+            if (suffix in SUFFIX_WORDS or unknown) and not normalise(found.matched).endswith(f" {suffix}"):
                 return replace(found, score=min(found.score, CERTAIN_SCORE - 1))
         return found
 
