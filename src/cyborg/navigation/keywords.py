@@ -86,7 +86,20 @@ name ("where is the entrance i" for "entrance 5", "room b"): the place is asked 
 Not "a", which ends sentences in its own right."""
 
 CLOSING_WORDS = frozenset(
-    {"located", "situated", "again", "here", "there", "then", "today", "too", "first", "quickly", "ok", "okay"}
+    {
+        "located",
+        "situated",
+        "again",
+        "here",
+        "there",
+        "then",
+        "today",
+        "too",
+        "first",
+        "quickly",
+        "ok",
+        "okay",
+    }
 )
 """Words that end a request right after a place's name ("where is the cafeteria located"). Any
 other word there may be the rest of another place's name ("where is the lift shop", the gift
