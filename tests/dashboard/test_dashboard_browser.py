@@ -689,21 +689,26 @@ def test_state_machine_zooms_to_readable_labels(browser: Browser, sim: str) -> N
         expect(page.locator("#graph svg")).to_be_visible()
         go_idle(page, sim)
         graph = box_of(page, "#graph")
-        fitted = box_of(page, '[id="state:idle"]')["width"]
         assert label_height(page, "idle") >= 10, "fitted to the panel, the names read (issue 16)"
         assert inside(box_of(page, "#graph svg .graph"), graph), "at first the whole machine is in view"
 
+        before = box_of(page, '[id="state:idle"]')["width"]
         page.click('#graph-tools button[data-zoom="in"]')
         page.wait_for_timeout(200)
         zoomed = box_of(page, '[id="state:idle"]')["width"]
-        assert zoomed == pytest.approx(fitted * 1.5, rel=0.02), "+ zooms in"
+        assert zoomed == pytest.approx(before * 1.5, rel=0.02), "+ zooms in"
         page.mouse.move(graph["x"] + graph["width"] / 2, graph["y"] + graph["height"] / 2)
         page.mouse.wheel(0, 400)
         page.wait_for_timeout(300)
         assert box_of(page, '[id="state:idle"]')["width"] < zoomed * 0.95, "the wheel zooms out"
         page.click('#graph-tools button[data-zoom="fit"]')
         page.wait_for_timeout(200)
-        assert box_of(page, '[id="state:idle"]')["width"] == pytest.approx(fitted, rel=0.02)
+        # The robot wanders meanwhile, and a superstate it enters opens, so the drawing's size may
+        # have changed since it was first fitted: "fit" means the whole of it fills the panel.
+        drawing, panel = box_of(page, "#graph svg .graph"), box_of(page, "#graph svg")
+        assert inside(drawing, panel), "fit brings the whole machine back in view"
+        filled = max(drawing["width"] / panel["width"], drawing["height"] / panel["height"])
+        assert filled == pytest.approx(1.0, abs=0.03), "and fills the panel"
 
         # Follow: the active state in view, labels big enough to read, as it changes.
         page.check("#graph-follow")
