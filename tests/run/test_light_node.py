@@ -102,6 +102,74 @@ def test_a_launched_module_node_and_gatekeeper_load_neither_the_controller_nor_t
     assert found == [], f"a thin node loads what it does not run: {found}"
 
 
+# What `python -m cyborg.run.launched node NAME ...` (a launch's thin part) imports and builds,
+# on an in-process transport: its arguments read as the launch writes them (Launch.command).
+LAUNCHED = """
+import json, sys
+from cyborg.run import launched
+from cyborg.run.middleware import Ros1
+from cyborg.run.node import build_node
+from cyborg.transport.embedded import EmbeddedTransport
+
+class InProcess(Ros1):
+    def transport(self, clock, node_name, *, use_sim_time=False, also=()):
+        return EmbeddedTransport(clock)
+
+    def part_built(self, node_name):
+        return None
+
+built = {}
+for line in sys.stdin:
+    node = launched.parse_launched(json.loads(line))
+    options = launched._options(node)
+    part = build_node(node.name, options, InProcess())
+    built[node.name] = [[type(c).__name__, c.node.name] for c in part.part.components]
+    part.close()
+print(json.dumps({"built": built, "modules": sorted(sys.modules)}))
+"""
+
+
+def test_a_launched_thin_node_loads_neither_pydantic_nor_click(tmp_path: Path) -> None:
+    from cyborg.app.config import load_config
+    from cyborg.run.middleware import ROS1, Ros1
+    from cyborg.run.supervisor import Launch, shared_process
+
+    config = load_config(packaged_config("cyborg.yaml"))
+    parts = ["cyborg_idle", "cyborg_joke", "cyborg_music", "cyborg_conversation", "cyborg_tts"]
+    parts += ["cyborg_speech_gatekeeper", "cyborg_navigation", "cyborg_controller"]
+    robot = Launch(Path(config.source), config, parts, tmp_path, middleware=ROS1)
+    commands = {name: robot.command(name, None) for name in robot.parts}
+    # the parts that run code of their own (and what a plug-in kind is) start as `cyborg node`
+    assert {name for name, command in commands.items() if command[2] == "cyborg.cli"} == {
+        "cyborg_navigation",
+        "cyborg_controller",
+    }
+    thin = [command[3:] for command in commands.values() if command[2] == "cyborg.run.launched"]
+
+    class Hosting(Ros1):  # ROS 2's shared process (--with), its command line read the same way
+        hosts_many = True
+
+    hosts = shared_process(config, parts[:6])
+    hosting = Launch(Path(config.source), config, parts[:6], tmp_path, middleware=Hosting(), hosts=hosts)
+    thin.append(hosting.command(hosting.parts[0], None)[3:])
+    result = subprocess.run(
+        [sys.executable, "-c", LAUNCHED],
+        input="".join(json.dumps(argv) + "\n" for argv in thin),
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+        cwd=ROOT,
+    )
+    assert result.returncode == 0, result.stderr[-3000:]
+    answer = json.loads(result.stdout.strip().splitlines()[-1])
+    assert answer["built"]["cyborg_joke"] == [["QuestionModule", "cyborg_joke"]]
+    assert [node for _, node in answer["built"]["cyborg_idle"]] == parts[:6]
+    heavy = ("pydantic", "pydantic_core", "click", *NOT_LOADED)
+    found = sorted(m for m in answer["modules"] if any(m == bad or m.startswith(bad + ".") for bad in heavy))
+    assert found == [], f"a launched thin node loads what it does not need: {found}"
+
+
 def test_ros1_refuses_to_host_several_parts_in_one_process() -> None:
     from cyborg.run.middleware import ROS1
     from cyborg.transport.clock import RealClock

@@ -19,7 +19,7 @@ from collections.abc import Iterable
 from cyborg.app.config import LoadedConfig
 from cyborg.app.registry import KindRegistry
 from cyborg.configfile import key_lines
-from cyborg.modules.kind import ModuleSettings
+from cyborg.modules.kind import KindSettings
 from cyborg.transport import topics
 
 __all__ = ["robot_warnings"]
@@ -60,7 +60,7 @@ def robot_warnings(config: LoadedConfig, kinds: KindRegistry) -> list[str]:
     modules = config.model.modules
     if not modules:
         return []
-    settings: dict[str, ModuleSettings] = {
+    settings: dict[str, KindSettings] = {
         name: kinds.parse(name, raw, source=config.source)[1] for name, raw in modules.items()
     }
     lines = _Lines(config.text)
@@ -112,7 +112,7 @@ def robot_warnings(config: LoadedConfig, kinds: KindRegistry) -> list[str]:
 
 
 def _speech_without_grant(
-    config: LoadedConfig, settings: dict[str, ModuleSettings], lines: _Lines
+    config: LoadedConfig, settings: dict[str, KindSettings], lines: _Lines
 ) -> list[str]:
     """A state whose module speaks there, where a speech gatekeeper grants its resource to another node."""
     speech_gates = [
@@ -142,9 +142,7 @@ def _speech_without_grant(
     return warnings
 
 
-def _events_nobody_takes(
-    config: LoadedConfig, settings: dict[str, ModuleSettings], lines: _Lines
-) -> list[str]:
+def _events_nobody_takes(config: LoadedConfig, settings: dict[str, KindSettings], lines: _Lines) -> list[str]:
     """An event a module publishes that no state has as a transition: the controller drops it."""
     machine = config.machine
     events = sorted({event for state in machine.states.values() for event in state.transitions})

@@ -13,6 +13,7 @@ from pydantic_core import PydanticUndefined
 
 from cyborg.app.registry import KindRegistry
 from cyborg.errors import ConfigError
+from cyborg.modules.settings import settings_model
 
 __all__ = ["kinds_markdown", "settings_rows"]
 
@@ -42,8 +43,10 @@ def _nested_model(annotation: Any) -> type[BaseModel] | None:
     return None
 
 
-def settings_rows(model: type[BaseModel], prefix: str = "") -> list[tuple[str, str, str]]:
-    """(key, default, meaning) of every setting of ``model``; nested models as ``key[].sub``."""
+def settings_rows(settings: type[Any], prefix: str = "") -> list[tuple[str, str, str]]:
+    """(key, default, meaning) of every setting of ``settings`` (a model, or dataclass settings);
+    nested models as ``key[].sub``."""
+    model = settings_model(settings)
     rows: list[tuple[str, str, str]] = []
     for name, field in model.model_fields.items():
         key = f"{prefix}{name}"
@@ -65,7 +68,8 @@ def kinds_markdown(registry: KindRegistry, names: list[str] | None = None) -> st
             continue
         lines = [f"### `{name}`", "", kind.summary, "", "| key | default | meaning |", "| --- | --- | --- |"]
         lines += [
-            f"| `{key}` | {default} | {meaning} |" for key, default, meaning in settings_rows(kind.settings)
+            f"| `{key}` | {default} | {meaning} |"
+            for key, default, meaning in settings_rows(settings_model(kind.settings))
         ]
         parts.append("\n".join(lines))
     return "\n\n".join(parts) + "\n"

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 from cyborg.app.context import BuildContext, calendar_of, heard_by, relays_of
 from cyborg.app.registry import KindRegistry, build_module, module_kinds
-from cyborg.app.sketch import PartConfig
+from cyborg.app.sketch import ConfigSketch, PartConfig
 from cyborg.errors import ConfigError, CyborgError
 from cyborg.modules.gatekeeper import Gatekeeper
 from cyborg.modules.kind import Component
@@ -90,7 +90,9 @@ def build_part(
         return Part(name, [controller, emotion, motivator], controller=controller)
     if name in model.modules:
         registry = kinds or module_kinds()
-        kind, settings = registry.parse(name, model.modules[name], source=config.source)
+        # a sketch's file was validated by the launch: its kind's settings are made, not validated again
+        parse = registry.parse_checked if isinstance(config, ConfigSketch) else registry.parse
+        kind, settings = parse(name, model.modules[name], source=config.source)
         if context.relays is None:
             context.relays = relays_of(config)
         if context.heard is None:  # only a module that asks (speech input) imports the other kinds

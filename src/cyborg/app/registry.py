@@ -8,6 +8,7 @@ uses it, so a node of one placeholder module loads the placeholder and nothing e
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import logging
 import re
@@ -18,12 +19,9 @@ from importlib.metadata import Distribution, EntryPoint, distributions, entry_po
 from pathlib import Path
 from typing import Any
 
-from pydantic import ValidationError
-
 from cyborg.app.plugin_path import main_path, main_python
-from cyborg.configfile import describe_errors
 from cyborg.errors import ConfigError, CyborgError
-from cyborg.modules.kind import BuildContext, Component, ModuleKind, ModuleSettings
+from cyborg.modules.kind import BuildContext, Component, KindSettings, ModuleKind, checked_settings
 from cyborg.transport.base import Node
 
 log = logging.getLogger(__name__)
@@ -209,8 +207,40 @@ class KindRegistry:
 
     def parse(
         self, node_name: str, raw: Any, *, source: str | None = None
-    ) -> tuple[ModuleKind[Any], ModuleSettings]:
+    ) -> tuple[ModuleKind[Any], KindSettings]:
         """Validate one ``modules:`` block; errors name the module, the setting and the fix."""
+        from pydantic import BaseModel, ValidationError
+
+        from cyborg.configfile import describe_errors
+        from cyborg.modules.settings import settings_model
+
+        kind, settings = self._kind_of(node_name, raw, source)
+        model = settings_model(kind.settings)
+        try:
+            validated = model.model_validate(settings)
+        except ValidationError as exc:
+            problems = describe_errors(exc, model, where=f"module {node_name!r}", doc="docs/configuration.md")
+            raise ConfigError(problems, source=source) from exc
+        if isinstance(validated, kind.settings):
+            return kind, validated
+        assert isinstance(validated, BaseModel)  # the model of dataclass settings: made into them
+        return kind, checked_settings(kind.settings, validated.model_dump())
+
+    def parse_checked(
+        self, node_name: str, raw: Any, *, source: str | None = None
+    ) -> tuple[ModuleKind[Any], KindSettings]:
+        """:meth:`parse` for a block validated already (by ``cyborg launch``): dataclass settings
+        are made without pydantic (:func:`~cyborg.modules.kind.checked_settings`); a pydantic
+        model is validated as in :meth:`parse`."""
+        kind, settings = self._kind_of(node_name, raw, source)
+        if not dataclasses.is_dataclass(kind.settings):
+            return self.parse(node_name, raw, source=source)
+        return kind, checked_settings(kind.settings, settings)
+
+    def _kind_of(
+        self, node_name: str, raw: Any, source: str | None
+    ) -> tuple[ModuleKind[Any], dict[str, Any]]:
+        """The kind a ``modules:`` block names, and its settings (the block without ``kind:``)."""
         if not isinstance(raw, dict) or "kind" not in raw:
             raise ConfigError(
                 f"module {node_name!r}: needs 'kind:' (one of {', '.join(self.names())})", source=source
@@ -220,14 +250,7 @@ class KindRegistry:
             kind = self.get(name, source=source)
         except ConfigError as exc:
             raise ConfigError([f"module {node_name!r}: {p}" for p in exc.problems], source=source) from exc
-        settings = {key: value for key, value in raw.items() if key != "kind"}
-        try:
-            return kind, kind.settings.model_validate(settings)
-        except ValidationError as exc:
-            problems = describe_errors(
-                exc, kind.settings, where=f"module {node_name!r}", doc="docs/configuration.md"
-            )
-            raise ConfigError(problems, source=source) from exc
+        return kind, {key: value for key, value in raw.items() if key != "kind"}
 
     def check(self, modules: Mapping[str, Any], *, source: str | None = None) -> None:
         """Validate every block of a ``modules:`` section; one ConfigError lists every problem."""
@@ -250,7 +273,7 @@ def build_module(
     name: str,
     kind: ModuleKind[Any],
     node: Node,
-    settings: ModuleSettings,
+    settings: KindSettings,
     context: BuildContext,
     *,
     source: str | None = None,

@@ -19,11 +19,12 @@ import enum
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from types import UnionType
-from typing import Any, TypeGuard, Union, get_args, get_origin
+from typing import TYPE_CHECKING, Any, TypeGuard, Union, get_args, get_origin
 
-from pydantic import BaseModel, ValidationError
-from pydantic.fields import FieldInfo
-from pydantic_core import ErrorDetails, PydanticUndefined
+if TYPE_CHECKING:  # imported when a problem is worded: reading a file needs no pydantic (issue 33)
+    from pydantic import BaseModel, ValidationError
+    from pydantic.fields import FieldInfo
+    from pydantic_core import ErrorDetails
 
 Location = Sequence[Any]
 """Where a value is in a file: keys and list indexes from the top, as pydantic gives them."""
@@ -320,6 +321,8 @@ def _short(value: Any, limit: int = 60) -> str:
 
 
 def _is_model(annotation: Any) -> TypeGuard[type[BaseModel]]:
+    from pydantic import BaseModel
+
     return isinstance(annotation, type) and issubclass(annotation, BaseModel)
 
 
@@ -411,6 +414,8 @@ def _expected(annotation: Any) -> tuple[str, str]:
 
 def _example(loc: Location, info: FieldInfo | None, annotation: Any) -> str:
     """'connect: 2.0' from the field's examples or default, else from its type; '2.5' without a key."""
+    from pydantic_core import PydanticUndefined
+
     value: Any = PydanticUndefined
     if info is not None and info.examples:
         value = info.examples[0]

@@ -36,14 +36,37 @@ The built-in modules live beside it: :mod:`~cyborg.modules.idle` and
 a timetable) and :mod:`~cyborg.modules.gatekeeper` (the relay in front of an output, which lets
 only the active state's module through). :mod:`~cyborg.modules.problems` tells the dashboard
 what a module cannot fix itself (:class:`ProblemReporter`).
+
+``Field`` and :class:`ModuleSettings` (pydantic's) are imported when first asked for: a node of
+a built-in thin module, whose settings are a dataclass, loads no pydantic (issue 33).
 """
 
-from pydantic import Field
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
 
 from cyborg.modules.behaviour import Abort, BehaviourModule, GoalContext, Outcome
-from cyborg.modules.kind import BuildContext, Component, ModuleKind, ModuleSettings
+from cyborg.modules.kind import BuildContext, Component, ModuleKind
 from cyborg.modules.problems import ProblemReporter
 from cyborg.transport.base import MessageInfo, Node
+
+if TYPE_CHECKING:
+    from pydantic import Field
+
+    from cyborg.modules.settings import ModuleSettings
+
+
+def __getattr__(name: str) -> Any:
+    if name == "Field":
+        from pydantic import Field
+
+        return Field
+    if name == "ModuleSettings":
+        from cyborg.modules.settings import ModuleSettings
+
+        return ModuleSettings
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = [
     "Abort",

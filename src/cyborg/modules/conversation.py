@@ -19,11 +19,10 @@ quiet spell. Registered as the module kinds ``conversation`` and ``question``.
 from __future__ import annotations
 
 import re
-
-from pydantic import Field
+from dataclasses import asdict, dataclass
 
 from cyborg.modules.behaviour import BehaviourModule, GoalContext
-from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
+from cyborg.modules.kind import BuildContext, KindSettings, ModuleKind, setting
 from cyborg.transport import topics
 from cyborg.transport.base import MessageInfo, Node
 from cyborg.transport.messages import SystemState
@@ -200,11 +199,12 @@ class QuestionModule(BehaviourModule):
         self.send_emotion(*(self.answered_feedback if self._answered else self.unanswered_feedback))
 
 
-class ConversationSettings(ModuleSettings):
+@dataclass(frozen=True, kw_only=True)
+class ConversationSettings(KindSettings):
     """Asks for the conversation state when someone speaks to the robot (10.1); ends after a quiet spell."""
 
-    action: str = Field(CONVERSATION_ACTION, description="action server of the conversation state")
-    quiet_seconds: float = Field(90.0, gt=0, description="seconds without speech that end the conversation")
+    action: str = setting(CONVERSATION_ACTION, description="action server of the conversation state")
+    quiet_seconds: float = setting(90.0, gt=0, description="seconds without speech that end the conversation")
 
     def listens_for(self) -> tuple[str, ...]:
         """Greetings ask for the conversation state at once; any other text does if no module acts on it."""
@@ -214,16 +214,17 @@ class ConversationSettings(ModuleSettings):
         return (CONVERSATION_INTEREST,)
 
 
-class QuestionSettings(ModuleSettings):
+@dataclass(frozen=True, kw_only=True)
+class QuestionSettings(KindSettings):
     """Asks one question, waits for an answer, and tells the emotion system how it went."""
 
-    action: str = Field(description="action server of the question's state")
-    question: str = Field(min_length=1, description="what the robot asks")
-    answer_seconds: float = Field(6.0, ge=0, description="seconds it waits for an answer")
-    unanswered_feedback: tuple[float, float, float] = Field(
+    action: str = setting(description="action server of the question's state")
+    question: str = setting(min_length=1, description="what the robot asks")
+    answer_seconds: float = setting(6.0, ge=0, description="seconds it waits for an answer")
+    unanswered_feedback: tuple[float, float, float] = setting(
         UNANSWERED_FEEDBACK, description="PAD change when nobody answers"
     )
-    answered_feedback: tuple[float, float, float] = Field(
+    answered_feedback: tuple[float, float, float] = setting(
         ANSWERED_FEEDBACK, description="PAD change when someone answers"
     )
 
@@ -236,7 +237,7 @@ def _conversation(node: Node, settings: ConversationSettings, context: BuildCont
 
 
 def _question(node: Node, settings: QuestionSettings, context: BuildContext) -> QuestionModule:
-    return QuestionModule(node, **settings.model_dump())
+    return QuestionModule(node, **asdict(settings))
 
 
 CONVERSATION_KIND = ModuleKind(ConversationSettings, _conversation)

@@ -7,21 +7,23 @@ the module kind ``event_script``.
 from __future__ import annotations
 
 import asyncio
-
-from pydantic import Field
+from dataclasses import dataclass
 
 from cyborg.errors import InvalidValueError
-from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
+from cyborg.modules.kind import BuildContext, KindSettings, ModuleKind, setting
 from cyborg.transport import topics
 from cyborg.transport.base import Node
 from cyborg.transport.messages import String
 
 
-class EventScriptSettings(ModuleSettings):
+@dataclass(frozen=True, kw_only=True)
+class EventScriptSettings(KindSettings):
     """Publishes the listed events in turn, one every few seconds (a demo without people)."""
 
-    events: list[str] = Field(min_length=1, description="events to publish, in this order, round and round")
-    every: float = Field(10.0, gt=0, description="seconds between two events")
+    events: list[str] = setting(  # noqa: RUF009 (a dataclasses.field)
+        min_length=1, description="events to publish, in this order, round and round"
+    )
+    every: float = setting(10.0, gt=0, description="seconds between two events")
 
     def publishes(self) -> tuple[str, ...]:
         return tuple(dict.fromkeys(self.events))

@@ -7,21 +7,22 @@ Registered as the module kind ``idle``.
 
 from __future__ import annotations
 
-from pydantic import Field
+from dataclasses import dataclass
 
 from cyborg.modules.behaviour import BehaviourModule, GoalContext
-from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
+from cyborg.modules.kind import BuildContext, KindSettings, ModuleKind, setting
 from cyborg.transport.base import Node
 
 IDLE_ACTION = "cyborg_idle/idle"
 
 
-class IdleSettings(ModuleSettings):
+@dataclass(frozen=True, kw_only=True)
+class IdleSettings(KindSettings):
     """The idle state (thesis 9.1): waits, sending a little boredom now and then."""
 
-    action: str = Field(IDLE_ACTION, description="action server of the idle state")
-    interval: float = Field(8.0, gt=0, description="seconds between two boredom feedbacks")
-    boredom: tuple[float, float, float] = Field(
+    action: str = setting(IDLE_ACTION, description="action server of the idle state")
+    interval: float = setting(8.0, gt=0, description="seconds between two boredom feedbacks")
+    boredom: tuple[float, float, float] = setting(
         (-0.05, -0.05, -0.05), description="PAD change sent every interval"
     )
 
@@ -31,7 +32,7 @@ class IdleModule(BehaviourModule):
 
     def __init__(self, node: Node, settings: IdleSettings | None = None) -> None:
         super().__init__(node)
-        self.settings = settings or IdleSettings.model_validate({})
+        self.settings = settings or IdleSettings()
         self.feedback_sent = 0
         self.serve(self.settings.action, self.idle)
 

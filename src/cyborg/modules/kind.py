@@ -5,43 +5,79 @@ registered and found: ``docs/modules.md``, "How a kind is found".
 
 The composition root (:mod:`cyborg.app`) validates a block against ``settings``, then calls
 ``build`` with the module's own node, the validated settings and a :class:`BuildContext`.
+
+``settings`` is a pydantic model (:class:`ModuleSettings`, what a plug-in writes) or a frozen
+stdlib dataclass of :class:`KindSettings` whose fields carry pydantic's ``Field`` arguments in
+their ``metadata`` (the built-in thin kinds): validated through a model made from it where a
+configuration is checked (:func:`cyborg.modules.settings.settings_model`), and built without
+pydantic by a node the launch checked its file for (:func:`checked_settings`), so such a node
+loads no pydantic (issue 33). :class:`ModuleSettings` itself is imported when first used.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import random
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Generic, Protocol, TypeVar, runtime_checkable
-
-from pydantic import BaseModel, ConfigDict
+from types import UnionType
+from typing import (
+    TYPE_CHECKING,
+    Any,
+    Generic,
+    Protocol,
+    TypeVar,
+    Union,
+    get_args,
+    get_origin,
+    get_type_hints,
+    runtime_checkable,
+)
 
 from cyborg.transport.base import Node
 from cyborg.transport.topics import BaseApi
 
 if TYPE_CHECKING:
     from cyborg.maps import OccupancyMap
+    from cyborg.modules.settings import ModuleSettings
 
 __all__ = [
     "BuildContext",
     "Component",
+    "KindSettings",
     "Listening",
     "ModuleKind",
     "ModuleSettings",
     "ServesStates",
+    "checked_settings",
     "listening_of",
+    "setting",
 ]
 
 
-class ModuleSettings(BaseModel):
-    """Base of a kind's settings: the keys of its YAML block besides ``kind:``.
+def __getattr__(name: str) -> Any:
+    if name == "ModuleSettings":  # pydantic's: imported by the first module that uses it
+        from cyborg.modules.settings import ModuleSettings
 
-    Unknown keys are refused, and each field's ``description`` and default go into the
-    ``modules:`` table of ``docs/configuration.md``.
+        return ModuleSettings
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def setting(default: Any = dataclasses.MISSING, *, description: str, **constraints: Any) -> Any:
+    """A field of dataclass settings: its default, its ``description`` and pydantic ``Field``
+    constraints (``gt=0``, ``min_length=1``...), checked wherever the configuration is validated."""
+    return dataclasses.field(default=default, metadata={"description": description, **constraints})
+
+
+class KindSettings:
+    """What every kind's settings answer, known without starting the module (the defaults here).
+
+    :class:`ModuleSettings` (a pydantic model) is one; a frozen stdlib dataclass deriving from
+    it is another (see the module's doc).
     """
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    __slots__ = ()
 
     def listens_for(self) -> tuple[str, ...]:
         """The phrases this module reacts to when speech-to-text hears them (lower case).
@@ -94,7 +130,7 @@ class Listening:
     place_phrases: tuple[str, ...] = ()
 
 
-def listening_of(settings: Iterable[ModuleSettings]) -> Listening:
+def listening_of(settings: Iterable[KindSettings]) -> Listening:
     """What the modules with ``settings`` listen for, together (lower case, each phrase once)."""
     modules = list(settings)
     places = dict.fromkeys(p.strip().lower() for s in modules for p in s.listens_for_places())
@@ -157,7 +193,7 @@ class BuildContext(Protocol):
         ...
 
 
-S = TypeVar("S", bound=ModuleSettings)
+S = TypeVar("S", bound=KindSettings)
 
 
 @dataclass(frozen=True)
@@ -172,3 +208,45 @@ class ModuleKind(Generic[S]):
         """The first line of the settings model's docstring: what the kind does."""
         doc = (self.settings.__doc__ or "").strip()
         return doc.splitlines()[0] if doc else ""
+
+
+def checked_settings(cls: type[S], data: Mapping[str, Any]) -> S:
+    """Dataclass settings ``cls`` from a block validated already (``cyborg launch`` checked the
+    file through the kind's model), without pydantic: nested settings, tuples and numbers are
+    made as the model's validation makes them; nothing else is checked here.
+
+    A pydantic model (a plug-in's :class:`ModuleSettings`) is validated instead: it pays for it.
+    """
+    if not dataclasses.is_dataclass(cls):
+        return cls.model_validate(data)  # type: ignore[attr-defined,no-any-return]
+    hints = get_type_hints(cls)
+    values = {f.name: _made(hints[f.name], data[f.name]) for f in dataclasses.fields(cls) if f.name in data}
+    return cls(**values)
+
+
+_TRUE = frozenset({"1", "on", "t", "true", "y", "yes"})
+
+
+def _made(annotation: Any, value: Any) -> Any:
+    """``value`` (valid for ``annotation``) as pydantic's lax validation would make it."""
+    if value is None:
+        return None
+    origin, args = get_origin(annotation), get_args(annotation)
+    if origin in (Union, UnionType):
+        members = [a for a in args if a is not type(None)]
+        return _made(members[0], value) if len(members) == 1 else value
+    if isinstance(annotation, type) and dataclasses.is_dataclass(annotation) and isinstance(value, Mapping):
+        return checked_settings(annotation, value)
+    if origin is list:
+        return [_made(args[0], item) for item in value]
+    if origin is tuple:
+        if len(args) == 2 and args[1] is Ellipsis:
+            return tuple(_made(args[0], item) for item in value)
+        return tuple(_made(a, item) for a, item in zip(args, value, strict=False))
+    if annotation is float and not isinstance(value, bool):
+        return float(value)
+    if annotation is int and not isinstance(value, bool):
+        return int(float(value)) if isinstance(value, str) else int(value)
+    if annotation is bool and not isinstance(value, bool):
+        return str(value).strip().lower() in _TRUE
+    return value

@@ -14,13 +14,13 @@ import logging
 import shutil
 import tempfile
 import wave
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from pydantic import Field
 
 from cyborg.modules.behaviour import BehaviourModule, GoalContext
-from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
+from cyborg.modules.kind import BuildContext, KindSettings, ModuleKind, setting
 from cyborg.modules.speech import audio_device_present
 from cyborg.transport.base import Node
 
@@ -120,14 +120,17 @@ class MusicModule(BehaviourModule):
                 await process.wait()  # gone before the preemption is acknowledged, even on a loaded machine
 
 
-class MusicSettings(ModuleSettings):
+@dataclass(frozen=True, kw_only=True)
+class MusicSettings(KindSettings):
     """Plays a short generated tune (on the speakers when there are any); stops when preempted."""
 
-    action: str = Field(MUSIC_ACTION, description="action server of the music state")
-    play_audio: bool | None = Field(
+    action: str = setting(MUSIC_ACTION, description="action server of the music state")
+    play_audio: bool | None = setting(
         None, description="play on the speakers (default: when an audio device is present)"
     )
-    feedback: tuple[float, float, float] = Field(MUSIC_FEEDBACK, description="PAD change when a tune starts")
+    feedback: tuple[float, float, float] = setting(
+        MUSIC_FEEDBACK, description="PAD change when a tune starts"
+    )
 
 
 def _build(node: Node, settings: MusicSettings, context: BuildContext) -> MusicModule:

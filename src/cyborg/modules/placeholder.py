@@ -12,10 +12,8 @@ from __future__ import annotations
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 
-from pydantic import Field
-
 from cyborg.modules.behaviour import BehaviourModule, GoalContext
-from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
+from cyborg.modules.kind import BuildContext, KindSettings, ModuleKind, setting
 from cyborg.transport.base import Node
 
 
@@ -53,26 +51,30 @@ class PlaceholderModule(BehaviourModule):
         return execute
 
 
-class PlaceholderServer(ModuleSettings):
+@dataclass(frozen=True, kw_only=True)
+class PlaceholderServer(KindSettings):
     """One state a placeholder serves."""
 
-    action: str = Field(description="action server of the state")
-    say: str = Field("", description="sentence said when the state starts")
-    duration: float | None = Field(
+    action: str = setting(description="action server of the state")
+    say: str = setting("", description="sentence said when the state starts")
+    duration: float | None = setting(
         None, ge=0, description="seconds in control before succeeding (none: until preempted)"
     )
-    emotion: tuple[float, float, float] | None = Field(
+    emotion: tuple[float, float, float] | None = setting(
         None, description="PAD change sent when the state starts"
     )
-    honour_cancel: bool = Field(
+    honour_cancel: bool = setting(
         True, description="false: ignore the controller's cancel (to test its timeout)"
     )
 
 
-class PlaceholderSettings(ModuleSettings):
+@dataclass(frozen=True, kw_only=True)
+class PlaceholderSettings(KindSettings):
     """Serves states from YAML alone: say a sentence, stay a while, succeed (no code needed)."""
 
-    servers: list[PlaceholderServer] = Field(min_length=1, description="the states it serves, one entry each")
+    servers: list[PlaceholderServer] = setting(  # noqa: RUF009 (a dataclasses.field)
+        min_length=1, description="the states it serves, one entry each"
+    )
 
     def speaks_in(self) -> tuple[str, ...]:
         return tuple(server.action for server in self.servers if server.say)
@@ -82,7 +84,19 @@ class PlaceholderSettings(ModuleSettings):
 
 
 def _build(node: Node, settings: PlaceholderSettings, context: BuildContext) -> PlaceholderModule:
-    return PlaceholderModule(node, [PlaceholderSpec(**server.model_dump()) for server in settings.servers])
+    return PlaceholderModule(
+        node,
+        [
+            PlaceholderSpec(
+                action=server.action,
+                say=server.say,
+                duration=server.duration,
+                emotion=server.emotion,
+                honour_cancel=server.honour_cancel,
+            )
+            for server in settings.servers
+        ],
+    )
 
 
 KIND = ModuleKind(PlaceholderSettings, _build)

@@ -19,11 +19,10 @@ import logging
 import os
 import shutil
 from collections import deque
+from dataclasses import dataclass
 from pathlib import Path
 
-from pydantic import Field
-
-from cyborg.modules.kind import BuildContext, ModuleKind, ModuleSettings
+from cyborg.modules.kind import BuildContext, KindSettings, ModuleKind, setting
 from cyborg.modules.problems import ProblemReporter
 from cyborg.transport.base import MessageInfo, Node
 from cyborg.transport.guards import OnlyFrom, TextLimit
@@ -202,15 +201,16 @@ class TextToSpeech:
         return sound_failure(process.returncode, err.decode(errors="replace"))
 
 
-class TtsSettings(ModuleSettings):
+@dataclass(frozen=True, kw_only=True)
+class TtsSettings(KindSettings):
     """Text-to-speech: says what passes the speech gatekeeper, one sentence at a time (espeak-ng)."""
 
-    queue_size: int = Field(10, ge=1, description="sentences waiting at most; the oldest is dropped")
-    play_audio: bool | None = Field(
+    queue_size: int = setting(10, ge=1, description="sentences waiting at most; the oldest is dropped")
+    play_audio: bool | None = setting(
         None, description="speak on the speakers (default: when an audio device is present)"
     )
-    wav_dir: str | None = Field(None, description="folder to write each sentence to as a WAV file")
-    voice: str = Field("en", description="espeak-ng voice")
+    wav_dir: str | None = setting(None, description="folder to write each sentence to as a WAV file")
+    voice: str = setting("en", description="espeak-ng voice")
 
 
 def _build(node: Node, settings: TtsSettings, context: BuildContext) -> TextToSpeech:

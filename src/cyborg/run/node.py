@@ -15,12 +15,11 @@ from __future__ import annotations
 import asyncio
 import logging
 import signal
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
-
-import click
 
 from cyborg.app.context import BuildContext
 from cyborg.app.parts import API, CONTROLLER, RECORDER, SCENARIO, Part, build_part
@@ -226,7 +225,7 @@ async def serve_node(node: BuiltNode, options: NodeOptions) -> int:
     freeze_built()  # what the part built lives as long as the node: out of GC's way (app.tuning)
     controller_task = controller.start() if controller is not None else None
     tasks = watch_tasks(node.clock)  # a module leaking tasks is named (cyborg.run.tasks)
-    click.echo(f"node {node.name} running", err=True)
+    _tell(f"node {node.name} running")
     if node.scenario is not None:
         try:
             return await _play(node.scenario, stop, node.name)
@@ -241,7 +240,7 @@ async def serve_node(node: BuiltNode, options: NodeOptions) -> int:
     code = 0
     if controller_task is not None and controller_task.done():
         # It logged why (critical). Leave, so that `cyborg launch` (or roslaunch's respawn) starts it again.
-        click.echo(f"node {node.name}: the controller stopped; ending this node with exit code 1", err=True)
+        _tell(f"node {node.name}: the controller stopped; ending this node with exit code 1")
         code = 1
     elif controller is not None:
         await controller.stop()
@@ -249,7 +248,7 @@ async def serve_node(node: BuiltNode, options: NodeOptions) -> int:
         await api.stop()
     if recorder is not None:
         recorder.close()  # the file's summary and index: a finished, seekable recording
-        click.echo(f"node {node.name}: recorded to {recorder.files[-1] if recorder.files else '-'}", err=True)
+        _tell(f"node {node.name}: recorded to {recorder.files[-1] if recorder.files else '-'}")
     return code
 
 
@@ -261,7 +260,7 @@ def _start_recorder(node: BuiltNode, options: NodeOptions) -> Recorder | None:
     from cyborg.run.local import clock_kind
 
     if options.record is None:
-        click.echo(f"node {node.name}: recording is off (--no-record); it records nothing", err=True)
+        _tell(f"node {node.name}: recording is off (--no-record); it records nothing")
         return None
     config = _validated(options)
     recorder_node = node.transport.node(RECORDER)
@@ -282,12 +281,14 @@ def _start_recorder(node: BuiltNode, options: NodeOptions) -> Recorder | None:
     )
     node.part.components.append(recorder)  # closed with the part: its node leaves the graph
     hear_ros_logs(recorder, node.middleware.name)  # the other nodes' warnings and errors (/rosout)
-    click.echo(f"node {node.name}: recording to {recorder.path or recorder.problem}", err=True)
+    _tell(f"node {node.name}: recording to {recorder.path or recorder.problem}")
     return recorder
 
 
 async def _serve_api(node: BuiltNode, options: NodeOptions) -> RobotAPI:
     """The HTTP API and dashboard over a mirror of the robot read from the graph."""
+    import click
+
     from cyborg.web.build import build_api, start_api
     from cyborg.web.ros_view import remote_robot
 
@@ -332,6 +333,13 @@ async def _play(scenario: ScenarioNode, stop: asyncio.Event, name: str) -> int:
         run.cancel()
         return 1
     run.result()
-    click.echo(f"node {name}: script ended, {scenario.driver.count} records", err=True)
+    import click
+
+    _tell(f"node {name}: script ended, {scenario.driver.count} records")
     click.secho(f"{name}: {scenario.driver.summary()}", fg="green")  # in the launch's terminal
     return 0
+
+
+def _tell(line: str) -> None:
+    """A line on stderr, as ``click.echo(err=True)`` writes it (a thin node imports no click)."""
+    print(line, file=sys.stderr, flush=True)

@@ -41,13 +41,14 @@ from cyborg.app.parts import API, CONTROLLER
 from cyborg.app.sketch import text_digest
 from cyborg.errors import CyborgError
 from cyborg.run.census import NAME_TAKEN_EXIT
+from cyborg.run.launched import THIN_KINDS
 from cyborg.run.lockstep import TimeServer
 from cyborg.run.middleware import ROS1, LaunchGraph, Middleware, exit_description
 from cyborg.run.simtime import EPOCH_MARGIN, READY_TIMEOUT, Rendezvous, check_virtual_time, clock_owner_of
 from cyborg.run.zygote import ForkedNode, Zygote
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, NS
 
-__all__ = ["THIN_KINDS", "Launch", "launch", "shared_process", "start_zygote"]
+__all__ = ["THIN_KINDS", "Launch", "is_thin", "launch", "shared_process", "start_zygote"]
 
 RESPAWN_DELAY = 1.0  # seconds before a stopped node is started again
 RESPAWN_STEADY = 10.0  # a node that ran this long before it stopped is started again after RESPAWN_DELAY
@@ -56,9 +57,6 @@ REFUSAL_GRACE = 5.0  # seconds a refused node's launch waits for the controller'
 IDLE_LOOK = 1.0
 """Seconds between two looks at the nodes while the zygote tells their ends (a master the launch
 started that stops is seen within this, as is the end of a --duration)."""
-THIN_KINDS = frozenset({"conversation", "event_script", "idle", "music", "placeholder", "question", "tts"})
-"""Built-in module kinds that only wait, talk and publish: they may share one process. Other kinds
-(the navigation, the simulated base, speech input, every plug-in's) keep a process of their own."""
 
 
 def start_zygote(middleware: Middleware, *, echo: bool = True) -> Zygote:
@@ -69,15 +67,17 @@ def start_zygote(middleware: Middleware, *, echo: bool = True) -> Zygote:
 def shared_process(config: LoadedConfig, parts: Sequence[str]) -> dict[str, list[str]]:
     """The thin parts among ``parts`` as one process: {the first: the others it hosts} (empty
     when fewer than two are thin)."""
-    modules = config.model.modules
-    gates = {gate.name for gate in config.model.gatekeepers}
-
-    def thin(name: str) -> bool:
-        raw = modules.get(name)
-        return name in gates or (isinstance(raw, dict) and raw.get("kind") in THIN_KINDS)
-
-    names = [name for name in parts if thin(name)]
+    names = [name for name in parts if is_thin(config, name)]
     return {names[0]: names[1:]} if len(names) > 1 else {}
+
+
+def is_thin(config: LoadedConfig, name: str) -> bool:
+    """Whether part ``name`` is a gatekeeper or a module of a built-in thin kind (:data:`THIN_KINDS`:
+    they only wait, talk and publish). Other kinds (the navigation, the simulated base, speech
+    input, every plug-in's) keep a process of their own, started as ``cyborg node``."""
+    raw = config.model.modules.get(name)
+    gates = {gate.name for gate in config.model.gatekeepers}
+    return name in gates or (isinstance(raw, dict) and raw.get("kind") in THIN_KINDS)
 
 
 @dataclass
@@ -134,11 +134,16 @@ class Launch:
         self.parts = [name for name in self.parts if name not in hosted]  # a process each
 
     def command(self, name: str, clock_owner: str | None, *, fresh: bool = True) -> list[str]:
-        """The command line of part ``name``'s process."""
+        """The command line of part ``name``'s process: ``python -m cyborg.cli node NAME ...``, or for
+        a thin part of a file validated here ``python -m cyborg.run.launched node NAME ...``, which
+        loads neither click nor pydantic (:mod:`cyborg.run.launched`)."""
+        thin = bool(self.config.text) and all(
+            is_thin(self.config, part) for part in [name, *self.hosts.get(name, [])]
+        )
         command = [
             self.middleware.python(),
             "-m",
-            "cyborg.cli",
+            "cyborg.run.launched" if thin else "cyborg.cli",
             "node",
             name,
             "--config",
@@ -254,7 +259,7 @@ class Launch:
         command = self.command(name, self._clock_owner, fresh=fresh)
         process: subprocess.Popen[bytes] | ForkedNode
         if self.zygote is not None and self.zygote.alive:
-            process = self.zygote.spawn(command[3:])  # what follows `python -m cyborg.cli`
+            process = self.zygote.spawn(command[3:], module=command[2])  # what follows `python -m MODULE`
         else:
             process = subprocess.Popen(
                 command, stdout=None if self.echo else subprocess.DEVNULL, env=self.middleware.environment()

@@ -59,6 +59,7 @@ _COMMON = (
     "cyborg.cli",
     "cyborg.cli.ros",
     "cyborg.run.node",
+    "cyborg.run.launched",
     "cyborg.run.middleware",
     "cyborg.app.parts",
     "cyborg.app.registry",
@@ -191,12 +192,14 @@ class Zygote:
     def alive(self) -> bool:
         return self._process.poll() is None
 
-    def spawn(self, argv: Sequence[str]) -> ForkedNode:
-        """Fork a node running ``python -m cyborg.cli`` with ``argv`` (what follows ``cyborg``)."""
+    def spawn(self, argv: Sequence[str], *, module: str = "cyborg.cli") -> ForkedNode:
+        """Fork a node running ``python -m MODULE`` with ``argv`` (for ``cyborg.cli``: what follows
+        ``cyborg``; a launch's thin parts run ``cyborg.run.launched``)."""
         with self._lock:
             assert self._process.stdin is not None
             try:
-                self._process.stdin.write(json.dumps({"argv": list(argv)}).encode() + b"\n")
+                request = {"argv": list(argv), "module": module}
+                self._process.stdin.write(json.dumps(request).encode() + b"\n")
                 self._process.stdin.flush()
             except (BrokenPipeError, ValueError) as exc:
                 raise OSError(f"the zygote process ended (exit code {self._process.poll()})") from exc
@@ -294,7 +297,7 @@ def _serve(control: IO[str], preload: Sequence[str], pending: bytes = b"") -> No
             if pid == 0:
                 os.close(wake_read)
                 os.close(wake_write)
-                _child(request["argv"], control, fresh=fresh)
+                _child(request["argv"], control, fresh=fresh, module=request.get("module", "cyborg.cli"))
             control.write(json.dumps({"forked": pid}) + "\n")
             control.flush()
         ready, _, _ = select.select([stdin, wake_read], [], [])
@@ -379,9 +382,9 @@ def _reap(control: IO[str]) -> None:
         control.flush()
 
 
-def _child(argv: list[str], control: IO[str], *, fresh: bool = False) -> None:
-    """In the forked child: become ``cyborg ARGV`` (``fresh``: a new ``python -m cyborg.cli``).
-    Never returns: click ends the command with SystemExit, which ends this process as it ends a
+def _child(argv: list[str], control: IO[str], *, fresh: bool = False, module: str = "cyborg.cli") -> None:
+    """In the forked child: become ``python -m MODULE ARGV`` (``fresh``: a new one, exec'd).
+    Never returns: the command ends with SystemExit, which ends this process as it ends a
     freshly started one (atexit, threads)."""
     signal.set_wakeup_fd(-1)
     signal.signal(signal.SIGCHLD, signal.SIG_DFL)
@@ -392,9 +395,9 @@ def _child(argv: list[str], control: IO[str], *, fresh: bool = False) -> None:
     os.dup2(devnull, 0)
     os.close(devnull)
     if fresh:
-        os.execv(sys.executable, [sys.executable, "-m", "cyborg.cli", *argv])
+        os.execv(sys.executable, [sys.executable, "-m", module, *argv])
     sys.argv = ["cyborg", *argv]
-    runpy.run_module("cyborg.cli", run_name="__main__", alter_sys=True)  # as `python -m cyborg.cli` does
+    runpy.run_module(module, run_name="__main__", alter_sys=True)  # as `python -m MODULE` does
     raise SystemExit(0)
 
 

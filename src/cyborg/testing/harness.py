@@ -33,7 +33,7 @@ from typing import Any
 from cyborg.app.context import BuildContext
 from cyborg.app.registry import module_kinds
 from cyborg.errors import ConfigError
-from cyborg.modules.kind import Component, ModuleKind, ModuleSettings, ServesStates
+from cyborg.modules.kind import Component, KindSettings, ModuleKind, ServesStates
 from cyborg.transport import topics
 from cyborg.transport.base import ClientGoalHandle, GoalStatus, MessageInfo, Node
 from cyborg.transport.clock import DEFAULT_VIRTUAL_START, VirtualClock
@@ -111,7 +111,7 @@ class ModuleHarness:
     def __init__(
         self,
         module: ModuleKind[Any] | str | Callable[[Node], Component],
-        settings: Mapping[str, Any] | ModuleSettings | None = None,
+        settings: Mapping[str, Any] | KindSettings | None = None,
         *,
         node_name: str = "module",
         data_dir: Path | None = None,
@@ -148,14 +148,14 @@ class ModuleHarness:
     def _build(
         self,
         module: ModuleKind[Any] | str | Callable[[Node], Component],
-        settings: Mapping[str, Any] | ModuleSettings | None,
+        settings: Mapping[str, Any] | KindSettings | None,
         node_name: str,
     ) -> Component:
         node = self.transport.node(node_name)
         if callable(module) and not isinstance(module, ModuleKind):
             return module(node)
         kind = module_kinds().get(module) if isinstance(module, str) else module
-        if isinstance(settings, ModuleSettings):
+        if isinstance(settings, KindSettings):
             chosen = settings
         else:
             _, chosen = module_kinds({"under_test": kind}).parse(
