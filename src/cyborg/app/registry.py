@@ -233,7 +233,8 @@ class KindRegistry:
         are made without pydantic (:func:`~cyborg.modules.kind.checked_settings`); a pydantic
         model is validated as in :meth:`parse`."""
         kind, settings = self._kind_of(node_name, raw, source)
-        if not dataclasses.is_dataclass(kind.settings):
+        cls: type[KindSettings] = kind.settings
+        if not dataclasses.is_dataclass(cls):
             return self.parse(node_name, raw, source=source)
         return kind, checked_settings(kind.settings, settings)
 

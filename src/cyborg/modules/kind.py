@@ -16,25 +16,13 @@ loads no pydantic (issue 33). :class:`ModuleSettings` itself is imported when fi
 
 from __future__ import annotations
 
-import dataclasses
 import random
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from types import UnionType
-from typing import (
-    TYPE_CHECKING,
-    Any,
-    Generic,
-    Protocol,
-    TypeVar,
-    Union,
-    get_args,
-    get_origin,
-    get_type_hints,
-    runtime_checkable,
-)
+from typing import TYPE_CHECKING, Any, Generic, Protocol, TypeVar, runtime_checkable
 
+from cyborg.modules.plain_settings import KindSettings, checked_settings, setting
 from cyborg.transport.base import Node
 from cyborg.transport.topics import BaseApi
 
@@ -62,64 +50,6 @@ def __getattr__(name: str) -> Any:
 
         return ModuleSettings
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def setting(default: Any = dataclasses.MISSING, *, description: str, **constraints: Any) -> Any:
-    """A field of dataclass settings: its default, its ``description`` and pydantic ``Field``
-    constraints (``gt=0``, ``min_length=1``...), checked wherever the configuration is validated."""
-    return dataclasses.field(default=default, metadata={"description": description, **constraints})
-
-
-class KindSettings:
-    """What every kind's settings answer, known without starting the module (the defaults here).
-
-    :class:`ModuleSettings` (a pydantic model) is one; a frozen stdlib dataclass deriving from
-    it is another (see the module's doc).
-    """
-
-    __slots__ = ()
-
-    def listens_for(self) -> tuple[str, ...]:
-        """The phrases this module reacts to when speech-to-text hears them (lower case).
-
-        Override it in a module that listens: ``cyborg validate`` warns when two modules
-        listen for the same phrase (they would race for one sentence), and speech recognition
-        adds the phrases to what it can hear. The default: none.
-        """
-        return ()
-
-    def listens_for_places(self) -> tuple[str, ...]:
-        """The phrases of :meth:`listens_for` that a place name follows ("where is" the cafeteria).
-
-        Speech recognition puts the navigation database's places after them. The default: none.
-        """
-        return ()
-
-    def publishes(self) -> tuple[str, ...]:
-        """The events this module publishes (``publish_event``), known without starting it.
-
-        Override it in a module that publishes events: ``cyborg validate`` warns about one that
-        is no transition of any state (the controller would drop it). The default: none.
-        """
-        return ()
-
-    def speaks_in(self) -> tuple[str, ...]:
-        """The action servers (of :meth:`serves`) in whose states this module says things (``say``).
-
-        Override it in a module that speaks: ``cyborg validate`` warns about such a state that
-        does not grant the speech gatekeeper's resource to this module's node (its sentences
-        would be dropped). The default: none.
-        """
-        return ()
-
-    def serves(self) -> tuple[str, ...]:
-        """The action servers this module offers (states' ``action:``), known without starting it.
-
-        The default reads an ``action`` setting; a module that serves several states, or fixed
-        ones, overrides it. ``cyborg validate`` warns about states that no module serves.
-        """
-        action = getattr(self, "action", None)
-        return (action,) if isinstance(action, str) and action else ()
 
 
 @dataclass(frozen=True)
@@ -208,45 +138,3 @@ class ModuleKind(Generic[S]):
         """The first line of the settings model's docstring: what the kind does."""
         doc = (self.settings.__doc__ or "").strip()
         return doc.splitlines()[0] if doc else ""
-
-
-def checked_settings(cls: type[S], data: Mapping[str, Any]) -> S:
-    """Dataclass settings ``cls`` from a block validated already (``cyborg launch`` checked the
-    file through the kind's model), without pydantic: nested settings, tuples and numbers are
-    made as the model's validation makes them; nothing else is checked here.
-
-    A pydantic model (a plug-in's :class:`ModuleSettings`) is validated instead: it pays for it.
-    """
-    if not dataclasses.is_dataclass(cls):
-        return cls.model_validate(data)  # type: ignore[attr-defined,no-any-return]
-    hints = get_type_hints(cls)
-    values = {f.name: _made(hints[f.name], data[f.name]) for f in dataclasses.fields(cls) if f.name in data}
-    return cls(**values)
-
-
-_TRUE = frozenset({"1", "on", "t", "true", "y", "yes"})
-
-
-def _made(annotation: Any, value: Any) -> Any:
-    """``value`` (valid for ``annotation``) as pydantic's lax validation would make it."""
-    if value is None:
-        return None
-    origin, args = get_origin(annotation), get_args(annotation)
-    if origin in (Union, UnionType):
-        members = [a for a in args if a is not type(None)]
-        return _made(members[0], value) if len(members) == 1 else value
-    if isinstance(annotation, type) and dataclasses.is_dataclass(annotation) and isinstance(value, Mapping):
-        return checked_settings(annotation, value)
-    if origin is list:
-        return [_made(args[0], item) for item in value]
-    if origin is tuple:
-        if len(args) == 2 and args[1] is Ellipsis:
-            return tuple(_made(args[0], item) for item in value)
-        return tuple(_made(a, item) for a, item in zip(args, value, strict=False))
-    if annotation is float and not isinstance(value, bool):
-        return float(value)
-    if annotation is int and not isinstance(value, bool):
-        return int(float(value)) if isinstance(value, str) else int(value)
-    if annotation is bool and not isinstance(value, bool):
-        return str(value).strip().lower() in _TRUE
-    return value

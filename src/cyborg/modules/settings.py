@@ -9,13 +9,13 @@ thin node the launch checked its file for builds its dataclass settings without 
 from __future__ import annotations
 
 import dataclasses
-import functools
 from types import UnionType
 from typing import Any, Union, get_args, get_origin, get_type_hints
 
 from pydantic import BaseModel, ConfigDict, Field, create_model
 
-from cyborg.modules.kind import KindSettings
+from cyborg.errors import ConfigError
+from cyborg.modules.plain_settings import KindSettings
 
 __all__ = ["ModuleSettings", "settings_model"]
 
@@ -30,15 +30,27 @@ class ModuleSettings(BaseModel, KindSettings):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
 
-@functools.cache
+_MODELS: dict[type[Any], type[BaseModel]] = {}
+
+
 def settings_model(settings: type[Any]) -> type[BaseModel]:
     """The pydantic model that validates ``settings``: itself when it is one; for a dataclass of
     :class:`~cyborg.modules.kind.KindSettings` a :class:`ModuleSettings` of the same fields
     (``Field(**metadata)`` each, nested dataclasses as their models), name and docstring."""
     if isinstance(settings, type) and issubclass(settings, BaseModel):
         return settings
+    made = _MODELS.get(settings)
+    if made is None:
+        made = _MODELS[settings] = _model_of(settings)
+    return made
+
+
+def _model_of(settings: type[Any]) -> type[BaseModel]:
     if not (isinstance(settings, type) and dataclasses.is_dataclass(settings)):
-        raise TypeError(f"{settings!r} is neither a pydantic model nor a dataclass of settings")
+        raise ConfigError(
+            f"module kind settings {settings!r} are neither a pydantic model nor a dataclass; fix: "
+            "derive them from cyborg.modules.ModuleSettings"
+        )
     hints = get_type_hints(settings)
     fields: dict[str, Any] = {}
     for field in dataclasses.fields(settings):

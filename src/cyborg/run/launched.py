@@ -1,7 +1,8 @@
 """The process of a thin part started by ``cyborg launch``: ``python -m cyborg.run.launched node NAME ...``.
 
 ``cyborg launch`` validated the whole configuration before it started any node, and tells each
-node so (``--checked DIGEST``). A module of a built-in thin kind (:data:`THIN_KINDS`) or a
+node so (``--checked DIGEST``). A module of a built-in thin kind
+(:data:`cyborg.run.supervisor.THIN_KINDS`) or a
 gatekeeper then needs neither the command line's parser (click) nor the validating models
 (pydantic): this entry reads the launch's own arguments (:func:`parse_launched`, the form
 :meth:`cyborg.run.supervisor.Launch.command` writes), a sketch of the file
@@ -24,16 +25,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NoReturn
 
 if TYPE_CHECKING:
     from cyborg.run.node import NodeOptions
 
-__all__ = ["THIN_KINDS", "LaunchedNode", "main", "parse_launched"]
-
-THIN_KINDS = frozenset({"conversation", "event_script", "idle", "music", "placeholder", "question", "tts"})
-"""Built-in module kinds that only wait, talk and publish (their settings are dataclasses): a
-launch runs their nodes through this entry, and on ROS 2 shares one process among them."""
+__all__ = ["LaunchedNode", "main", "parse_launched"]
 
 _VALUES = frozenset(
     {
@@ -89,8 +86,10 @@ def main(argv: Sequence[str] | None = None) -> None:
     """Run the node ``argv`` (what follows ``cyborg``) describes; ``cyborg node`` when it cannot."""
     args = list(sys.argv[1:] if argv is None else argv)
     launched = parse_launched(args)
-    options = _options(launched) if launched is not None else None
-    if launched is None or options is None:
+    if launched is None:
+        _as_cyborg_node(args)
+    options = _options(launched)
+    if options is None:
         _as_cyborg_node(args)
     from cyborg.errors import CyborgError
     from cyborg.run.census import NAME_TAKEN_EXIT, NameTaken
@@ -157,7 +156,7 @@ def _epoch(value: str | None) -> float | str | None:
         return value
 
 
-def _as_cyborg_node(args: list[str]) -> None:
+def _as_cyborg_node(args: list[str]) -> NoReturn:
     """Become ``cyborg ARGS`` (the same process): it validates the file whole, as by hand."""
     sys.stdout.flush()
     sys.stderr.flush()

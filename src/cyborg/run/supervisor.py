@@ -41,7 +41,6 @@ from cyborg.app.parts import API, CONTROLLER
 from cyborg.app.sketch import text_digest
 from cyborg.errors import CyborgError
 from cyborg.run.census import NAME_TAKEN_EXIT
-from cyborg.run.launched import THIN_KINDS
 from cyborg.run.lockstep import TimeServer
 from cyborg.run.middleware import ROS1, LaunchGraph, Middleware, exit_description
 from cyborg.run.simtime import EPOCH_MARGIN, READY_TIMEOUT, Rendezvous, check_virtual_time, clock_owner_of
@@ -57,6 +56,11 @@ REFUSAL_GRACE = 5.0  # seconds a refused node's launch waits for the controller'
 IDLE_LOOK = 1.0
 """Seconds between two looks at the nodes while the zygote tells their ends (a master the launch
 started that stops is seen within this, as is the end of a --duration)."""
+
+
+THIN_KINDS = frozenset({"conversation", "event_script", "idle", "music", "placeholder", "question", "tts"})
+"""Built-in module kinds that only wait, talk and publish (their settings are dataclasses): they
+may share one process, and their nodes start without click or pydantic (:mod:`cyborg.run.launched`)."""
 
 
 def start_zygote(middleware: Middleware, *, echo: bool = True) -> Zygote:
