@@ -11,8 +11,9 @@ map them) and USS (private pages: what one more such process costs). Every figur
   (VmHWM) over ``--sim-seconds`` and RSS at the end.
 * floor / node (ROS 1): a bare rospy node serving one ``actionlib.SimpleActionServer``, and
   ``cyborg node cyborg_joke`` of demo.yaml (a placeholder module) started as ``cyborg launch``
-  starts it (``--checked``: the launch validated the file) and by hand (it validates the file
-  itself), alternating; memory 1 s after each says it is ready.
+  starts it (``python -m cyborg.run.launched node ... --checked``: the launch validated the file,
+  no click; the command of :meth:`cyborg.run.supervisor.Launch.command`) and by hand (``cyborg
+  node``: it validates the file itself), alternating; memory 1 s after each says it is ready.
 * floor2 / node2 (ROS 2): the same with a bare rclpy node serving one ``ActionServer``, and
   ``cyborg node --ros2`` in the ROS 2 venv's Python.
 * launch / launch2: ``cyborg launch`` (ROS 1 against a roscore this benchmark starts; ROS 2 with
@@ -429,7 +430,9 @@ def measure_node(
     args = ["node", name, "--config", str(config), "--db", str(data)]
     args += checked(config) if launched else []
     args += ["--ros2"] if ros2 else []
-    child = Child(cyborg(*args, python=ros2_python() if ros2 else None), env, log_dir, name)
+    python = ros2_python() if ros2 else sys.executable
+    command = [python, "-m", "cyborg.run.launched", *args] if launched else cyborg(*args, python=python)
+    child = Child(command, env, log_dir, name)
     try:
         child.wait_line(f"node {name} running")
         time.sleep(SETTLE)
