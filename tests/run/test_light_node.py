@@ -165,7 +165,7 @@ def test_a_launched_thin_node_loads_neither_pydantic_nor_click(tmp_path: Path) -
     answer = json.loads(result.stdout.strip().splitlines()[-1])
     assert answer["built"]["cyborg_joke"] == [["QuestionModule", "cyborg_joke"]]
     assert [node for _, node in answer["built"]["cyborg_idle"]] == parts[:6]
-    heavy = ("pydantic", "pydantic_core", "click", *NOT_LOADED)
+    heavy = ("pydantic", "pydantic_core", "click", "importlib.metadata", "xmlrpc", *NOT_LOADED)
     found = sorted(m for m in answer["modules"] if any(m == bad or m.startswith(bad + ".") for bad in heavy))
     assert found == [], f"a launched thin node loads what it does not need: {found}"
 
@@ -192,3 +192,41 @@ def test_a_node_validates_the_whole_file_when_it_changed_since_the_launch_checke
     config.write_text(text.replace("initial:", "initial_state:"), encoding="utf-8")
     with pytest.raises(ConfigError, match="initial_state"):
         _node_config(["cyborg_joke"], config, digest)  # edited after the launch: checked again, whole
+
+
+def test_the_built_in_kinds_table_is_the_one_of_the_entry_points() -> None:
+    import tomllib
+
+    from cyborg.app.registry import BUILT_IN_KINDS, ENTRY_POINT_GROUP
+
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+    assert project["project"]["entry-points"][ENTRY_POINT_GROUP] == BUILT_IN_KINDS
+
+
+def test_a_launched_node_makes_the_settings_the_launch_validated(tmp_path: Path) -> None:
+    """What the node makes of a block without pydantic is what validation made of it, lax input too."""
+    from cyborg.app.config import load_config
+    from cyborg.app.registry import built_in_kinds, module_kinds
+    from cyborg.run.supervisor import THIN_KINDS
+
+    registry = module_kinds()
+    blocks = {
+        f"{file}:{name}": raw
+        for file in ("cyborg.yaml", "demo.yaml", "robot.yaml", "monitor.yaml")
+        for name, raw in load_config(packaged_config(file)).model.modules.items()
+        if raw["kind"] in THIN_KINDS
+    }
+    blocks["lax_placeholder"] = {
+        "kind": "placeholder",
+        "servers": [{"action": "a/b", "duration": "5", "emotion": [1, "0.5", 0], "honour_cancel": "no"}],
+    }
+    blocks["lax_tts"] = {"kind": "tts", "queue_size": "3", "play_audio": 0}
+    blocks["lax_music"] = {"kind": "music", "play_audio": "off", "feedback": [0, 0.1, 1]}
+    blocks["lax_script"] = {"kind": "event_script", "events": ["x", "y"], "every": 2}
+    assert {raw["kind"] for raw in blocks.values()} == THIN_KINDS
+    light = built_in_kinds(THIN_KINDS)
+    for name, raw in blocks.items():
+        validated = registry.parse(name, raw)[1]
+        made = light.parse_checked(name, raw)[1]
+        assert made == validated, name
+        assert repr(made) == repr(validated), name  # the same types too (5.0, not "5"; tuples)

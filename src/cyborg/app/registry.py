@@ -10,25 +10,50 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import importlib
 import logging
 import re
 import site
 import sys
 from collections.abc import Iterable, Mapping
-from importlib.metadata import Distribution, EntryPoint, distributions, entry_points
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from cyborg.app.plugin_path import main_path, main_python
 from cyborg.errors import ConfigError, CyborgError
 from cyborg.modules.kind import BuildContext, Component, KindSettings, ModuleKind, checked_settings
 from cyborg.transport.base import Node
 
+if (
+    TYPE_CHECKING
+):  # importlib.metadata (email, zipfile, csv...: ~2 MiB) is read when a registry reads entry points
+    from importlib.metadata import Distribution, EntryPoint
+
 log = logging.getLogger(__name__)
 
-__all__ = ["ENTRY_POINT_GROUP", "KindRegistry", "build_module", "module_kinds"]
+__all__ = [
+    "BUILT_IN_KINDS",
+    "ENTRY_POINT_GROUP",
+    "KindRegistry",
+    "build_module",
+    "built_in_kinds",
+    "module_kinds",
+]
 
 ENTRY_POINT_GROUP = "cyborg.module_kinds"
+BUILT_IN_KINDS = {
+    "conversation": "cyborg.modules.conversation:CONVERSATION_KIND",
+    "event_script": "cyborg.modules.event_script:KIND",
+    "idle": "cyborg.modules.idle:KIND",
+    "music": "cyborg.modules.music:KIND",
+    "navigation": "cyborg.navigation.kind:KIND",
+    "placeholder": "cyborg.modules.placeholder:KIND",
+    "question": "cyborg.modules.conversation:QUESTION_KIND",
+    "simulated_base": "cyborg.sim.base:KIND",
+    "speech_input": "cyborg.hearing.module:KIND",
+    "tts": "cyborg.modules.speech:KIND",
+}
+"""cyborg's own kinds, as its entry points name them (pyproject.toml; a test keeps the two equal)."""
 
 
 def _origin(entry: EntryPoint) -> str:
@@ -63,6 +88,8 @@ def main_venv_entries() -> list[tuple[EntryPoint, Distribution]]:
     paths = main_path()
     if not paths:
         return []
+    from importlib.metadata import distributions
+
     here = {_normalized(dist.metadata["Name"] or "") for dist in distributions()}
     found: list[tuple[EntryPoint, Distribution]] = []
     for dist in distributions(path=paths):
@@ -102,6 +129,8 @@ class KindRegistry:
         self._clashes: dict[str, list[str]] = {}
         self._elsewhere: dict[str, Distribution] = {}
         if entries is None:
+            from importlib.metadata import entry_points
+
             shared = main_venv_entries()
             entries = [*entry_points(group=ENTRY_POINT_GROUP), *(entry for entry, _ in shared)]
             self._elsewhere = {entry.value: dist for entry, dist in shared}
@@ -263,6 +292,17 @@ class KindRegistry:
                 problems.extend(exc.problems)
         if problems:
             raise ConfigError(problems, source=source)
+
+
+def built_in_kinds(names: Iterable[str]) -> KindRegistry:
+    """A registry of cyborg's own kinds ``names`` alone, imported without reading any package's
+    entry points (importlib.metadata). A built-in kind wins over another package's of its name,
+    so these are the kinds a full registry finds: for a node of built-in kinds (issue 33)."""
+    kinds: dict[str, ModuleKind[Any]] = {}
+    for name in names:
+        module, _, attribute = BUILT_IN_KINDS[name].partition(":")
+        kinds[name] = getattr(importlib.import_module(module), attribute)
+    return KindRegistry([], extra=kinds)
 
 
 def module_kinds(extra: Mapping[str, ModuleKind[Any]] | None = None) -> KindRegistry:

@@ -28,7 +28,6 @@ from __future__ import annotations
 import os
 import time
 import urllib.parse
-import xmlrpc.client
 from collections.abc import Callable, Iterable
 from typing import Any
 
@@ -159,20 +158,21 @@ def wait_for_graph(
     return seen
 
 
-class _TimeoutTransport(xmlrpc.client.Transport):
-    def __init__(self, timeout: float) -> None:
-        super().__init__()
-        self._timeout = timeout
-
-    def make_connection(self, host: Any) -> Any:
-        connection = super().make_connection(host)
-        connection.timeout = self._timeout
-        return connection
-
-
 def ros1_live_nodes(names: Iterable[str], master_uri: str) -> dict[str, str]:
     """Of ``names``, those the ROS 1 master at ``master_uri`` knows and whose node answers: name ->
     ``process N on HOST``."""
+    import xmlrpc.client  # (here: a ROS 2 node imports this module, and needs no XML-RPC)
+
+    class _TimeoutTransport(xmlrpc.client.Transport):
+        def __init__(self, timeout: float) -> None:
+            super().__init__()
+            self._timeout = timeout
+
+        def make_connection(self, host: Any) -> Any:
+            connection = super().make_connection(host)
+            connection.timeout = self._timeout
+            return connection
+
     master = xmlrpc.client.ServerProxy(master_uri, transport=_TimeoutTransport(PING_TIMEOUT))
     live: dict[str, str] = {}
     for name in names:

@@ -113,6 +113,7 @@ def main(argv: Sequence[str] | None = None) -> None:
 def _options(launched: LaunchedNode) -> NodeOptions | None:
     """The node's options from a sketch of its file; None when the file changed since the launch
     validated it, or a part is no module or gatekeeper of it."""
+    from cyborg.app.registry import BUILT_IN_KINDS, built_in_kinds
     from cyborg.app.sketch import read_sketch
     from cyborg.run.datadir import default_data_dir
     from cyborg.run.node import NodeOptions
@@ -125,6 +126,8 @@ def _options(launched: LaunchedNode) -> NodeOptions | None:
     sketch = read_sketch(Path(values["--config"]), values["--checked"])
     if sketch is None or not all(sketch.has_part(name) for name in [launched.name, *launched.also]):
         return None
+    modules = sketch.model.modules
+    kinds = {str(modules[name].get("kind")) for name in [launched.name, *launched.also] if name in modules}
     start = values.get("--start")
     moment = datetime.fromisoformat(start) if start is not None else DEFAULT_VIRTUAL_START
     epoch = values.get("--epoch")
@@ -143,6 +146,7 @@ def _options(launched: LaunchedNode) -> NodeOptions | None:
         ),
         publish_clock=next((publish[flag] for flag in launched.flags if flag in publish), None),
         also=tuple(launched.also),
+        kinds=built_in_kinds(kinds) if kinds <= BUILT_IN_KINDS.keys() else None,  # no entry points read
     )
 
 

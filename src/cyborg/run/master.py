@@ -11,7 +11,6 @@ import os
 import signal
 import subprocess
 import time
-import xmlrpc.client
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +26,8 @@ def master_uri() -> str:
 
 def master_running(uri: str | None = None) -> bool:
     """True when a ROS 1 master answers at ``uri`` (default :func:`master_uri`)."""
+    import xmlrpc.client  # (here: a ROS 2 node imports this module, and needs no XML-RPC)
+
     try:
         xmlrpc.client.ServerProxy(uri or master_uri()).getSystemState("/cyborg")
     except (OSError, xmlrpc.client.Error):
@@ -38,6 +39,8 @@ class Master:
     """The parameter server of ``ROS_MASTER_URI``, through plain XML-RPC (no ROS node needed)."""
 
     def __init__(self, uri: str | None = None, caller: str = "/cyborg_launch") -> None:
+        import xmlrpc.client
+
         self.uri = uri or master_uri()
         self.caller = caller
         self._proxy = xmlrpc.client.ServerProxy(self.uri)
@@ -54,6 +57,8 @@ class Master:
         self._proxy.setParam(self.caller, key, value)
 
     def delete(self, key: str) -> None:
+        import xmlrpc.client
+
         with contextlib.suppress(OSError, xmlrpc.client.Error):
             self._proxy.deleteParam(self.caller, key)
 

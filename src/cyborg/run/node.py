@@ -39,6 +39,7 @@ from cyborg.web.access import DEFAULT_PORT, Access
 
 if TYPE_CHECKING:
     from cyborg.app.config import LoadedConfig
+    from cyborg.app.registry import KindRegistry
     from cyborg.app.sketch import ConfigSketch
     from cyborg.observe.recorder import Recorder, RecorderSettings
     from cyborg.run.scenario import ScenarioFiles, ScenarioNode
@@ -83,6 +84,8 @@ class NodeOptions:
     also: tuple[str, ...] = ()
     """Modules and gatekeepers this process hosts beside NAME, each its own node on the graph
     (ROS 2 only: :attr:`Middleware.hosts_many`; ``cyborg launch``'s shared processes)."""
+    kinds: KindRegistry | None = None
+    """The module kinds the parts are built with (None: every installed package's)."""
 
 
 @dataclass
@@ -148,9 +151,10 @@ def build_node(name: str, options: NodeOptions, middleware: Middleware) -> Built
         node.part = Part(name, [node.scenario])
     else:
         try:
-            node.part = build_part(name, options.config, transport, context)
+            node.part = build_part(name, options.config, transport, context, kinds=options.kinds)
             for other in options.also:  # one process, one loop; each part its own node(s)
-                node.part.components += build_part(other, options.config, transport, context).components
+                hosted = build_part(other, options.config, transport, context, kinds=options.kinds)
+                node.part.components += hosted.components
         except BaseException:
             node.close()  # leave the graph: the error is the node's whole output
             raise
