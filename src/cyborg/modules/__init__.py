@@ -3,7 +3,9 @@
 A module is a class on :class:`BehaviourModule` that serves one or more states; its kind
 (:class:`ModuleKind`: a :class:`ModuleSettings` model and a factory) lets the YAML's
 ``modules:`` section start it. :mod:`~cyborg.modules.behaviour` holds the class, and
-:mod:`~cyborg.modules.kind` the kind and what a factory is given. See ``docs/modules.md``
+:mod:`~cyborg.modules.kind` the kind and what a factory is given; :mod:`~cyborg.modules.settings`
+the pydantic side of settings, :mod:`~cyborg.modules.plain_settings` settings as dataclasses
+(the built-in thin kinds': a launched node makes them without pydantic). See ``docs/modules.md``
 ("your first module") and test it with :mod:`cyborg.testing`::
 
     from cyborg.modules import BehaviourModule, Field, GoalContext, ModuleKind, ModuleSettings

@@ -7,6 +7,7 @@
   graph; :mod:`~cyborg.run.master`: the ROS 1 master over XML-RPC; :mod:`~cyborg.run.ros2_env`:
   the ROS 2 venv's Python.
 - :mod:`~cyborg.run.node`: one part as one node (``cyborg node``): build, wait, serve;
+  :mod:`~cyborg.run.launched`: a launch's thin part started without click or pydantic;
   :mod:`~cyborg.run.logs`: where a node's log lines go; :mod:`~cyborg.run.census`: who else is
   on the graph (a name in use, another robot, the domain a robot must pick);
   :mod:`~cyborg.run.tasks`: pending tasks counted per module, a leak named.
