@@ -10,7 +10,8 @@ process writes to them (copy on write). Every node is still its own process and,
 own rospy node: its own name on the graph, its own crash, its own restart.
 
 The zygote is single-threaded and joins no graph (a fork keeps only the forking thread). It reads
-one request a line on stdin (JSON: the node's ``argv``), answers on its control pipe with the
+one request a line on stdin (JSON: the node's ``argv`` and the module that runs it,
+``cyborg.cli`` or for a thin part ``cyborg.run.launched``), answers on its control pipe with the
 child's pid, and reports each child's exit there too (JSON lines). :class:`Zygote` is the launch's
 side; :class:`ForkedNode` stands for one child as a :class:`subprocess.Popen` does (``poll``,
 ``wait``, ``send_signal``, ``kill``). Ctrl-C reaches the nodes as before (one process group); the
