@@ -230,3 +230,31 @@ def test_a_launched_node_makes_the_settings_the_launch_validated(tmp_path: Path)
         made = light.parse_checked(name, raw)[1]
         assert made == validated, name
         assert repr(made) == repr(validated), name  # the same types too (5.0, not "5"; tuples)
+
+
+def test_a_launched_node_whose_file_changed_since_the_launch_is_validated_whole_by_cyborg_node(
+    tmp_path: Path,
+) -> None:
+    config = tmp_path / "robot.yaml"
+    text = packaged_config("demo.yaml").read_text(encoding="utf-8")
+    config.write_text(text.replace("initial:", "initial_state:"), encoding="utf-8")
+    argv = [
+        "node",
+        "cyborg_joke",
+        "--config",
+        str(config),
+        "--db",
+        str(tmp_path),
+        "--checked",
+        text_digest(text),
+    ]
+    result = subprocess.run(
+        [sys.executable, "-m", "cyborg.run.launched", *argv],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+        cwd=ROOT,
+    )
+    assert result.returncode == 1, result.stderr[-2000:]
+    assert "initial_state" in result.stderr and "fix:" in result.stderr, result.stderr[-2000:]
