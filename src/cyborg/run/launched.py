@@ -88,9 +88,6 @@ def main(argv: Sequence[str] | None = None) -> None:
     launched = parse_launched(args)
     if launched is None:
         _as_cyborg_node(args)
-    options = _options(launched)
-    if options is None:
-        _as_cyborg_node(args)
     from cyborg.errors import CyborgError
     from cyborg.run.census import NAME_TAKEN_EXIT, NameTaken
     from cyborg.run.middleware import ROS1, ROS2
@@ -99,6 +96,9 @@ def main(argv: Sequence[str] | None = None) -> None:
     logging.basicConfig(level=logging.INFO, format=LOG_FORMAT, datefmt="%H:%M:%S")
     middleware = ROS2 if "--ros2" in launched.flags else ROS1
     try:
+        options = _options(launched)
+        if options is None:
+            _as_cyborg_node(args)
         middleware.enter()
         code = run_node(launched.name, options, middleware)
     except NameTaken as exc:
