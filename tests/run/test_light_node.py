@@ -218,7 +218,10 @@ def test_a_launched_node_makes_the_settings_the_launch_validated(tmp_path: Path)
     }
     blocks["lax_placeholder"] = {
         "kind": "placeholder",
-        "servers": [{"action": "a/b", "duration": "5", "emotion": [1, "0.5", 0], "honour_cancel": "no"}],
+        "servers": [
+            {"action": "a/b", "duration": "5", "emotion": [1, "0.5", 0], "honour_cancel": "no"},
+            {"action": "c/d", "honour_cancel": 1.0},
+        ],
     }
     blocks["lax_tts"] = {"kind": "tts", "queue_size": "3", "play_audio": 0}
     blocks["lax_music"] = {"kind": "music", "play_audio": "off", "feedback": [0, 0.1, 1]}

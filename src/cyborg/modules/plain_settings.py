@@ -123,5 +123,5 @@ def _made(annotation: Any, value: Any) -> Any:
     if annotation is int and not isinstance(value, bool):
         return int(float(value)) if isinstance(value, str) else int(value)
     if annotation is bool and not isinstance(value, bool):
-        return str(value).strip().lower() in _TRUE
+        return bool(value) if isinstance(value, int | float) else value.strip().lower() in _TRUE
     return value
