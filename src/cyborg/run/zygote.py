@@ -64,6 +64,7 @@ _COMMON = (
     "cyborg.run.middleware",
     "cyborg.app.parts",
     "cyborg.app.registry",
+    "importlib.metadata",  # the entry points, which every node but a thin one reads (cyborg.app.registry)
     "cyborg.app.sketch",
     "cyborg.app.config",  # the whole configuration's models: the controller, API, recorder, navigation, base
     "cyborg.configfile",
