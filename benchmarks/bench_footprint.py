@@ -21,7 +21,10 @@ map them) and USS (private pages: what one more such process costs). Every figur
   process), CPU of the launch's processes until then, PSS / USS / RSS of all of them (launcher and
   nodes; ROS 1's rosmaster and rosout apart) 5 s later, then their CPU over ``--idle-seconds``
   (ROS 1: and the master's) as a percentage of one core. The robot of the default configuration
-  starts wandering about 12 s in: the "idle" figure is a robot that is up and moving slowly.
+  starts wandering about 12 s in: that figure is a robot that is up and moving slowly. At rest:
+  the CPU from 2 s after the first state (idle) until the next state change (the robot in its idle
+  state, the base still, nobody talking; about 10 s); ``--still`` launches the packaged robot
+  without the motivator's events of the idle state, so it stays at rest for the whole window.
 
 The load average (1 min) is printed with each figure. The processes run with ``PYTHONPATH=--src``
 first when given (a checkout's ``src`` folder, to measure an older commit beside the working
@@ -30,7 +33,7 @@ benchmark starts its own roscore on a free port with a temporary ROS_HOME, uses 
 ROS_DOMAIN_ID, and stops everything it started (process groups).
 
 Run: .venv/bin/python benchmarks/bench_footprint.py [--runs 3] [--sim-seconds 30] [--idle-seconds 20]
-     [--src DIR] [--only help,say,sim,node,node2,launch,launch2]
+     [--src DIR] [--only help,say,sim,node,node2,launch,launch2] [--still | --config FILE]
 """
 
 from __future__ import annotations
@@ -695,7 +698,14 @@ def report(out: dict[str, Any], runs: int, sim_seconds: float, idle_seconds: flo
     print(f"machine: {machine_line()}")
     print(f"code: {src if src is not None else 'this working tree'}; medians of {runs} runs (min-max)")
     print(
-        f"launch configuration: {LAUNCH_CONFIG[0] if LAUNCH_CONFIG else 'the packaged robot (cyborg.yaml)'}"
+        "launch configuration: "
+        + (
+            "the packaged robot without its idle state's motivator events (--still: at rest)"
+            if LAUNCH_CONFIG and LAUNCH_CONFIG[0].name == "still.yaml"
+            else str(LAUNCH_CONFIG[0])
+            if LAUNCH_CONFIG
+            else "the packaged robot (cyborg.yaml)"
+        )
     )
     print(ISSUE_BEFORE)
     print("| what | figure | target | | load (1 min) |")
@@ -830,6 +840,19 @@ def report(out: dict[str, Any], runs: int, sim_seconds: float, idle_seconds: flo
         )
 
 
+def still_robot(folder: Path) -> Path:
+    """The packaged robot without the motivator's events of its idle state (it would wander or
+    play music by itself): the same processes, nodes and topics, at rest until spoken to."""
+    import yaml
+
+    config = yaml.safe_load((DATA / "cyborg.yaml").read_text(encoding="utf-8"))
+    events = config["motivator"]["events"]
+    config["motivator"]["events"] = [e for e in events if e["state"] != config["initial"]]
+    path = folder / "still.yaml"
+    path.write_text(yaml.safe_dump(config, sort_keys=False), encoding="utf-8")
+    return path
+
+
 ROS_CORE: list[subprocess.Popen[Any]] = []
 LAUNCH_CONFIG: list[Path] = []  # --config: what the launches run (default: the packaged robot)
 
@@ -849,6 +872,12 @@ def main() -> None:
         "src/cyborg/data/demo.yaml's placeholders wait in their idle state)",
     )
     parser.add_argument(
+        "--still",
+        action="store_true",
+        help="launch the packaged robot with nothing for its motivator to choose in the idle state: it "
+        "stays in idle, the base still (the CPU at rest is read over --idle-seconds too)",
+    )
+    parser.add_argument(
         "--only",
         default="help,say,sim,node,node2,launch,launch2",
         help="comma-separated: help,say,sim,node,node2,launch,launch2 (node: ROS 1, node2: ROS 2)",
@@ -859,12 +888,20 @@ def main() -> None:
     if args.role is not None:
         roles[args.role]()
         return
+    if args.config is not None and args.still:
+        raise SystemExit("--config and --still exclude each other: pick one")
     if args.config is not None:
         LAUNCH_CONFIG.append(args.config.resolve())
+    if args.still:
+        LAUNCH_CONFIG.append(still_robot(Path(tempfile.mkdtemp(prefix="cyborg-bench-still-"))))
     parts = {p.strip() for p in args.only.split(",") if p.strip()}
     if parts & {"node", "launch"} and shutil.which("roscore") is None:
         raise SystemExit("no roscore; fix: scripts/install-ros")
-    out = bench(parts, args.runs, args.sim_seconds, args.idle_seconds, args.src)
+    try:
+        out = bench(parts, args.runs, args.sim_seconds, args.idle_seconds, args.src)
+    finally:
+        if args.still:
+            shutil.rmtree(LAUNCH_CONFIG[0].parent, ignore_errors=True)
     report(out, args.runs, args.sim_seconds, args.idle_seconds, args.src)
 
 
