@@ -24,7 +24,10 @@ map them) and USS (private pages: what one more such process costs). Every figur
   process), CPU of the launch's processes until then, PSS / USS / RSS of all of them (launcher and
   nodes; ROS 1's rosmaster and rosout apart) 5 s later, then their CPU over ``--idle-seconds``
   (ROS 1: and the master's) as a percentage of one core. The robot of the default configuration
-  starts wandering about 12 s in: the "idle" figure is a robot that is up and moving slowly.
+  starts wandering about 12 s in: that figure is a robot that is up and moving slowly. At rest:
+  the CPU from 2 s after the first state (idle) until the next state change (the robot in its idle
+  state, the base still, nobody talking; about 10 s); ``--still`` launches the packaged robot
+  without the motivator's events of the idle state, so it stays at rest for the whole window.
 
 The load average (1 min) is printed with each figure. The processes run with ``PYTHONPATH=--src``
 first when given (a checkout's ``src`` folder, to measure an older commit beside the working
@@ -33,7 +36,7 @@ benchmark starts its own roscore on a free port with a temporary ROS_HOME, uses 
 ROS_DOMAIN_ID, and stops everything it started (process groups).
 
 Run: .venv/bin/python benchmarks/bench_footprint.py [--runs 3] [--sim-seconds 30] [--idle-seconds 20]
-     [--src DIR] [--only help,say,sim,node,node2,launch,launch2]
+     [--src DIR] [--only help,say,sim,node,node2,launch,launch2] [--still | --config FILE]
 """
 
 from __future__ import annotations
@@ -63,6 +66,8 @@ DATA = ROOT / "src" / "cyborg" / "data"
 STATE_CHANGE = "/cyborg_controller/state_change"
 SETTLE = 1.0  # seconds between "ready" and reading the memory
 AFTER_FIRST_STATE = 5.0  # seconds between the launch's first state and reading its memory
+REST_SETTLE = 2.0  # seconds after the first state before the CPU at rest is read
+SAMPLE = 0.25  # seconds between readings of the launch's CPU
 MB = 1024 * 1024
 TARGETS = {  # issue 33 (node, launch) and issue 13 (say, sim)
     "node_uss_ratio": 1.15,
@@ -130,7 +135,7 @@ def role_floor2() -> None:
 
 
 def role_watch() -> None:
-    """Print the Unix time of the first message on STATE_CHANGE (ROS 1), then wait."""
+    """Print the Unix time and the new state of each message on STATE_CHANGE (ROS 1)."""
     import rospy
     from cyborg_controller.msg import SystemState  # type: ignore[import-not-found]
 
@@ -138,9 +143,8 @@ def role_watch() -> None:
     heard = threading.Event()
 
     def on_change(message: Any) -> None:
-        if not heard.is_set():
-            heard.set()
-            print(f"state {time.time()!r}", flush=True)
+        heard.set()
+        print(f"state {time.time()!r} {message.to_system_state}", flush=True)
 
     rospy.Subscriber(STATE_CHANGE, SystemState, on_change, queue_size=10)
     print("watching", flush=True)
@@ -149,7 +153,7 @@ def role_watch() -> None:
 
 
 def role_watch2() -> None:
-    """Print the Unix time of the first message on STATE_CHANGE (ROS 2, latched), then wait."""
+    """Print the Unix time and the new state of each message on STATE_CHANGE (ROS 2, latched)."""
     import rclpy
     from cyborg_controller.msg import SystemState
     from rclpy.node import Node
@@ -160,9 +164,8 @@ def role_watch2() -> None:
     heard = threading.Event()
 
     def on_change(message: Any) -> None:
-        if not heard.is_set():
-            heard.set()
-            print(f"state {time.time()!r}", flush=True)
+        heard.set()
+        print(f"state {time.time()!r} {message.to_system_state}", flush=True)
 
     latched = QoSProfile(
         depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
@@ -445,6 +448,16 @@ def measure_node(
         child.stop()
 
 
+def states_heard(watcher: Child) -> list[tuple[float, str]]:
+    """(Unix time, new state) of each state change the watcher has heard so far."""
+    heard = []
+    for line in watcher.log().splitlines():
+        words = line.split()
+        if len(words) >= 2 and words[0] == "state":
+            heard.append((float(words[1]), words[2] if len(words) > 2 else "?"))
+    return heard
+
+
 def measure_launch(
     env: dict[str, str],
     log_dir: Path,
@@ -454,7 +467,15 @@ def measure_launch(
     idle_seconds: float,
     launch_env: dict[str, str] | None = None,
 ) -> dict[str, Any]:
-    """Seconds to the first state; CPU until then; memory 5 s later; CPU over ``idle_seconds``."""
+    """Seconds to the first state; CPU until then; memory 5 s later; CPU at rest and over
+    ``idle_seconds``.
+
+    At rest: from ``REST_SETTLE`` s after the first state until the next state change (the robot
+    in its first state, the base still, nobody talking), at most ``AFTER_FIRST_STATE +
+    idle_seconds``; CPU is sampled every ``SAMPLE`` s and the last sample before the change ends
+    the window. Then, as before, CPU over ``idle_seconds`` from ``AFTER_FIRST_STATE`` s after the
+    first state, whatever the robot does (the packaged robot wanders).
+    """
     data = Path(tempfile.mkdtemp(prefix="cyborg-bench-db-", dir=log_dir))
     python = ros2_python() if ros2 else sys.executable
     watcher = Child([python, __file__, "--role", "watch2" if ros2 else "watch"], env, log_dir, "watch")
@@ -466,25 +487,50 @@ def measure_launch(
         args += ["--config", str(LAUNCH_CONFIG[0])] if LAUNCH_CONFIG else []
         launch = Child(cyborg(*args), launch_env or env, log_dir, "launch")
         deadline = time.monotonic() + 120
-        while "state " not in watcher.log():
+        while not states_heard(watcher):
             if launch.process.poll() is not None or time.monotonic() > deadline:
                 raise SystemExit(f"no state change within 120 s; launch log:\n{launch.log()[-3000:]}")
             time.sleep(0.02)
-        line = next(x for x in watcher.log().splitlines() if x.startswith("state "))
-        first = float(line.split()[1]) - began
+        first_at = states_heard(watcher)[0][0]
+        first = first_at - began
         pids = [launch.pid, *descendants(launch.pid)]
         cpu_first = sum(cpu_seconds(pid) for pid in pids)
         load_first = load()
-        time.sleep(AFTER_FIRST_STATE)
-        pids = [launch.pid, *descendants(launch.pid)]
-        mems = {pid: memory(pid) for pid in pids}
-        names = {pid: node_name(pid) for pid in pids}
-        names[launch.pid] = "(launcher)"
-        master_mem = [memory(pid) for pid in master_pids]
         watched = pids + list(master_pids)
-        before = {pid: cpu_seconds(pid) for pid in watched}
-        time.sleep(idle_seconds)
-        used = {pid: cpu_seconds(pid) - before[pid] for pid in watched}
+        samples: list[tuple[float, dict[int, float]]] = []  # (Unix time, CPU seconds of each pid)
+        mems: dict[int, dict[str, float]] = {}
+        names: dict[int, str] = {}
+        master_mem: list[dict[str, float]] = []
+        idle_from: dict[int, float] = {}
+        idle_began = 0.0
+        end = first_at + AFTER_FIRST_STATE + idle_seconds
+        while (now := time.time()) < end:
+            if now >= first_at + REST_SETTLE:
+                samples.append((now, {pid: cpu_seconds(pid) for pid in watched}))
+            if not mems and now >= first_at + AFTER_FIRST_STATE:
+                pids = [launch.pid, *descendants(launch.pid)]
+                mems = {pid: memory(pid) for pid in pids}
+                names = {pid: node_name(pid) for pid in pids}
+                names[launch.pid] = "(launcher)"
+                master_mem = [memory(pid) for pid in master_pids]
+                watched = pids + list(master_pids)
+                idle_from = {pid: cpu_seconds(pid) for pid in watched}
+                idle_began = time.time()
+            time.sleep(SAMPLE)
+        used = {pid: cpu_seconds(pid) - idle_from[pid] for pid in watched}
+        idle_span = time.time() - idle_began
+        heard = states_heard(watcher)
+        changes = [t for t, _ in heard[1:]]
+        rest_end = changes[0] if changes else end
+        rest = [x for x in samples if x[0] <= rest_end]
+        rest_s = rest[-1][0] - rest[0][0] if len(rest) >= 2 else 0.0
+        rest_used = (
+            {pid: rest[-1][1].get(pid, 0.0) - rest[0][1].get(pid, 0.0) for pid in watched} if rest_s else {}
+        )
+
+        def pct(used: dict[int, float], among: Sequence[int], span: float) -> float | None:
+            return 100 * sum(used.get(pid, 0.0) for pid in among) / span if span > 0 else None
+
         return {
             "first": first,
             "load": load_first,
@@ -496,9 +542,20 @@ def measure_launch(
             "launcher_pss": mems[launch.pid]["pss"],
             "master_pss": sum(m["pss"] for m in master_mem),
             "per_node_pss": {names[pid]: m["pss"] for pid, m in mems.items()},
-            "idle_pct": 100 * sum(used[pid] for pid in pids) / idle_seconds,
-            "master_idle_pct": 100 * sum(used[pid] for pid in master_pids) / idle_seconds,
-            "per_node_idle": {names[pid]: 100 * used[pid] / idle_seconds for pid in pids},
+            "idle_pct": pct(used, pids, idle_span),
+            "master_idle_pct": pct(used, master_pids, idle_span),
+            "per_node_idle": {names[pid]: 100 * used[pid] / idle_span for pid in pids},
+            "idle_changes": sum(1 for t in changes if idle_began <= t <= idle_began + idle_span),
+            "rest_s": rest_s,
+            "rest_state": heard[0][1],
+            "rest_pct": pct(rest_used, pids, rest_s),
+            "master_rest_pct": pct(rest_used, master_pids, rest_s),
+            "per_node_rest": {
+                names.get(pid, str(pid)): 100 * rest_used.get(pid, 0.0) / rest_s for pid in pids
+            }
+            if rest_s
+            else {},
+            "load_end": load(),
         }
     finally:
         if launch is not None:
@@ -659,7 +716,14 @@ def report(out: dict[str, Any], runs: int, sim_seconds: float, idle_seconds: flo
     print(f"machine: {machine_line()}")
     print(f"code: {src if src is not None else 'this working tree'}; medians of {runs} runs (min-max)")
     print(
-        f"launch configuration: {LAUNCH_CONFIG[0] if LAUNCH_CONFIG else 'the packaged robot (cyborg.yaml)'}"
+        "launch configuration: "
+        + (
+            "the packaged robot without its idle state's motivator events (--still: at rest)"
+            if LAUNCH_CONFIG and LAUNCH_CONFIG[0].name == "still.yaml"
+            else str(LAUNCH_CONFIG[0])
+            if LAUNCH_CONFIG
+            else "the packaged robot (cyborg.yaml)"
+        )
     )
     print(ISSUE_BEFORE)
     print("| what | figure | target | | load (1 min) |")
@@ -751,10 +815,33 @@ def report(out: dict[str, Any], runs: int, sim_seconds: float, idle_seconds: flo
         print(
             f"|   per process, PSS MiB (last run) | {', '.join(f'{n} {v:.0f}' for n, v in sorted(per.items(), key=lambda kv: -kv[1]))} | | | |"
         )
+        rested = [x for x in launches if x["rest_pct"] is not None]
+        if rested:
+            rest_master = median([x["master_rest_pct"] or 0.0 for x in rested])
+            rest = median([x["rest_pct"] for x in rested]) + rest_master
+            row(
+                f"  CPU at rest (in its first state, {rested[0]['rest_state']}, from {REST_SETTLE:g} s after it "
+                f"until the next state change: {spread([x['rest_s'] for x in rested], '.1f')} s), all processes"
+                f"{' (with rosmaster, rosout)' if key == 'launch' else ''}, % of a core",
+                f"**{rest:.2f}** (launch {spread([x['rest_pct'] for x in rested], '.2f')}"
+                + (
+                    f"; master {spread([x['master_rest_pct'] for x in rested], '.2f')})"
+                    if key == "launch"
+                    else ")"
+                ),
+                f"<= {TARGETS['idle_pct']:g}",
+                rest <= TARGETS["idle_pct"],
+                at,
+            )
+            per_rest = rested[-1]["per_node_rest"]
+            print(
+                f"|   per process at rest, % of a core (last run) | {', '.join(f'{n} {v:.2f}' for n, v in sorted(per_rest.items(), key=lambda kv: -kv[1]))} | | | |"
+            )
         master = median([x["master_idle_pct"] for x in launches])
         idle = median([x["idle_pct"] for x in launches]) + master
         row(
-            f"  CPU over the next {idle_seconds:g} s, all processes{' (with rosmaster, rosout)' if key == 'launch' else ''}, % of a core",
+            f"  CPU over the next {idle_seconds:g} s ({spread([x['idle_changes'] for x in launches], '.0f')} state changes), "
+            f"all processes{' (with rosmaster, rosout)' if key == 'launch' else ''}, % of a core",
             f"{idle:.2f} (launch {figure('idle_pct', '.2f')}"
             + (
                 f"; master {figure('master_idle_pct', '.2f')}, PSS {figure('master_pss', '.0f')} MiB)"
@@ -769,6 +856,19 @@ def report(out: dict[str, Any], runs: int, sim_seconds: float, idle_seconds: flo
         print(
             f"|   per process, % of a core (last run) | {', '.join(f'{n} {v:.2f}' for n, v in sorted(per_idle.items(), key=lambda kv: -kv[1]))} | | | |"
         )
+
+
+def still_robot(folder: Path) -> Path:
+    """The packaged robot without the motivator's events of its idle state (it would wander or
+    play music by itself): the same processes, nodes and topics, at rest until spoken to."""
+    import yaml
+
+    config = yaml.safe_load((DATA / "cyborg.yaml").read_text(encoding="utf-8"))
+    events = config["motivator"]["events"]
+    config["motivator"]["events"] = [e for e in events if e["state"] != config["initial"]]
+    path = folder / "still.yaml"
+    path.write_text(yaml.safe_dump(config, sort_keys=False), encoding="utf-8")
+    return path
 
 
 ROS_CORE: list[subprocess.Popen[Any]] = []
@@ -791,6 +891,12 @@ def main() -> None:
         "src/cyborg/data/demo.yaml's placeholders wait in their idle state)",
     )
     parser.add_argument(
+        "--still",
+        action="store_true",
+        help="launch the packaged robot with nothing for its motivator to choose in the idle state: it "
+        "stays in idle, the base still (the CPU at rest is read over --idle-seconds too)",
+    )
+    parser.add_argument(
         "--only",
         default="help,say,sim,node,node2,launch,launch2",
         help="comma-separated: help,say,sim,node,node2,launch,launch2 (node: ROS 1, node2: ROS 2)",
@@ -801,14 +907,22 @@ def main() -> None:
     if args.role is not None:
         roles[args.role]()
         return
+    if args.config is not None and args.still:
+        raise SystemExit("--config and --still exclude each other: pick one")
     if args.config is not None:
         LAUNCH_CONFIG.append(args.config.resolve())
     if ((args.src or ROOT / "src") / "cyborg" / "run" / "launched.py").is_file():
         LAUNCHED_ENTRY.append(True)
+    if args.still:
+        LAUNCH_CONFIG.append(still_robot(Path(tempfile.mkdtemp(prefix="cyborg-bench-still-"))))
     parts = {p.strip() for p in args.only.split(",") if p.strip()}
     if parts & {"node", "launch"} and shutil.which("roscore") is None:
         raise SystemExit("no roscore; fix: scripts/install-ros")
-    out = bench(parts, args.runs, args.sim_seconds, args.idle_seconds, args.src)
+    try:
+        out = bench(parts, args.runs, args.sim_seconds, args.idle_seconds, args.src)
+    finally:
+        if args.still:
+            shutil.rmtree(LAUNCH_CONFIG[0].parent, ignore_errors=True)
     report(out, args.runs, args.sim_seconds, args.idle_seconds, args.src)
 
 

@@ -52,9 +52,9 @@ class BlindBase(SimulatedBase):
         self._blind_from = self.node.clock.monotonic() + 2.0
         super()._on_goal(handle)
 
-    def _publish_pose(self) -> None:
+    def _publish_pose(self, *, resting: bool = True) -> None:
         if self.node.clock.monotonic() < getattr(self, "_blind_from", float("inf")):
-            super()._publish_pose()
+            super()._publish_pose(resting=resting)
 
 
 def faulty(cls: type[SimulatedBase]) -> dict[str, ModuleKind[typing.Any]]:

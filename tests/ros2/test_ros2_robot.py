@@ -269,8 +269,8 @@ def test_ros2_command_tool_and_api_drive_a_launched_robot(
     output = process.communicate(timeout=30)[0]
     assert process.returncode == 0, output[-3000:]
     assert (
-        "launched 5 nodes in 4 processes: cyborg_controller, cyborg_recorder, "
-        "cyborg_test_idle (with cyborg_test_worker), cyborg_api" in output  # ROS 2: thin parts share one
+        "launched 5 nodes in 3 processes: cyborg_controller, cyborg_test_idle (with cyborg_test_worker), "
+        "cyborg_api (with cyborg_recorder)" in output  # ROS 2: thin parts share one, API and recorder one
     )
     assert "stopping" in output and "Traceback" not in output, output[-3000:]
 
@@ -281,8 +281,10 @@ def test_ros2_command_tool_and_api_drive_a_launched_robot(
         f"every log line is in {logs}/NODE.log; cyborg_test_idle's process also runs cyborg_test_worker: "
         "their lines are in cyborg_test_idle.log, which their NODE.log links to" in output
     ), output[:3000]
+    assert "cyborg_api's process also runs cyborg_recorder: their lines are in cyborg_api.log" in output
     nodes = ("cyborg_controller", "cyborg_recorder", "cyborg_test_idle", "cyborg_test_worker", "cyborg_api")
     missing = [name for name in nodes if not (logs / f"{name}.log").is_file()]
     assert not missing, f"no log file for {missing} in {sorted(p.name for p in logs.iterdir())}"
     assert (logs / "cyborg_test_worker.log").resolve() == (logs / "cyborg_test_idle.log").resolve()
+    assert (logs / "cyborg_recorder.log").resolve() == (logs / "cyborg_api.log").resolve()
     assert "the emotion system starts neutral" in (logs / "cyborg_controller.log").read_text()

@@ -41,9 +41,9 @@ MoveHandle = ClientGoalHandle[MoveBaseGoal, MoveBaseResult, MoveBaseFeedback]
 class Client:
     """What the navigation module sees of the base: poses, path states, the action and the services."""
 
-    def __init__(self, transport: EmbeddedTransport) -> None:
+    def __init__(self, transport: EmbeddedTransport, name: str = "test_client") -> None:
         self.clock = transport.clock
-        node = transport.node("test_client")
+        node = transport.node(name)
         self.poses: list[tuple[float, float, float, float]] = []  # (t, x, y, theta)
         self.states: list[str] = []
         self.feedback: list[Point] = []
@@ -206,6 +206,35 @@ def test_cancel_mid_way_stops_the_robot_and_preempts(
     assert len(client.poses) == count and client.position == stopped_at  # and moves no more
     assert base.path_state is PathState.STOPPED
     assert client.states[-1] == PathState.STOPPED.value  # the path state says so too
+
+
+@pytest.mark.parametrize("virtual_pose_rate", [None, 1.0], ids=["every step", "one a second"])
+def test_a_late_subscriber_hears_where_the_base_stopped(
+    clock: VirtualClock,
+    transport: EmbeddedTransport,
+    campus: OccupancyMap,
+    campus_planner: RoutePlanner,
+    virtual_pose_rate: float | None,
+) -> None:
+    """The steps go out unlatched (a latched message costs its ROS 2 listeners twice); where the
+    base rests is latched: a dashboard started after a trip was cancelled sees where it stopped."""
+    base = make_base(transport, campus, campus_planner, virtual_pose_rate=virtual_pose_rate)
+    client = Client(transport)
+
+    async def main() -> tuple[Point, list[tuple[float, float, float, float]]]:
+        await clock.sleep(0.1)
+        handle = client.send_to(campus.pose("cafeteria"))
+        await clock.sleep(5.0)
+        handle.cancel()
+        await handle.wait()
+        await clock.sleep(1.0)
+        late = Client(transport, "late_client")
+        await clock.sleep(0.1)
+        return client.position, late.poses
+
+    stopped_at, heard_late = clock.run(main())
+    assert len(heard_late) == 1
+    assert (heard_late[0][1], heard_late[0][2]) == stopped_at == (base.x, base.y)
 
 
 def test_stop_service_stops_a_goal_with_preempted(

@@ -100,8 +100,9 @@ _speed_help = "virtual time at this factor of real time (all nodes share one clo
     "also",
     multiple=True,
     metavar="NAME",
-    help="ROS 2: host this module or gatekeeper in the same process, as its own node (repeatable; "
-    "`cyborg launch --ros2` shares a process among the thin modules)",
+    help="ROS 2: host this module or gatekeeper (or, beside cyborg_api, cyborg_recorder) in the same "
+    "process, as its own node (repeatable; `cyborg launch --ros2` shares a process among the thin "
+    "modules, and another between the API and the recorder)",
 )
 @click.option(
     "--checked",
@@ -154,7 +155,7 @@ def node(
     sim_time = SimTime(speed=speed, epoch=parse_epoch(epoch), start=parse_start(start_at), lockstep=lockstep)
     try:
         record = None
-        if name == RECORDER:
+        if RECORDER in (name, *also):
             whole = load_or_default(config_path)
             # the recorder node records even when the configuration's recording is off: it was asked for
             record = recorder_settings(whole, record_path, no_record, data_dir, enabled=True)
@@ -234,8 +235,8 @@ def _scenario_files(script: Path | None, transcript: Path | None) -> ScenarioFil
     "--processes",
     type=click.Choice(["shared", "per-part"]),
     default=None,
-    help="shared: the thin modules and the gatekeepers share one process, each its own node "
-    "(ROS 2 only; its default); per-part: a process per part (ROS 1's only way: rospy runs one "
+    help="shared: the thin modules and the gatekeepers share one process, the API and the recorder "
+    "another, each its own node (ROS 2 only; its default); per-part: a process per part (ROS 1's only way: rospy runs one "
     "node per process)",
 )
 @click.option(

@@ -128,9 +128,12 @@ def run_node(name: str, options: NodeOptions, middleware: Middleware) -> int:
 def build_node(name: str, options: NodeOptions, middleware: Middleware) -> BuiltNode:
     """Join ``middleware``'s graph as node ``name`` and build its part, not started yet."""
     for other in options.also:
+        if other == RECORDER and name == API:
+            continue  # both only listen to the graph (cyborg launch --ros2 shares their process)
         if other in (CONTROLLER, API, RECORDER, SCENARIO) or is_simulated_base(options.config, other):
             raise CyborgError(
-                f"{other} runs in a process of its own; fix: host only modules and gatekeepers beside {name}"
+                f"{other} runs in a process of its own (the recorder may share the API's); fix: host "
+                f"only modules and gatekeepers beside {name}"
             )
     clock = options.time.make_clock()
     transport = middleware.transport(clock, name, use_sim_time=options.time.virtual, also=options.also)
@@ -225,7 +228,7 @@ async def serve_node(node: BuiltNode, options: NodeOptions) -> int:
         counters = publish_controller_stats(node.stats_publisher, controller)
         background.append(loop.create_task(counters, name="controller stats"))
     api = await _serve_api(node, options) if node.name == API else None
-    recorder = _start_recorder(node, options) if node.name == RECORDER else None
+    recorder = _start_recorder(node, options) if RECORDER in (node.name, *options.also) else None
     freeze_built()  # what the part built lives as long as the node: out of GC's way (app.tuning)
     controller_task = controller.start() if controller is not None else None
     tasks = watch_tasks(node.clock)  # a module leaking tasks is named (cyborg.run.tasks)

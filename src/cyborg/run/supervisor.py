@@ -9,8 +9,8 @@ speed the launch fixes the shared origin of virtual time once every node is read
 node (:mod:`cyborg.run.scenario`).
 
 On ROS 2 the launch shares one process among the thin parts (:func:`shared_process`: the
-built-in light module kinds and the gatekeepers), each still its own node on the graph, so a
-gatekeeper tells them apart as before; ROS 1 runs one node per process (rospy's rule, and a
+built-in light module kinds and the gatekeepers), and another between the API and the recorder,
+each still its own node on the graph, so a gatekeeper tells them apart as before; ROS 1 runs one node per process (rospy's rule, and a
 gatekeeper knows a sender by its process's node name). ``cyborg launch --processes`` chooses.
 
 A node that refuses to start because its name is taken on the graph (another robot there, or a
@@ -37,7 +37,7 @@ from pathlib import Path
 import click
 
 from cyborg.app.config import LoadedConfig
-from cyborg.app.parts import API, CONTROLLER
+from cyborg.app.parts import API, CONTROLLER, RECORDER
 from cyborg.app.sketch import text_digest
 from cyborg.errors import CyborgError
 from cyborg.run.census import NAME_TAKEN_EXIT
@@ -69,10 +69,15 @@ def start_zygote(middleware: Middleware, *, echo: bool = True) -> Zygote:
 
 
 def shared_process(config: LoadedConfig, parts: Sequence[str]) -> dict[str, list[str]]:
-    """The thin parts among ``parts`` as one process: {the first: the others it hosts} (empty
-    when fewer than two are thin)."""
+    """The thin parts among ``parts`` as one process: {the first: the others it hosts} (none
+    when fewer than two are thin); and the recorder in the API's process (both only listen to
+    the graph, and both hear every pose: in one process one wake-up of its executor takes both
+    copies of a message)."""
     names = [name for name in parts if is_thin(config, name)]
-    return {names[0]: names[1:]} if len(names) > 1 else {}
+    shared = {names[0]: names[1:]} if len(names) > 1 else {}
+    if API in parts and RECORDER in parts:
+        shared[API] = [RECORDER]
+    return shared
 
 
 def is_thin(config: LoadedConfig, name: str) -> bool:
@@ -187,6 +192,8 @@ class Launch:
                 self.start.isoformat(),
                 "--publish-clock" if name == clock_owner else "--no-publish-clock",
             ]
+        for hosted in self.hosts.get(name, []):  # what the launch tells a part, its host hears
+            command += self.extra_args.get(hosted, [])
         return command + self.extra_args.get(name, [])
 
     def start_all(self) -> None:

@@ -179,8 +179,14 @@ class SimulatedBase:
         self._goal: _AnyHandle | None = None
         self._leg = 0  # the route's waypoint the base drives to now
         self._unpublished = False  # a step was made since the last pose message (virtual_pose_rate)
+        self._stepped = False  # the last pose went out as a step: the latched one is older
         self._heading = (math.nan, Quaternion())  # the last heading published, and its quaternion
+        # Where it rests (its start, the end of each leg, where it stops) is latched for late
+        # subscribers; the steps between go out unlatched. On ROS 2 a latched message reaches each
+        # of our subscriptions twice (its volatile and its transient-local half, one copy dropped):
+        # at 10 steps a second that doubled what hearing the pose cost its three listeners.
         self._pose_pub = node.publisher(topics.AMCL_POSE, PoseWithCovarianceStamped, latch=True)
+        self._step_pub = node.publisher(topics.AMCL_POSE, PoseWithCovarianceStamped)
         self._state_pub = node.publisher(topics.ARNL_PATH_STATE, String, latch=True)
         self.base_api = base_api
         """The interface it offers: ROSARNL's services and ``move_base``, or nav2's action."""
@@ -216,13 +222,17 @@ class SimulatedBase:
 
     # --- outputs ----------------------------------------------------------------------
 
-    def _publish_pose(self) -> None:
+    def _publish_pose(self, *, resting: bool = True) -> None:
+        """Publish the pose: latched where the base rests (or may: a leg's end), else a step."""
         self._unpublished = False
+        self._stepped = not resting
         if self._heading[0] != self.theta:  # messages are frozen: one orientation serves a whole leg
             self._heading = (self.theta, yaw_to_quaternion(self.theta))
         pose = Pose(PointMsg(self.x, self.y, 0.0), self._heading[1])
         header = Header(stamp=self.node.clock.now(), frame_id=MAP_FRAME)
-        self._pose_pub.publish(PoseWithCovarianceStamped(header, PoseWithCovariance(pose)))
+        (self._pose_pub if resting else self._step_pub).publish(
+            PoseWithCovarianceStamped(header, PoseWithCovariance(pose))
+        )
 
     def _set_state(self, state: PathState) -> None:
         if state is not self.path_state:
@@ -234,8 +244,8 @@ class SimulatedBase:
     def _halt(self) -> None:
         if self._motion is not None and not self._motion.done():
             self._motion.cancel()
-            if self._unpublished:
-                self._publish_pose()  # where it stops, when that step was not published
+            if self._unpublished or self._stepped:
+                self._publish_pose()  # where it stops, latched (or that step was not published)
         self._motion = None
         self.route = None
         self.wandering = False
@@ -294,7 +304,7 @@ class SimulatedBase:
             self._unpublished = True
             if unpublished == self.steps_per_message or done >= 1.0:
                 unpublished = 0
-                self._publish_pose()
+                self._publish_pose(resting=done >= 1.0)
                 if on_pose is not None:
                     on_pose()
             if done >= 1.0:

@@ -31,6 +31,7 @@ from rclpy.action import ActionServer as RclActionServer
 from rclpy.action import CancelResponse, GoalResponse
 from rclpy.action.client import ClientGoalHandle as RclClientGoalHandle
 from rclpy.action.server import RCLError
+from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.node import Node as RclNode
 from std_msgs.msg import String as RosString
 from unique_identifier_msgs.msg import UUID
@@ -290,7 +291,14 @@ class Ros2ActionServer(ActionServer[G, R, F]):
             self._ledger.listen(f"{name}#goal", Channel.UNICAST)
             self._ledger.listen(f"{name}#cancel", Channel.UNICAST)
             self._ledger.listen(f"{name}#get_result", Channel.UNICAST)
-        self._text = node.create_publisher(RosString, f"{name}/{TEXT_TOPIC}", volatile_qos(100))
+        # Our own side topic, one type, one QoS: no event handlers (each one more entity in the wait
+        # set the executor builds for every message: cyborg.transport.ros2.topics).
+        self._text = node.create_publisher(
+            RosString,
+            f"{name}/{TEXT_TOPIC}",
+            volatile_qos(100),
+            event_callbacks=PublisherEventCallbacks(use_default_callbacks=False),
+        )
         self._server = _RclServer(
             node,
             self.classes,
@@ -542,7 +550,12 @@ class Ros2ActionClient(ActionClient[G, R, F]):
         self._texts: dict[bytes, str] = {}
         self._text_topic = f"{name}/{TEXT_TOPIC}"
         self._text_sub = node.create_subscription(
-            RosString, self._text_topic, self._on_text, volatile_qos(100), callback_group=callback_group
+            RosString,
+            self._text_topic,
+            self._on_text,
+            volatile_qos(100),
+            callback_group=callback_group,
+            event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False),  # as the server's
         )
         self._watchdog: Any = None
         self._closed = False

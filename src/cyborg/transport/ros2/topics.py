@@ -111,12 +111,11 @@ class Ros2Publisher(Publisher[M]):
         qos = latched_qos() if latch else volatile_qos(queue_size)
         self._node = node
         # Every subscription of ours has a transient-local half that a volatile publisher does
-        # not serve, by design (module docstring): no warning about it.
+        # not serve, by design (module docstring): no warning about it. Nor an event handler: each
+        # is one more entity in the executor's wait set, built anew in Python for every message
+        # the process hears (a subscription warns of a type or QoS that does not fit).
         self._pub: Any = node.create_publisher(
-            self._cls,
-            topic,
-            qos,
-            event_callbacks=PublisherEventCallbacks(incompatible_qos=lambda event: None),
+            self._cls, topic, qos, event_callbacks=PublisherEventCallbacks(use_default_callbacks=False)
         )
 
     def publish(self, message: M) -> None:
@@ -184,14 +183,16 @@ class Ros2Subscription(Subscription[M]):
             node.create_subscription(
                 cls, topic, self._on_ros, volatile_qos(depth), callback_group=callback_group
             ),
-            # A volatile publisher does not match this one, by design: no warning about it.
+            # A volatile publisher does not match this one, by design: no warning about it; the
+            # volatile half warns of a type that does not fit. No event handler, then: each is one
+            # more entity in the wait set the executor builds in Python for every message heard.
             node.create_subscription(
                 cls,
                 topic,
                 self._on_ros,
                 latched_qos(depth),
                 callback_group=callback_group,
-                event_callbacks=SubscriptionEventCallbacks(incompatible_qos=lambda event: None),
+                event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False),
             ),
         ]
 
