@@ -122,7 +122,7 @@ class LazyGroup(click.Group):
         ),
         "launch": (
             "cyborg.cli.ros:launch_command",
-            "Start the whole robot over ROS 1 (a master if none runs) or ROS 2 (--ros2), a process a part.",
+            "Start the whole robot over ROS 1 (a master if none runs) or ROS 2 (--ros2), a node a part (see --processes).",
         ),
     },
 )

@@ -264,7 +264,7 @@ def launch_command(
     processes: str | None,
     fork: bool,
 ) -> None:
-    """Start the whole robot over ROS 1 (a master if none runs) or ROS 2 (--ros2), a process a part.
+    """Start the whole robot over ROS 1 (a master if none runs) or ROS 2 (--ros2), a node a part (see --processes).
 
     With --speed N every node runs in virtual time at N times real time from one shared origin,
     /use_sim_time is set and the simulated base publishes /clock. With --speed max the time moves
