@@ -84,7 +84,7 @@ def test_a_launch_stopped_normally_prints_no_traceback(
         assert warned["level"] == "warning" and warned["sender"] == rospy.get_name().lstrip("/"), warned
         # The launch's recording re-runs the controller alone against its recorded inputs.
         again = CliRunner().invoke(cli, ["rerun", str(tmp_path / "launch.mcap")])
-        assert again.exit_code == 0, again.output
+        assert again.exit_code == 0, f"{again.output}{again.exception!r}"
         assert "recorded over ROS 1 in real time: the controller alone re-ran against its" in again.output
         states = [r for r in recording.records if r["type"] == "state"]
         assert [r["event"] for r in states[:2]] == ["start", "aborted"], states

@@ -399,7 +399,12 @@ def _child(argv: list[str], control: IO[str], *, fresh: bool = False, module: st
     if fresh:
         os.execv(sys.executable, [sys.executable, "-m", module, *argv])
     sys.argv = ["cyborg", *argv]
-    runpy.run_module(module, run_name="__main__", alter_sys=True)  # as `python -m MODULE` does
+    preloaded = sys.modules.get(module)
+    if preloaded is not None and not hasattr(preloaded, "__path__"):
+        # runpy would run a second copy of it as __main__ beside the one loaded (and warn)
+        preloaded.main()
+    else:
+        runpy.run_module(module, run_name="__main__", alter_sys=True)  # as `python -m MODULE` does
     raise SystemExit(0)
 
 

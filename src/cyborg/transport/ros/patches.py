@@ -22,7 +22,9 @@ transport) changes nothing; :func:`install` patches rospy's classes for the whol
 
 from __future__ import annotations
 
+import contextlib
 import threading
+from collections.abc import Iterator
 from typing import Any
 
 import rospy  # type: ignore[import-not-found]
@@ -30,7 +32,7 @@ import rospy  # type: ignore[import-not-found]
 from cyborg.transport.ros import reads
 from cyborg.transport.ros.master import UNREACHABLE, WATCH, answer, master_proxy
 
-__all__ = ["REGISTRATION_PERIOD", "XMLRPC_POLL_PERIOD", "install"]
+__all__ = ["REGISTRATION_PERIOD", "XMLRPC_POLL_PERIOD", "install", "refusing_late_connections"]
 
 REGISTRATION_PERIOD = 2.0
 """Seconds between two rounds of rospy's registration thread with nothing to do (rospy: 0.5). A
@@ -147,3 +149,21 @@ def _register_once() -> None:
 
     reg_added._cyborg_once = True  # type: ignore[attr-defined]
     RegManager.reg_added = reg_added
+
+
+@contextlib.contextmanager
+def refusing_late_connections() -> Iterator[None]:
+    """While the block runs (a process's nodes unregister as it stops), rospy answers a subscriber
+    that connects late, not told yet that a publisher is gone, "node shutting down" quietly, as it
+    does once its own shutdown has begun, instead of a warning on the terminal ("... is not a
+    publisher of ..."). Afterwards rospy's shutdown runs as before."""
+    import rospy.core  # type: ignore[import-not-found]
+
+    if rospy.core.is_shutdown_requested():
+        yield
+        return
+    rospy.core._in_shutdown = True
+    try:
+        yield
+    finally:
+        rospy.core._in_shutdown = False

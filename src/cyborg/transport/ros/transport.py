@@ -100,6 +100,15 @@ class RosTransport(Transport):
 
         return self._add_node(name, make)
 
+    def close(self) -> None:
+        """See :meth:`Transport.close`; rospy refuses late connections quietly meanwhile
+        (:func:`~cyborg.transport.ros.patches.refusing_late_connections`)."""
+        if self._closed:
+            return
+        with patches.refusing_late_connections():
+            self.shutdown()
+        super().close()
+
     def _leave(self) -> None:
         """Leave the graph: rospy shuts down, and cannot rejoin it in this process."""
         rospy.signal_shutdown("cyborg node stopped")

@@ -152,6 +152,10 @@ def _fits(publisher_qos: Any, subscription_qos: Any) -> bool:
     return not (volatile_to_latched or best_effort_to_reliable)
 
 
+_DESTROYED_ENTITY = ("pointer is invalid", "destruction was requested")
+"""What rclpy raises while it builds its wait set as one of the entities is destroyed."""
+
+
 class Ros2Transport(Transport):
     """Nodes of this process on a ROS 2 graph (one rclpy context, spun on its own thread)."""
 
@@ -191,10 +195,12 @@ class Ros2Transport(Transport):
                     return
                 # Also seen: rclpy building its wait set while an action client or server is
                 # destroyed ("action client pointer is invalid"); the next turn goes without it.
-                # While the process closes its nodes that is expected ("cannot use Destroyable
-                # because destruction was requested"): a debug line, not a warning on the terminal.
+                # Only this process destroys its entities (a node closes, or the process ends, as
+                # one of the modules sharing a process stops before the others): that is
+                # expected, a debug line, not a warning on the terminal.
+                destroyed = any(sign in str(exc) for sign in _DESTROYED_ENTITY)
                 log.log(
-                    logging.DEBUG if self._closed else logging.WARNING,
+                    logging.DEBUG if self._closed or destroyed else logging.WARNING,
                     "the ROS 2 executor raised (%s); it spins on",
                     exc,
                     exc_info=log.isEnabledFor(logging.DEBUG),
