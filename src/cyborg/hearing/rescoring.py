@@ -6,8 +6,9 @@ This module says which candidates, as Whisper would write them:
 
 - for a request whose place was heard, the same words with each other place in the place's slot
   (:func:`place_variants`): when one of them is nearly as likely, the robot asks, never guesses;
-- for a transcript nothing understands, the sentences the robot understands that read most like it
-  (:func:`repair_candidates`, from :func:`sentence_pool`), spliced into the words heard around them.
+- for a transcript nothing understands, the answers, greetings and phrases the robot understands that
+  read most like it (:func:`repair_candidates`, from :func:`sentence_pool`), also spliced into the
+  words heard around them.
 """
 
 from __future__ import annotations
@@ -37,8 +38,6 @@ PART_RATIO = 65.0
 SPLICE_LOOK = 300
 """How many sentences that best match a part of the transcript are weighed for splicing (by how
 much of them matched: a short one, "no", matches inside any "know")."""
-
-_DETERMINERS = frozenset({"the", "a", "an"})
 
 _SPELLED = {
     "lets": "let's",
@@ -93,23 +92,11 @@ def place_variants(
     ]
 
 
-def sentence_pool(
-    triggers: Iterable[str],
-    forms: Mapping[str, Sequence[str]],
-    phrases: Iterable[str],
-    followers: Iterable[str],
-) -> list[str]:
-    """The sentences the robot understands, in its words: each phrase that takes a place before each
-    place's forms, each phrase on its own and with each word that may follow it ("hello there")."""
+def sentence_pool(phrases: Iterable[str], followers: Iterable[str]) -> list[str]:
+    """The answers, greetings and phrases the robot understands on their own, in its words: each
+    phrase alone and with each word that may follow it ("hello there")."""
     after = list(followers)
-    pool = [
-        " ".join([t, *(f.split() if t.split()[-1] in _DETERMINERS else _slot(f))])
-        for t in triggers
-        for fs in forms.values()
-        for f in fs
-    ]
-    pool += [s for p in phrases for s in (p, *(f"{p} {w}" for w in after))]
-    return list(dict.fromkeys(pool))
+    return list(dict.fromkeys(s for p in phrases for s in (p, *(f"{p} {w}" for w in after))))
 
 
 def repair_candidates(heard: str, pool: Sequence[str], limit: int) -> list[str]:
