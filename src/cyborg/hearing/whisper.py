@@ -580,7 +580,8 @@ class WhisperRecogniser:
         if not candidates:
             return None
         end = raw.strip()[-1:] if raw.strip()[-1:] in ".?!" else "."
-        [heard, *scores] = self._rescore(searched, [raw, *(written(s, end) for s, _ in candidates)])
+        texts = [written(text, end), *(written(s, end) for s, _ in candidates)]  # like for like: said once
+        [heard, *scores] = self._rescore(searched, texts)
         best = max(range(len(scores)), key=scores.__getitem__)
         score = scores[best]
         return candidates[best] if score >= heard - REPAIR_MARGIN else None
