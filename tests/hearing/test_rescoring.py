@@ -50,20 +50,15 @@ def test_each_other_place_takes_the_slot_of_the_place_heard_with_its_the() -> No
     ]
 
 
-def test_the_pool_holds_each_phrase_alone_and_with_each_follower() -> None:
-    assert sentence_pool(["hello", "sure thing"], ["there"]) == [
-        "hello",
-        "hello there",
-        "sure thing",
-        "sure thing there",
-    ]
+def test_the_pool_holds_each_phrase_and_each_greeting_with_each_follower() -> None:
+    assert sentence_pool(["hello", "never"], ["hello"], ["there"]) == ["hello", "hello there", "never"]
 
 
 def test_the_repair_candidates_read_like_the_transcript_and_keep_the_words_around_them() -> None:
-    pool = sentence_pool(["sure thing", "no", "sounds good", "hello"], ["there", "robot"])
+    pool = sentence_pool(["sure thing", "no", "sounds good", "indeed", "hello"], ["hello"], ["there"])
     assert repair_candidates("short thing", pool, 4)[0] == "sure thing"
-    found = repair_candidates("well sound is good", pool, 8)
-    assert "well sounds good" in found
-    assert len(repair_candidates("hello", pool, 3)) == 3
+    assert "sounds good to me" in repair_candidates("sound is good to me", pool, 8)
+    assert "where is the indeed" not in repair_candidates("where is the wind", pool, 8)
+    assert repair_candidates("hello there", pool, 1) == ["hello there"]  # at most the limit
     assert repair_candidates("", pool, 4) == []
     assert repair_candidates("zzz qqq", pool, 4) == []  # nothing reads like it

@@ -92,11 +92,11 @@ def place_variants(
     ]
 
 
-def sentence_pool(phrases: Iterable[str], followers: Iterable[str]) -> list[str]:
+def sentence_pool(phrases: Iterable[str], greetings: Iterable[str], followers: Iterable[str]) -> list[str]:
     """The answers, greetings and phrases the robot understands on their own, in its words: each
-    phrase alone and with each word that may follow it ("hello there")."""
-    after = list(followers)
-    return list(dict.fromkeys(s for p in phrases for s in (p, *(f"{p} {w}" for w in after))))
+    phrase, and each of the ``greetings`` also with each word that may follow it ("hello there")."""
+    after, greeting = list(followers), set(greetings)
+    return list(dict.fromkeys(s for p in phrases for s in (p, *(f"{p} {w}" for w in after if p in greeting))))
 
 
 def repair_candidates(heard: str, pool: Sequence[str], limit: int) -> list[str]:
@@ -126,7 +126,8 @@ def repair_candidates(heard: str, pool: Sequence[str], limit: int) -> list[str]:
 
 def _splice(heard: str, sentence: str) -> str | None:
     """``sentence`` in place of the words of ``heard`` it lines up with, the rest of ``heard`` kept;
-    None when it lines up with all of them or none."""
+    None when it lines up with all of them, or when more words are kept than it puts back ("where is
+    the wind" is no "where is the indeed")."""
     if len(sentence) >= len(heard):
         return None
     aligned = fuzz.partial_ratio_alignment(sentence, heard)
@@ -136,6 +137,7 @@ def _splice(heard: str, sentence: str) -> str | None:
     stop = heard.find(" ", max(aligned.dest_end - 1, start))
     stop = len(heard) if stop < 0 else stop
     before, after = heard[:start].strip(), heard[stop:].strip()
-    if not before and not after:
+    kept = len(before.split()) + len(after.split())
+    if not kept or kept > len(sentence.split()):  # a repair puts back most of what was heard
         return None
     return " ".join(part for part in (before, sentence, after) if part)

@@ -369,7 +369,9 @@ class WhisperRecogniser:
         self._prompt = [self._token("<|startofprev|>"), *tokens]
         self.understanding = self._understanding_of(grammar)
         self._forms = written_forms(grammar.place_forms)
-        self._pool = sentence_pool(grammar.phrases, GREETING_FOLLOWERS)
+        self._pool = sentence_pool(
+            grammar.phrases, [p for p in grammar.phrases if is_greeting(p)], GREETING_FOLLOWERS
+        )
         self.grammar = grammar
 
     def transcribe(self, audio: bytes) -> tuple[str, float]:
