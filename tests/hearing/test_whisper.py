@@ -187,6 +187,32 @@ def test_a_misheard_answer_is_taken_from_a_hypothesis_nearly_as_likely_and_a_pla
     assert whisper._understood_rival("where is the entrance 4", -2.0, four) is None
 
 
+def test_another_place_scored_again_nearly_as_likely_is_asked_about_and_a_far_one_is_not(
+    whisper: WhisperRecogniser,
+) -> None:
+    assert whisper.understanding is not None
+    of = whisper.understanding.of
+    _, cafeteria = whisper._search(synthesise("where is the cafeteria", VOICES[3]))
+    waiting, said = of("where is the waiting area"), of("where is the cafeteria")
+    assert waiting is not None and said is not None
+    assert whisper._scored_rival(cafeteria, "where is the waiting area", waiting) == "cafeteria"
+    assert whisper._scored_rival(cafeteria, "where is the cafeteria", said) is None
+    _, el6 = whisper._search(synthesise("go to el6", VOICES[3]))
+    elevator = of("go to the elevator")
+    assert elevator is not None
+    assert whisper._scored_rival(el6, "go to the elevator", elevator) == "el6"
+
+
+def test_a_transcript_nothing_understands_is_repaired_when_a_sentence_understood_scores_as_well(
+    whisper: WhisperRecogniser,
+) -> None:
+    _, sure = whisper._search(synthesise("sure thing", VOICES[3]))
+    repaired = whisper._repaired(sure, " Short thing.", "short thing")
+    assert repaired is not None and repaired[0] == "sure thing" and repaired[1].event == "yes"
+    _, turtles = whisper._search(synthesise("i like turtles", VOICES[3]))
+    assert whisper._repaired(turtles, " I like turtles.", "i like turtles") is None
+
+
 def test_a_missing_model_names_the_fix_and_the_ears_fall_back_to_pocketsphinx(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:

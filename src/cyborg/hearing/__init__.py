@@ -3,7 +3,8 @@
 :mod:`~cyborg.hearing.grammar` builds what the robot can hear from what it understands (pure),
 :mod:`~cyborg.hearing.understanding` says what the robot would do with a sentence (pure),
 :mod:`~cyborg.hearing.whisper` decodes with Whisper tiny.en (the default) and believes what the
-robot understands, :mod:`~cyborg.hearing.recogniser` decodes with pocketsphinx and rejects
+robot understands, :mod:`~cyborg.hearing.rescoring` says which candidate transcripts its second look
+scores (pure), :mod:`~cyborg.hearing.recogniser` decodes with pocketsphinx and rejects
 speech outside the grammar, :mod:`~cyborg.hearing.vad` cuts audio into utterances with Silero
 VAD, :mod:`~cyborg.hearing.audio` reads WAV files and the microphone,
 :mod:`~cyborg.hearing.synth` synthesises speech (espeak-ng, flite) for tests and benchmarks of the ears, and
