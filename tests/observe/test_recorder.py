@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from typing import Any
 
 import pytest
 from click.testing import CliRunner
@@ -296,3 +297,28 @@ def test_the_controller_alone_re_runs_against_the_recorded_events_and_module_out
     assert difference is not None and difference.index == 1, difference
     assert difference.recorded is not None and difference.recorded["to"] == "conversation"
     assert "state change 2: recorded t=9 s" in difference.describe(noun="state change")
+
+
+def test_an_event_recorded_just_after_the_state_change_it_caused_is_still_its_cause() -> None:
+    """Over ROS the recorder hears the sender and the controller on two connections: under load
+    the state change on "aborted" can be recorded before the event "aborted" that caused it. The
+    re-run must send that event (once, before the change), not also end the module's goal."""
+    from types import SimpleNamespace
+
+    from cyborg.sim.rerun_controller import controller_inputs
+
+    ms = 1_000_000
+    recording: Any = SimpleNamespace(
+        events=[{"t_ns": 5_030 * ms, "event": "aborted"}, {"t_ns": 9_000 * ms, "event": "ignored"}],
+        records=[
+            {"type": "state", "t_ns": 200 * ms, "event": "start", "from": "", "to": "idle"},
+            {"type": "state", "t_ns": 5_000 * ms, "event": "aborted", "from": "idle", "to": "idle"},
+            {"type": "state", "t_ns": 8_000 * ms, "event": "succeeded", "from": "idle", "to": "idle"},
+        ],
+    )
+    inputs = controller_inputs(recording)
+    assert [(i.kind, i.name, i.t_ns) for i in inputs] == [
+        ("event", "aborted", 5_000 * ms),
+        ("outcome", "succeeded", 8_000 * ms),
+        ("event", "ignored", 9_000 * ms),
+    ]

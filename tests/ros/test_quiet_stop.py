@@ -59,6 +59,7 @@ def test_a_launch_stopped_normally_prints_no_traceback(
         warnings = observe.topic("/rosout_agg", Log)
         sender = observe.events()
         sender.wait_connected()
+        sender.wait_connected("/cyborg_recorder")  # else the event is not recorded, and the re-run differs
         sender.send("aborted")
         changes.wait_state("idle", event="aborted", timeout=30)
         rospy.logwarn("the camera's lens is dirty")

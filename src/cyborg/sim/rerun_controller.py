@@ -37,6 +37,8 @@ __all__ = [
 ]
 
 OUTCOMES = (SUCCEEDED, ABORTED)
+EVENT_SKEW_NS = 2 * NS_PER_S
+"""How much later than the state change it caused an event may have been recorded."""
 SETTLE_SECONDS = 1.0
 """Virtual seconds the re-run goes on after the last input (its last handover)."""
 
@@ -68,18 +70,41 @@ class ControllerRerun:
 
 
 def controller_inputs(recording: Recording) -> list[ControllerInput]:
-    """The recorded events and module outcomes, in the order they came."""
-    inputs = [ControllerInput(int(e["t_ns"]), "event", str(e["event"])) for e in recording.events]
-    sent = sorted((each.t_ns, each.name) for each in inputs)
-    since = None  # the previous state change's time
+    """The recorded events and module outcomes, in the order they came.
+
+    The recorder hears an event from its sender and the state change it caused from the
+    controller, on two connections: under load the state change may come first. An event
+    recorded up to :data:`EVENT_SKEW_NS` after a state change of its name is taken as its cause
+    (and sent again at the change's time); a state change on ``succeeded`` or ``aborted`` that no
+    event explains is its module's outcome."""
+    events = sorted((int(e["t_ns"]), str(e["event"])) for e in recording.events)
+    used = [False] * len(events)
+    inputs: list[ControllerInput] = []
+    since: int | None = None  # the previous state change's time
     for record in recording.records:
         if record["type"] != "state":
             continue
         t_ns, event = int(record["t_ns"]), str(record["event"])
-        explained = any(name == event and (since is None or t >= since) and t <= t_ns for t, name in sent)
-        if event in OUTCOMES and record["from"] and not explained:
+        cause = next(
+            (
+                index
+                for index, (t, name) in enumerate(events)
+                if not used[index]
+                and name == event
+                and (since is None or t >= since)
+                and t <= t_ns + EVENT_SKEW_NS
+            ),
+            None,
+        )
+        if cause is not None:
+            used[cause] = True
+            inputs.append(ControllerInput(min(events[cause][0], t_ns), "event", event))
+        elif event in OUTCOMES and record["from"]:
             inputs.append(ControllerInput(t_ns, "outcome", event, str(record["from"])))
         since = t_ns
+    inputs.extend(
+        ControllerInput(t, "event", name) for (t, name), done in zip(events, used, strict=True) if not done
+    )
     inputs.sort(key=lambda each: each.t_ns)  # (stable: an event before an outcome of its instant)
     return inputs
 
